@@ -1,0 +1,22 @@
+#include "qs/core/mesh.h"
+
+namespace qs {
+
+Box3 bounding_box(const std::vector<Vec3>& positions) {
+  Box3 box;
+  if (positions.empty()) return box;
+  box.min = box.max = positions.front();
+  for (const Vec3& p : positions) {
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+  }
+  return box;
+}
+
+double face_area(const TriMesh& mesh, int f) {
+  const Tri& t = mesh.faces[f];
+  const Vec3& a = mesh.positions[t[0]];
+  return 0.5 * (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).norm();
+}
+
+}  // namespace qs
