@@ -1,0 +1,46 @@
+#pragma once
+// The one place where a tool turns failures into messages and exit codes:
+//   0 ok, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal (see qs/core/error.h).
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+#include <new>
+#include <string>
+
+#include "qs/core/error.h"
+
+namespace qs::tools {
+
+/// Runs `body` (which parses with `app` and does the work), mapping every exception to a
+/// one-line message on stderr, prefixed with the tool's name, and a documented exit code.
+template <class Body>
+int run_tool(CLI::App& app, int argc, char** argv, Body&& body) {
+  const std::string name = app.get_name();
+  try {
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+      return app.exit(e);  // prints help, returns 0
+    } catch (const CLI::CallForAllHelp& e) {
+      return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      std::cerr << name << ": " << e.what() << "\nRun '" << name << " --help' for usage.\n";
+      return exit_code(ErrorCode::Usage);
+    }
+    return body();
+  } catch (const Error& e) {
+    std::cerr << name << ": " << error_name(e.code()) << " error: " << e.what() << "\n";
+    return exit_code(e.code());
+  } catch (const std::bad_alloc&) {
+    std::cerr << name << ": internal error: out of memory\n";
+    return exit_code(ErrorCode::Internal);
+  } catch (const std::exception& e) {
+    std::cerr << name << ": internal error: " << e.what() << " (please report this)\n";
+    return exit_code(ErrorCode::Internal);
+  }
+}
+
+}  // namespace qs::tools
