@@ -2,6 +2,7 @@
 // The plain indexed triangle mesh that travels between stages.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products are used everywhere
 #include <array>
 #include <string>
 #include <vector>

@@ -20,10 +20,41 @@ struct SeedLoop {
 /// Traces the four paths. \pre mesh is a validated closed genus-0 mesh; seeds are 4 distinct
 /// vertices. \throws InvalidInput naming the seeds when a path cannot be routed without
 /// crossing or touching the others.
+///
+/// Shortest paths on the vertex graph with 3D edge lengths (A*, exact; ties broken by vertex id:
+/// deterministic), one path at a time; a path avoids the seeds other than its ends and the
+/// vertices of the paths already routed. Orders tried: the four paths by increasing unobstructed
+/// length first (so the shortest pair gets a true shortest path), then the other 23 orders. A result is accepted only
+/// when the faces flooded across non-loop edges form exactly two parts and every loop edge has
+/// one part on each side (an edge joining two loop vertices off the loop, a chord, is allowed).
+/// Also \throws InvalidInput for a seed out of range, two equal seeds, or an edge with one face
+/// or more than two. O(F log F) per path; ~20 ms for 50k vertices.
 SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const Context& context = {});
+
+/// Which seed patch each face lies in: #F labels, 0 for the faces left of the loop
+/// s0 -> s1 -> s2 -> s3 -> s0 (the loop runs counter-clockwise around patch 0 seen from outside,
+/// faces being counter-clockwise seen from outside as validate() leaves them), 1 for the others.
+/// With choose_seeds' seeds, patch 0 is the +e3 side. \throws InvalidInput when the paths are
+/// not joined edge paths between the seeds or do not cut the mesh into exactly two parts.
+std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop);
 
 /// Four seeds chosen automatically (the documented rule is in the .cpp and the README):
 /// the extreme vertices along the first two principal axes, in loop order.
+///  - axes: eigenvectors of the vertex-area-weighted covariance of the positions (vertex area =
+///    a third of its faces' areas); e1 largest variance, e2 second, e3 = e1 x e2; each axis
+///    points to the side of positive third central moment, or, for a symmetric shape (moment
+///    below 1e-6 sigma^3), so that its largest absolute component is positive;
+///  - s0 = max along e1, s1 = max along e2, s2 = min along e1, s3 = min along e2 (lowest id on
+///    ties, a vertex already taken skipped), so the loop runs counter-clockwise around +e3;
+///  - if trace_seed_loop cannot route these, choose_seeds_farthest() is used instead.
+/// \throws InvalidInput when the mesh has fewer than 4 used vertices, or neither rule routes.
 std::array<int, 4> choose_seeds(const TriMesh& mesh);
+
+/// The fallback rule of choose_seeds: geodesic (edge-path) farthest points. s0 = the vertex
+/// farthest from the vertex nearest the area-weighted centroid, s2 = farthest from s0, s1 =
+/// farthest from both s0 and s2 (max of the smaller distance), s3 = farthest from s0, s1 and s2;
+/// s1 and s3 are swapped if needed so the loop runs counter-clockwise around +e3 (signed area of
+/// the quadrilateral projected on the e1-e2 plane). Not checked for routability.
+std::array<int, 4> choose_seeds_farthest(const TriMesh& mesh);
 
 }  // namespace qs::dissect

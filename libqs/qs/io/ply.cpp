@@ -357,7 +357,7 @@ ReadResult read_ply(std::string_view data, const std::string& name) {
       min_bytes += encoding == Encoding::Ascii ? 2
                    : p.is_list                 ? scalar_size(p.count_type)
                                                : scalar_size(p.type);
-    check_count_fits(where, e.count, plural(e).c_str(), min_bytes, budget);
+    if (!e.props.empty()) check_count_fits(where, e.count, plural(e).c_str(), min_bytes, budget);
     if (min_bytes > 0) budget -= std::min(budget, static_cast<std::size_t>(e.count) * min_bytes);
   }
   if (nv < 0) nv = 0;

@@ -119,8 +119,15 @@ class Resolver {
         << "); was it picked on another mesh or in other units?";
       fail(name, s.str());
     }
+    // A point within 1e-6 of the diagonal of a vertex is that vertex (picked points are rounded).
+    const Tri& t = m_.mesh.faces[lm.where.face];
     for (int k = 0; k < 3; ++k)
-      if (lm.where.bary[k] == 1.0) lm.vertex = m_.mesh.faces[lm.where.face][k];
+      if ((m_.mesh.positions[t[k]] - lm.position).norm() <= 1e-6 * m_.report.bbox_diagonal) {
+        lm.vertex = t[k];
+        lm.where.bary = {k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0};
+        lm.position = m_.mesh.positions[t[k]];
+        break;
+      }
     return lm;
   }
 

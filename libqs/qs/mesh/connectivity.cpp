@@ -53,7 +53,9 @@ EdgeGroups group_halfedges(const std::vector<Tri>& faces, int num_vertices) {
 
 namespace {
 
-std::string edge_name(int a, int b) { return std::to_string(a) + "-" + std::to_string(b); }
+std::string edge_name(const EdgeGroups& g, int e) {
+  return std::to_string(g.vertices[e][0]) + "-" + std::to_string(g.vertices[e][1]);
+}
 
 }  // namespace
 
@@ -81,16 +83,15 @@ Connectivity build_connectivity(const TriMesh& mesh) {
     const int n = g.size(e);
     if (n == 1) continue;
     const int* hs = &g.halfedges[g.offsets[e]];
-    const std::string name = edge_name(g.vertices[e][0], g.vertices[e][1]);
     if (n > 2)
-      throw InvalidInput("build_connectivity: non-manifold edge " + name + " has " +
+      throw InvalidInput("build_connectivity: non-manifold edge " + edge_name(g, e) + " has " +
                          std::to_string(n) + " faces (first: " + std::to_string(hs[0] / 3) + ", " +
                          std::to_string(hs[1] / 3) + ", " + std::to_string(hs[2] / 3) +
                          "); each edge must have at most two faces");
     if (c.tail(hs[0]) == c.tail(hs[1]))
-      throw InvalidInput("build_connectivity: edge " + name + " is used in the same direction by faces " +
-                         std::to_string(hs[0] / 3) + " and " + std::to_string(hs[1] / 3) +
-                         " (inconsistent orientation)");
+      throw InvalidInput("build_connectivity: edge " + edge_name(g, e) +
+                         " is used in the same direction by faces " + std::to_string(hs[0] / 3) +
+                         " and " + std::to_string(hs[1] / 3) + " (inconsistent orientation)");
     c.opposite[hs[0]] = hs[1];
     c.opposite[hs[1]] = hs[0];
   }

@@ -15,8 +15,8 @@ namespace qs::mesh {
 /// Halfedges grouped by undirected edge, edges sorted by (lower vertex id, higher vertex id).
 /// Built with a counting sort on the lower vertex and a small sort inside each bucket: O(F).
 struct EdgeGroups {
-  std::vector<int> halfedges;                ///< all 3F halfedges, edge by edge, ascending within an edge
-  std::vector<int> offsets;                  ///< #E+1: edge e owns halfedges[offsets[e] .. offsets[e+1])
+  std::vector<int> halfedges;  ///< all 3F halfedges, edge by edge, ascending within an edge
+  std::vector<int> offsets;    ///< #E+1: edge e owns halfedges[offsets[e] .. offsets[e+1])
   std::vector<std::array<int, 2>> vertices;  ///< #E: (lower, higher) vertex id of each edge
   int num_edges() const { return static_cast<int>(vertices.size()); }
   /// How many halfedges (= face sides) edge e has: 1 boundary, 2 manifold, >2 non-manifold.

@@ -21,36 +21,77 @@ struct PatchMesh {
   std::array<int, 4> corner_index{};
 };
 
-struct SquareParamOptions {
-  double min_edge_length = 1e-12;  ///< shorter 3D edges get this length in the weights
+/// How the sparse LU orders the mean-value system before factorizing it.
+enum class LuOrdering {
+  /// AMD on the (structurally symmetric) pattern, applied to rows and columns alike, diagonal
+  /// pivots preferred: less fill, about 2x faster than Colamd on patches of 20k+ vertices.
+  SymmetricAmd,
+  /// Eigen's COLAMD column ordering with ordinary partial pivoting.
+  Colamd,
 };
+
+struct SquareParamOptions {
+  double min_edge_length = 1e-12;  ///< shorter 3D edges get this length in the weights (> 0)
+  /// Border spacing floor, relative: on each side, every border edge counts as at least this
+  /// fraction of the side's mean edge length, so coincident border vertices stay apart in UV.
+  /// In [0, 1); 0 gives pure arc length.
+  double min_border_spacing = 1e-6;
+  LuOrdering ordering = LuOrdering::SymmetricAmd;  ///< both give the same map (to rounding)
+};
+
+/// A UV face with |signed area| <= this counts as zero-area (and neither as flipped).
+inline constexpr double kZeroUvArea = 1e-14;
 
 /// A parameterization: corners at (0,0) (1,0) (1,1) (0,1), CCW.
 struct SquareParam {
   std::vector<Vec2> uv;     ///< #V
-  int flipped_faces = 0;    ///< UV faces with negative signed area (computed, never assumed)
-  int zero_area_faces = 0;  ///< UV faces with |signed area| <= 1e-14
+  int flipped_faces = 0;    ///< UV faces with signed area < -kZeroUvArea (computed, never assumed)
+  int zero_area_faces = 0;  ///< UV faces with |signed area| <= kZeroUvArea
   double uv_area_sum = 0;   ///< sum of signed UV areas; 1 for a valid map
   bool bijective() const { return flipped_faces == 0 && zero_area_faces == 0; }
 };
 
 /// Interior edges joining two boundary vertices of the same square side (a corner counts on both
-/// of its sides), and faces with all three vertices on one side: both make zero-area UV faces.
-/// Returns the local vertex pairs (a, b) of the edges to split (at their midpoints) before
-/// solving so that every face gets an interior vertex; empty when the patch is clean.
+/// of its sides): the region they cut off lands on one straight side of the square, so its faces
+/// get zero UV area (Floater's "dividing edges"). A face with all three vertices on one side (an
+/// ear) always has such an edge, so it is covered by the same list.
+/// Returns the local vertex pairs (a, b), a < b, sorted and unique; empty when the patch is clean.
+/// The caller must split every returned edge at its 3D midpoint before solving: add a vertex m
+/// (a new interior vertex, not on the boundary loop) and replace each of the two faces (a, b, x)
+/// by (a, m, x) and (m, b, x), keeping the orientation. Splitting never removes another listed
+/// edge, so the edges may be split one after another by their vertex pairs; afterwards no interior
+/// edge joins two same-side vertices and the mean-value map is bijective in exact arithmetic.
+/// \pre the same as parameterize_square (checked: InvalidInput).
 std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch);
 
-/// Border by arc length on each side (3D edge lengths), interior by mean-value weights, one
-/// sparse LU solve (Eigen SparseLU, COLAMD) for u and v together.
-/// \pre patch is a disk with a valid boundary loop and 4 distinct corners (checked: InvalidInput).
-/// \throws SolverError if the factorization fails.
+/// Border by arc length on each side (3D edge lengths), interior by Floater mean-value weights
+/// w_ij = (tan(a/2) + tan(b/2)) / |p_i - p_j| from the 3D one-ring angles, one sparse LU solve
+/// (Eigen SparseLU, ordering per options.ordering) for u and v together.
+/// Degenerate geometry never yields NaN: edge lengths are floored at options.min_edge_length;
+/// a corner without an angle (zero-length edge) contributes 0, an angle within ~2e-8 rad of pi is
+/// clamped; in each row, edges left with a weight below 1e-8 times the row's largest get that
+/// floor (the system stays nonsingular), and a vertex with no usable angle at all gets uniform
+/// weights. Flipped and zero-area UV faces are counted, never assumed away: call
+/// border_degeneracies() first and split what it returns.
+/// \pre patch is a disk (V - E + F = 1, manifold, consistently oriented) whose boundary loop is
+/// its only border, listed CCW (each b[i] -> b[i+1] is a half-edge of a face), vertices distinct;
+/// corner_index[0] == 0 < [1] < [2] < [3] < boundary.size(); every vertex used by a face;
+/// positions finite. All checked: InvalidInput naming the offending local ids.
+/// \throws SolverError if the factorization fails or the solution is not finite.
 SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions& options = {},
                                 const Context& context = {});
 
-/// L2 stretch (Sander, Snyder, Gortler, Hoppe 2001), normalized by sqrt(total UV area / total 3D
-/// area) so that a map that is an isometry up to scale scores exactly 1.
+/// L2 stretch (Sander, Snyder, Gortler, Hoppe 2001). Per face, with S_s, S_t the partial
+/// derivatives of the (linear) UV-to-3D map, L2_f = sqrt((|S_s|^2 + |S_t|^2) / 2); per patch
+/// sqrt(sum L2_f^2 A3D_f / sum A3D_f). Normalization: every value (faces and patch) is multiplied
+/// by sqrt(total UV area / total 3D area), which makes it invariant under scaling the surface or
+/// the UV domain: an isometry up to uniform scale scores exactly 1, and the patch value is >= 1
+/// for every map (e.g. > 1 for a conformal map with non-uniform scale; single faces may be < 1).
+/// A face with UV signed area <= 0 scores infinity, and so does the patch. Faces of zero 3D area
+/// weigh nothing (a patch of zero 3D area scores 0).
+/// \throws InvalidInput if uv.size() != positions.size() or a face id is out of range.
 struct Stretch {
-  std::vector<double> face;  ///< #F per-face normalized L2 stretch (infinity for zero-area UV)
+  std::vector<double> face;  ///< #F per-face normalized L2 stretch (infinity for UV area <= 0)
   double patch = 0;          ///< area-weighted RMS over the faces (3D area weights), normalized
   double area3d = 0;         ///< total 3D area of the patch
 };

@@ -1,0 +1,135 @@
+#include "qs/dissect/chart_io.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "qs/core/atomic_file.h"
+#include "qs/core/error.h"
+
+namespace qs::dissect {
+namespace {
+
+template <class T>
+void put(std::ostream& out, T value) {
+  static_assert(std::is_arithmetic_v<T>);
+  out.write(reinterpret_cast<const char*>(&value), sizeof(T));  // x86-64 and aarch64: little endian
+}
+
+const char* kHeaderTail =
+    "property list uchar int vertex_indices\n"
+    "property list uchar float texcoord\n"
+    "property int patch\n"
+    "property uchar red\n"
+    "property uchar green\n"
+    "property uchar blue\n"
+    "end_header\n";
+
+}  // namespace
+
+std::array<unsigned char, 3> patch_colour(int patch) {
+  const double h = std::fmod(0.13 + patch * 0.618033988749895, 1.0) * 6.0;
+  const double s = patch % 2 ? 0.55 : 0.75, v = patch % 3 == 2 ? 0.8 : 0.95;
+  const int i = static_cast<int>(h);
+  const double f = h - i, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
+  double r, g, b;
+  switch (i % 6) {
+    case 0: r = v, g = t, b = p; break;
+    case 1: r = q, g = v, b = p; break;
+    case 2: r = p, g = v, b = t; break;
+    case 3: r = p, g = q, b = v; break;
+    case 4: r = t, g = p, b = v; break;
+    default: r = v, g = p, b = q; break;
+  }
+  auto c = [](double x) { return static_cast<unsigned char>(std::lround(255 * x)); };
+  return {c(r), c(g), c(b)};
+}
+
+void write_chart_ply(const std::filesystem::path& path, const Chart& chart) {
+  AtomicFile file(path);
+  std::ostream& out = file.stream();
+  out << "ply\nformat binary_little_endian 1.0\ncomment qs chart: cut mesh, per-face patch and wedge uv\n"
+      << "element vertex " << chart.mesh.positions.size()
+      << "\nproperty double x\nproperty double y\nproperty double z\n"
+      << "element face " << chart.mesh.faces.size() << "\n"
+      << kHeaderTail;
+  for (const Vec3& p : chart.mesh.positions)
+    for (int k = 0; k < 3; ++k) put<double>(out, p[k]);
+  for (size_t f = 0; f < chart.mesh.faces.size(); ++f) {
+    put<std::uint8_t>(out, 3);
+    for (int k = 0; k < 3; ++k) put<std::int32_t>(out, chart.mesh.faces[f][k]);
+    put<std::uint8_t>(out, 6);
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 2; ++d) put<float>(out, static_cast<float>(chart.face_uv[f][k][d]));
+    put<std::int32_t>(out, chart.face_patch[f]);
+    for (unsigned char c : patch_colour(chart.face_patch[f])) put<std::uint8_t>(out, c);
+  }
+  file.commit();
+}
+
+Chart read_chart_ply(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path.string() + ": cannot open chart file");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  const std::string data = buf.str();
+  const size_t end = data.find("end_header\n");
+  if (data.rfind("ply\nformat binary_little_endian 1.0\n", 0) != 0 || end == std::string::npos)
+    throw InvalidInput(path.string() + ": not a qs chart file (expected a binary little-endian PLY header)");
+  const std::string header = data.substr(0, end);
+  long long nv = -1, nf = -1;
+  std::istringstream hs(header);
+  for (std::string line; std::getline(hs, line);) {
+    if (line.rfind("element vertex ", 0) == 0) nv = std::stoll(line.substr(15));
+    if (line.rfind("element face ", 0) == 0) nf = std::stoll(line.substr(13));
+  }
+  if (header.find(kHeaderTail, 0) == std::string::npos && header.find("property int patch") == std::string::npos)
+    throw InvalidInput(path.string() + ": PLY file lacks the chart's per-face patch and texcoord properties");
+  const size_t face_bytes = 1 + 12 + 1 + 24 + 4 + 3;
+  const size_t body = end + std::strlen("end_header\n");
+  if (nv < 0 || nf < 0 || data.size() - body != static_cast<size_t>(nv) * 24 + static_cast<size_t>(nf) * face_bytes)
+    throw InvalidInput(path.string() + ": chart file size does not match its header (truncated?)");
+  Chart chart;
+  const char* p = data.data() + body;
+  auto get = [&p](auto& v) {
+    std::memcpy(&v, p, sizeof(v));
+    p += sizeof(v);
+  };
+  chart.mesh.positions.resize(nv);
+  for (auto& v : chart.mesh.positions)
+    for (int k = 0; k < 3; ++k) get(v[k]);
+  chart.mesh.faces.resize(nf);
+  chart.face_uv.resize(nf);
+  chart.face_patch.resize(nf);
+  int max_patch = -1;
+  for (long long f = 0; f < nf; ++f) {
+    std::uint8_t n3, n6, rgb[3];
+    get(n3);
+    std::int32_t idx[3];
+    for (auto& i : idx) get(i);
+    get(n6);
+    if (n3 != 3 || n6 != 6) throw InvalidInput(path.string() + ": face " + std::to_string(f) + " is not a chart triangle");
+    for (int k = 0; k < 3; ++k) {
+      if (idx[k] < 0 || idx[k] >= nv)
+        throw InvalidInput(path.string() + ": face " + std::to_string(f) + " has vertex index " +
+                           std::to_string(idx[k]) + " out of range");
+      chart.mesh.faces[f][k] = idx[k];
+      float u, v;
+      get(u);
+      get(v);
+      chart.face_uv[f][k] = Vec2(u, v);
+    }
+    std::int32_t patch;
+    get(patch);
+    for (auto& c : rgb) get(c);
+    if (patch < 0) throw InvalidInput(path.string() + ": face " + std::to_string(f) + " has a negative patch");
+    chart.face_patch[f] = patch;
+    max_patch = std::max(max_patch, static_cast<int>(patch));
+  }
+  chart.patches.resize(max_patch + 1);
+  return chart;
+}
+
+}  // namespace qs::dissect

@@ -1,0 +1,479 @@
+// Floater mean-value parameterization of a quad patch onto the unit square (paper 3.1).
+
+#include "qs/param/square_param.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "qs/core/error.h"
+
+namespace qs::param {
+namespace {
+
+/// tan(a/2) is clamped here: a corner angle within ~2e-8 rad of pi (a vertex on its opposite
+/// edge) would otherwise give an infinite weight.
+constexpr double kMaxTanHalfAngle = 1e8;
+/// In a row of the system, an edge whose mean-value weight is below this fraction of the row's
+/// largest weight (only edges all of whose corners at the row vertex are degenerate) gets this
+/// fraction: every edge keeps a positive weight, so the matrix stays an irreducibly diagonally
+/// dominant M-matrix (nonsingular) however degenerate the geometry.
+constexpr double kRelativeWeightFloor = 1e-8;
+/// SparseLU takes the diagonal as pivot when it is at least this fraction of its column's largest
+/// entry (symmetric-AMD path only).
+constexpr double kDiagonalPivotThreshold = 1e-3;
+/// How many element ids an error message lists per kind of problem.
+constexpr int kMaxListed = 8;
+
+/// tan(a/2) for the angle a between u and v, computed without cancellation on both sides of
+/// pi/2: sin a / (1 + cos a) for acute angles, (1 - cos a) / sin a for obtuse ones. 0 when u or v
+/// is a zero vector (no angle); never NaN for finite input.
+double tan_half_angle(const Vec3& u, const Vec3& v) {
+  const double nn = u.norm() * v.norm();
+  if (!(nn > 0)) return 0;
+  const double cr = u.cross(v).norm();
+  const double d = u.dot(v);
+  if (d >= 0) return cr / (nn + d);
+  const double num = nn - d;  // >= nn > 0
+  if (cr * kMaxTanHalfAngle <= num) return kMaxTanHalfAngle;
+  return num / cr;
+}
+
+/// Collects the problems of one kind and renders "what: id, id, ... (and N more)".
+class ProblemList {
+ public:
+  explicit ProblemList(std::string what) : what_(std::move(what)) {}
+  void add(const std::string& item) {
+    if (count_ < kMaxListed) items_.push_back(item);
+    ++count_;
+  }
+  bool empty() const { return count_ == 0; }
+  void append_to(std::vector<std::string>& out) const {
+    if (count_ == 0) return;
+    std::ostringstream s;
+    s << what_ << ": ";
+    for (std::size_t i = 0; i < items_.size(); ++i) s << (i ? ", " : "") << items_[i];
+    if (count_ > static_cast<int>(items_.size())) s << " (and " << count_ - items_.size() << " more)";
+    out.push_back(s.str());
+  }
+
+ private:
+  std::string what_;
+  std::vector<std::string> items_;
+  int count_ = 0;
+};
+
+[[noreturn]] void throw_problems(const std::vector<std::string>& problems) {
+  std::ostringstream s;
+  s << "parameterize_square: invalid patch: ";
+  for (std::size_t i = 0; i < problems.size(); ++i) s << (i ? "; " : "") << problems[i];
+  throw InvalidInput(s.str());
+}
+
+std::string pair_str(int a, int b) {
+  std::string s(1, '(');  // not "(" + ...: GCC 12 warns falsely (-Wrestrict) on that form
+  s += std::to_string(a);
+  s += ',';
+  s += std::to_string(b);
+  s += ')';
+  return s;
+}
+
+/// Half-edge h = 3 f + c runs from faces[f][c] to faces[f][(c+1)%3]. Out-going half-edges are
+/// bucketed per vertex (CSR), and every half-edge knows its opposite (-1 on the border).
+struct HalfEdges {
+  std::vector<int> out_offset;  ///< #V + 1
+  std::vector<int> out;         ///< half-edge ids grouped by source vertex
+  std::vector<int> twin;        ///< #H
+};
+
+int he_from(const std::vector<Tri>& faces, int h) { return faces[h / 3][h % 3]; }
+int he_to(const std::vector<Tri>& faces, int h) { return faces[h / 3][(h % 3 + 1) % 3]; }
+
+/// Finds the half-edge a->b among a's out-going ones, or -1.
+int find_half_edge(const HalfEdges& he, const std::vector<Tri>& faces, int a, int b) {
+  for (int k = he.out_offset[a]; k < he.out_offset[a + 1]; ++k)
+    if (he_to(faces, he.out[k]) == b) return he.out[k];
+  return -1;
+}
+
+/// \pre face ids are in range.
+HalfEdges build_half_edges(int num_vertices, const std::vector<Tri>& faces) {
+  HalfEdges he;
+  const int nh = 3 * static_cast<int>(faces.size());
+  he.out_offset.assign(num_vertices + 1, 0);
+  for (const Tri& t : faces)
+    for (int v : t) ++he.out_offset[v + 1];
+  for (int v = 0; v < num_vertices; ++v) he.out_offset[v + 1] += he.out_offset[v];
+  he.out.resize(nh);
+  std::vector<int> fill(he.out_offset.begin(), he.out_offset.end() - 1);
+  for (int h = 0; h < nh; ++h) he.out[fill[he_from(faces, h)]++] = h;
+  he.twin.assign(nh, -1);
+  for (int h = 0; h < nh; ++h) he.twin[h] = find_half_edge(he, faces, he_to(faces, h), he_from(faces, h));
+  return he;
+}
+
+/// Checks every documented precondition, collecting all problems; returns the half-edges.
+HalfEdges validate_patch(const PatchMesh& patch, const SquareParamOptions& options) {
+  std::vector<std::string> problems;
+  const int nv = static_cast<int>(patch.positions.size());
+  const int nf = static_cast<int>(patch.faces.size());
+  const int nb = static_cast<int>(patch.boundary.size());
+
+  if (!(options.min_edge_length > 0) || !std::isfinite(options.min_edge_length))
+    problems.push_back("options.min_edge_length must be positive and finite (got " +
+                       std::to_string(options.min_edge_length) + ")");
+  if (!(options.min_border_spacing >= 0 && options.min_border_spacing < 1))
+    problems.push_back("options.min_border_spacing must be in [0, 1) (got " +
+                       std::to_string(options.min_border_spacing) + ")");
+  if (nf == 0) problems.push_back("the patch has no faces");
+
+  ProblemList non_finite("vertices with a non-finite position");
+  for (int v = 0; v < nv; ++v)
+    if (!patch.positions[v].allFinite()) non_finite.add(std::to_string(v));
+  non_finite.append_to(problems);
+
+  ProblemList bad_face("faces with a vertex id outside [0, " + std::to_string(nv) + ")");
+  ProblemList repeated("faces that repeat a vertex");
+  std::vector<char> used(nv, 0);
+  for (int f = 0; f < nf; ++f) {
+    const Tri& t = patch.faces[f];
+    bool ok = true;
+    for (int v : t)
+      if (v < 0 || v >= nv) ok = false;
+    if (!ok) {
+      bad_face.add(std::to_string(f) + " (" + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " +
+                   std::to_string(t[2]) + ")");
+      continue;
+    }
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) repeated.add(std::to_string(f));
+    for (int v : t) used[v] = 1;
+  }
+  bad_face.append_to(problems);
+  repeated.append_to(problems);
+  if (bad_face.empty()) {
+    ProblemList unused("vertices used by no face (remove them from the patch)");
+    for (int v = 0; v < nv; ++v)
+      if (!used[v]) unused.add(std::to_string(v));
+    unused.append_to(problems);
+  }
+
+  if (nb < 4)
+    problems.push_back("the boundary loop has " + std::to_string(nb) +
+                       " vertices; a square patch needs at least 4 (one per corner)");
+  ProblemList bad_boundary("boundary loop entries outside [0, " + std::to_string(nv) + ") (position: id)");
+  ProblemList twice("vertices that appear more than once in the boundary loop (the patch must be a disk)");
+  std::vector<int> position_in_loop(nv, -1);
+  for (int i = 0; i < nb; ++i) {
+    const int v = patch.boundary[i];
+    if (v < 0 || v >= nv) {
+      bad_boundary.add(std::to_string(i) + ": " + std::to_string(v));
+    } else if (position_in_loop[v] >= 0) {
+      twice.add(std::to_string(v) + " (positions " + std::to_string(position_in_loop[v]) + " and " +
+                std::to_string(i) + ")");
+    } else {
+      position_in_loop[v] = i;
+    }
+  }
+  bad_boundary.append_to(problems);
+  twice.append_to(problems);
+
+  const auto& c = patch.corner_index;
+  const std::string corners = "(got " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
+                              std::to_string(c[2]) + " " + std::to_string(c[3]) + ")";
+  if (c[0] != 0)
+    problems.push_back("corner_index[0] must be 0: the boundary loop starts at corner 0 " + corners);
+  for (int k = 0; k < 4; ++k)
+    if (c[k] < 0 || c[k] >= nb)
+      problems.push_back("corner_index[" + std::to_string(k) + "] = " + std::to_string(c[k]) +
+                         " is out of range: the boundary loop has " + std::to_string(nb) + " vertices " +
+                         corners);
+  for (int k = 0; k + 1 < 4; ++k)
+    if (c[k] >= c[k + 1])
+      problems.push_back("corner indices must strictly increase (4 distinct corners in loop order): corner_index[" +
+                         std::to_string(k) + "] >= corner_index[" + std::to_string(k + 1) + "] " + corners);
+
+  if (!problems.empty()) throw_problems(problems);
+
+  // Connectivity: ids are all valid from here on.
+  HalfEdges he = build_half_edges(nv, patch.faces);
+  const int nh = 3 * nf;
+  ProblemList duplicate("edges used twice in the same direction (faces inconsistently oriented or "
+                        "the patch is not manifold)");
+  for (int h = 0; h < nh; ++h) {
+    const int a = he_from(patch.faces, h), b = he_to(patch.faces, h);
+    if (find_half_edge(he, patch.faces, a, b) != h) duplicate.add(pair_str(a, b));
+  }
+  duplicate.append_to(problems);
+
+  ProblemList reversed("boundary edges reversed: the face holding the edge runs it the other way; the loop "
+                       "must run counter-clockwise with the patch on its left (reverse the loop)");
+  ProblemList not_edge("consecutive boundary loop entries that are not an edge of any face");
+  ProblemList inner("consecutive boundary loop entries joined by an interior edge (faces on both sides)");
+  for (int i = 0; i < nb; ++i) {
+    const int a = patch.boundary[i], b = patch.boundary[(i + 1) % nb];
+    const bool forward = find_half_edge(he, patch.faces, a, b) >= 0;
+    const bool backward = find_half_edge(he, patch.faces, b, a) >= 0;
+    if (forward && backward) inner.add(pair_str(a, b));
+    else if (backward) reversed.add(pair_str(a, b));
+    else if (!forward) not_edge.add(pair_str(a, b));
+  }
+  reversed.append_to(problems);
+  not_edge.append_to(problems);
+  inner.append_to(problems);
+
+  if (problems.empty()) {
+    // Connected components over the face edges (union-find).
+    std::vector<int> parent(nv);
+    for (int v = 0; v < nv; ++v) parent[v] = v;
+    auto root = [&](int v) {
+      while (parent[v] != v) v = parent[v] = parent[parent[v]];
+      return v;
+    };
+    for (const Tri& t : patch.faces)
+      for (int c = 0; c < 2; ++c) parent[root(t[c])] = root(t[c + 1]);
+    int components = 0;
+    for (int v = 0; v < nv; ++v)
+      if (root(v) == v) ++components;
+    if (components != 1)
+      problems.push_back("the patch has " + std::to_string(components) +
+                         " connected components; it must be one disk");
+  }
+  if (problems.empty()) {
+    int border_edges = 0;
+    for (int h = 0; h < nh; ++h)
+      if (he.twin[h] < 0) ++border_edges;
+    if (border_edges != nb) {
+      problems.push_back("the patch has " + std::to_string(border_edges) +
+                         " border edges but its boundary loop has " + std::to_string(nb) +
+                         ": it has holes or more than one boundary loop; a patch must be a disk");
+    } else {
+      const int num_edges = (nh + border_edges) / 2;
+      const int euler = nv - num_edges + nf;
+      if (euler != 1)
+        problems.push_back("the patch is not a disk: V - E + F = " + std::to_string(euler) + " (expected 1)");
+    }
+  }
+  if (!problems.empty()) throw_problems(problems);
+  return he;
+}
+
+/// The sides (bit s for side s) each vertex lies on; 0 for interior vertices. A corner lies on
+/// both of its sides. \pre the boundary loop and corners are valid.
+std::vector<unsigned> side_masks(const PatchMesh& patch) {
+  std::vector<unsigned> mask(patch.positions.size(), 0u);
+  const int nb = static_cast<int>(patch.boundary.size());
+  for (int s = 0; s < 4; ++s) {
+    const int begin = patch.corner_index[s];
+    const int end = s < 3 ? patch.corner_index[s + 1] : nb;
+    for (int i = begin; i <= end; ++i) mask[patch.boundary[i % nb]] |= 1u << s;
+  }
+  return mask;
+}
+
+[[noreturn]] void throw_factorization(Eigen::Index n, const std::string& why) {
+  throw SolverError("parameterize_square: sparse LU factorization of the " + std::to_string(n) + "x" +
+                    std::to_string(n) + " mean-value system failed: " + why);
+}
+
+/// Eigen SparseLU with its own column ordering (COLAMD on the columns only).
+Eigen::MatrixX2d solve_colamd(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs,
+                              const Context& context) {
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
+  lu.analyzePattern(A);
+  lu.factorize(A);
+  if (lu.info() != Eigen::Success) throw_factorization(A.rows(), lu.lastErrorMessage());
+  context.report("parameterize: solve", 0.9);
+  Eigen::MatrixX2d x = lu.solve(rhs);
+  if (lu.info() != Eigen::Success) throw_factorization(A.rows(), "the solve failed");
+  return x;
+}
+
+/// The matrix is structurally symmetric and row diagonally dominant: order rows and columns
+/// together by AMD on its pattern (P^T A P), then factor with SparseLU in symmetric mode and a
+/// low diagonal-pivot threshold so that the diagonal pivots (and the symmetric fill) are kept.
+/// Gaussian elimination needs no pivoting on a row diagonally dominant matrix (growth <= 2).
+Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs,
+                                     const Context& context) {
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm;
+  Eigen::AMDOrdering<int> amd;
+  amd(A, perm);
+  Eigen::SparseMatrix<double> B = perm.transpose() * A * perm;
+  B.makeCompressed();
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::NaturalOrdering<int>> lu;
+  lu.isSymmetric(true);
+  lu.setPivotThreshold(kDiagonalPivotThreshold);
+  lu.analyzePattern(B);
+  lu.factorize(B);
+  if (lu.info() != Eigen::Success) throw_factorization(A.rows(), lu.lastErrorMessage());
+  context.report("parameterize: solve", 0.9);
+  const Eigen::MatrixX2d y = lu.solve(perm.transpose() * rhs);
+  if (lu.info() != Eigen::Success) throw_factorization(A.rows(), "the solve failed");
+  return perm * y;
+}
+
+}  // namespace
+
+std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch) {
+  HalfEdges he = validate_patch(patch, {});
+  const std::vector<unsigned> mask = side_masks(patch);
+  const auto& faces = patch.faces;
+  std::vector<std::array<int, 2>> result;
+  // Interior edges (both half-edges present: each visited once, from the lower id) joining two
+  // vertices of one side.
+  for (int h = 0; h < 3 * static_cast<int>(faces.size()); ++h) {
+    if (he.twin[h] < 0) continue;
+    const int a = he_from(faces, h), b = he_to(faces, h);
+    if (a < b && (mask[a] & mask[b]) != 0) result.push_back({a, b});
+  }
+  // A face with all three vertices on one side has at least one edge that is not a border edge
+  // (a 3-vertex border is rejected above), and that edge joins two same-side vertices, so it is
+  // already listed; adding it again is harmless (deduplicated below) and keeps this explicit.
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
+    const Tri& t = faces[f];
+    if ((mask[t[0]] & mask[t[1]] & mask[t[2]]) == 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      if (he.twin[3 * f + c] < 0) continue;
+      const int a = t[c], b = t[(c + 1) % 3];
+      result.push_back({std::min(a, b), std::max(a, b)});
+      break;
+    }
+  }
+  std::sort(result.begin(), result.end());
+  result.erase(std::unique(result.begin(), result.end()), result.end());
+  return result;
+}
+
+SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions& options,
+                                const Context& context) {
+  const HalfEdges he = validate_patch(patch, options);
+  context.check_cancel();
+  const auto& pos = patch.positions;
+  const auto& faces = patch.faces;
+  const int nv = static_cast<int>(pos.size());
+  const int nf = static_cast<int>(faces.size());
+  const int nb = static_cast<int>(patch.boundary.size());
+
+  SquareParam result;
+  result.uv.assign(nv, Vec2::Zero());
+
+  // Border: arc length per side, each edge at least min_border_spacing times its side's mean.
+  const Vec2 corner_uv[4] = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  std::vector<int> interior_index(nv, -1);
+  std::vector<char> on_border(nv, 0);
+  for (int v : patch.boundary) on_border[v] = 1;
+  for (int s = 0; s < 4; ++s) {
+    const int begin = patch.corner_index[s];
+    const int end = s < 3 ? patch.corner_index[s + 1] : nb;
+    const int m = end - begin;
+    std::vector<double> len(m);
+    double total = 0;
+    for (int k = 0; k < m; ++k) {
+      len[k] = (pos[patch.boundary[(begin + k + 1) % nb]] - pos[patch.boundary[begin + k]]).norm();
+      total += len[k];
+    }
+    const double floor_len = options.min_border_spacing * total / m;
+    double sum = 0;
+    for (int k = 0; k < m; ++k) {
+      if (!(total > 0)) len[k] = 1;  // a side of zero length: spread its vertices evenly
+      len[k] = std::max(len[k], floor_len);
+      sum += len[k];
+    }
+    const Vec2 a = corner_uv[s], b = corner_uv[(s + 1) % 4];
+    double run = 0;
+    result.uv[patch.boundary[begin]] = a;
+    for (int k = 1; k < m; ++k) {
+      run += len[k - 1];
+      const double t = run / sum;
+      result.uv[patch.boundary[begin + k]] = a + t * (b - a);  // exact 0 or 1 across the side
+    }
+  }
+
+  int ni = 0;
+  for (int v = 0; v < nv; ++v)
+    if (!on_border[v]) interior_index[v] = ni++;
+  context.report("parameterize: weights", 0.0);
+
+  if (ni > 0) {
+    // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
+    // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
+    // i->j is half-edge 3f+c itself, i->k is the twin of k->i (3f+(c+2)%3).
+    std::vector<double> w(3 * nf, 0.0);
+    for (int f = 0; f < nf; ++f) {
+      const Tri& t = faces[f];
+      for (int c = 0; c < 3; ++c) {
+        const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
+        if (on_border[i]) continue;
+        const Vec3 eij = pos[j] - pos[i], eik = pos[k] - pos[i];
+        const double th = tan_half_angle(eij, eik);
+        w[3 * f + c] += th / std::max(eij.norm(), options.min_edge_length);
+        w[he.twin[3 * f + (c + 2) % 3]] += th / std::max(eik.norm(), options.min_edge_length);
+      }
+    }
+
+    std::vector<Eigen::Triplet<double>> triplets;
+    triplets.reserve(he.out.size() + ni);
+    Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
+    for (int i = 0; i < nv; ++i) {
+      const int r = interior_index[i];
+      if (r < 0) continue;
+      const int begin = he.out_offset[i], end = he.out_offset[i + 1];
+      double wmax = 0;
+      bool finite = true;
+      for (int k = begin; k < end; ++k) {
+        const double x = w[he.out[k]];
+        finite = finite && std::isfinite(x);
+        wmax = std::max(wmax, x);
+      }
+      // No usable angle at all around i (every face degenerate), or overflow: uniform weights.
+      const bool uniform = !finite || !(wmax > 0);
+      const double floor_w = kRelativeWeightFloor * wmax;
+      double diag = 0;
+      for (int k = begin; k < end; ++k) {
+        const int h = he.out[k];
+        const int j = he_to(faces, h);
+        const double x = uniform ? 1.0 : std::max(w[h], floor_w);
+        diag += x;
+        if (interior_index[j] >= 0) triplets.emplace_back(r, interior_index[j], -x);
+        else rhs.row(r) += x * result.uv[j].transpose();
+      }
+      triplets.emplace_back(r, r, diag);
+    }
+    Eigen::SparseMatrix<double> A(ni, ni);
+    A.setFromTriplets(triplets.begin(), triplets.end());
+    triplets = {};
+    context.report("parameterize: factorize", 0.2);
+    context.check_cancel();
+
+    const Eigen::MatrixX2d x = options.ordering == LuOrdering::SymmetricAmd
+                                   ? solve_symmetric_amd(A, rhs, context)
+                                   : solve_colamd(A, rhs, context);
+    if (!x.allFinite())
+      throw SolverError("parameterize_square: the mean-value solve (" + std::to_string(ni) +
+                        " interior vertices) gave no finite solution");
+    for (int v = 0; v < nv; ++v)
+      if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
+  }
+
+  for (const Tri& t : faces) {
+    const Vec2 &a = result.uv[t[0]], &b = result.uv[t[1]], &c = result.uv[t[2]];
+    const double area = 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+    result.uv_area_sum += area;
+    if (std::abs(area) <= kZeroUvArea) ++result.zero_area_faces;
+    else if (area < 0) ++result.flipped_faces;
+  }
+  context.report("parameterize: done", 1.0);
+  if (!result.bijective())
+    context.warn("parameterize_square: " + std::to_string(result.flipped_faces) + " flipped and " +
+                 std::to_string(result.zero_area_faces) + " zero-area UV faces of " + std::to_string(nf));
+  return result;
+}
+
+}  // namespace qs::param

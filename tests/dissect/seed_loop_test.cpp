@@ -1,0 +1,505 @@
+// The seed loop (paper 3.3): four non-crossing edge paths that cut a genus-0 mesh into two disks.
+// Every property is checked independently of the implementation (own edge set, own flood fill,
+// own Dijkstra).
+
+#include "qs/dissect/seed_loop.h"
+
+#include <Eigen/Geometry>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <map>
+#include <queue>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "qs/core/error.h"
+#include "qs/io/read_mesh.h"
+#include "qs/mesh/validate.h"
+#include "qs/shapes/shapes.h"
+
+namespace {
+
+using qs::TriMesh;
+using qs::Vec3;
+using qs::dissect::SeedLoop;
+using Seeds = std::array<int, 4>;
+using ::testing::HasSubstr;
+
+using Edge = std::pair<int, int>;
+Edge edge(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
+
+/// Undirected edge -> the faces beside it.
+std::map<Edge, std::vector<int>> edge_faces(const TriMesh& m) {
+  std::map<Edge, std::vector<int>> e;
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) e[edge(m.faces[f][k], m.faces[f][(k + 1) % 3])].push_back(f);
+  return e;
+}
+
+/// Plain Dijkstra distance over mesh edges, nothing blocked.
+double edge_distance(const TriMesh& m, int from, int to) {
+  std::vector<std::vector<std::pair<int, double>>> adj(m.num_vertices());
+  for (const auto& [e, faces] : edge_faces(m)) {
+    const double len = (m.positions[e.first] - m.positions[e.second]).norm();
+    adj[e.first].emplace_back(e.second, len);
+    adj[e.second].emplace_back(e.first, len);
+  }
+  std::vector<double> dist(m.num_vertices(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+  dist[from] = 0;
+  q.emplace(0.0, from);
+  while (!q.empty()) {
+    const auto [d, v] = q.top();
+    q.pop();
+    if (d > dist[v]) continue;
+    if (v == to) return d;
+    for (const auto& [w, len] : adj[v])
+      if (d + len < dist[w]) {
+        dist[w] = d + len;
+        q.emplace(dist[w], w);
+      }
+  }
+  return dist[to];
+}
+
+double path_length(const TriMesh& m, const std::vector<int>& p) {
+  double sum = 0;
+  for (std::size_t k = 1; k < p.size(); ++k)
+    sum += (m.positions[p[k]] - m.positions[p[k - 1]]).norm();
+  return sum;
+}
+
+int nearest_vertex(const TriMesh& m, const Vec3& direction) {
+  int best = 0;
+  for (int v = 1; v < m.num_vertices(); ++v)
+    if (m.positions[v].normalized().dot(direction.normalized()) >
+        m.positions[best].normalized().dot(direction.normalized()))
+      best = v;
+  return best;
+}
+
+/// Checks every documented property of a seed loop; returns the two part sizes.
+std::pair<int, int> check_loop(const TriMesh& m, const Seeds& seeds, const SeedLoop& loop) {
+  EXPECT_EQ(loop.seeds, seeds);
+  const auto faces_of = edge_faces(m);
+  std::set<int> seed_set(seeds.begin(), seeds.end());
+  std::map<int, int> uses;  // vertex -> how many path positions use it
+  std::set<Edge> loop_edges;
+  for (int i = 0; i < 4; ++i) {
+    const auto& p = loop.paths[i];
+    EXPECT_GE(p.size(), 2u) << "path " << i;
+    if (p.size() < 2) return {0, 0};
+    EXPECT_EQ(p.front(), seeds[i]) << "path " << i;
+    EXPECT_EQ(p.back(), seeds[(i + 1) % 4]) << "path " << i;
+    EXPECT_EQ(std::set<int>(p.begin(), p.end()).size(), p.size())
+        << "path " << i << " is not simple";
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      ++uses[p[k]];
+      if (k > 0 && k + 1 < p.size()) {
+        EXPECT_EQ(seed_set.count(p[k]), 0u) << "path " << i << " passes through a seed";
+      }
+      if (k + 1 < p.size()) {
+        const Edge e = edge(p[k], p[k + 1]);
+        EXPECT_EQ(faces_of.count(e), 1u) << "path " << i << " jumps " << p[k] << "->" << p[k + 1];
+        EXPECT_TRUE(loop_edges.insert(e).second) << "edge used twice";
+      }
+    }
+  }
+  for (const auto& [v, n] : uses)
+    EXPECT_EQ(n, seed_set.count(v) ? 2 : 1) << "vertex " << v << " shared by paths";
+  // Flood fill across edges that are not on the loop.
+  std::vector<int> part(m.num_faces(), -1);
+  int parts = 0;
+  for (int f0 = 0; f0 < m.num_faces(); ++f0) {
+    if (part[f0] >= 0) continue;
+    std::vector<int> stack{f0};
+    part[f0] = parts;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const Edge e = edge(m.faces[f][k], m.faces[f][(k + 1) % 3]);
+        if (loop_edges.count(e)) continue;
+        for (int g : faces_of.at(e))
+          if (part[g] < 0) {
+            part[g] = parts;
+            stack.push_back(g);
+          }
+      }
+    }
+    ++parts;
+  }
+  EXPECT_EQ(parts, 2);
+  for (const Edge& e : loop_edges) {
+    const auto& fs = faces_of.at(e);
+    EXPECT_EQ(fs.size(), 2u);
+    if (fs.size() == 2) {
+      EXPECT_NE(part[fs[0]], part[fs[1]]) << "loop edge with one part on both sides";
+    }
+  }
+  const int n0 = static_cast<int>(std::count(part.begin(), part.end(), 0));
+  const int n1 = static_cast<int>(std::count(part.begin(), part.end(), 1));
+  EXPECT_GT(n0, 0);
+  EXPECT_GT(n1, 0);
+  EXPECT_EQ(n0 + n1, m.num_faces());
+  // The library's labels agree with this flood fill (up to naming the parts).
+  const std::vector<int> labels = qs::dissect::seed_patch_of_faces(m, loop);
+  EXPECT_EQ(static_cast<int>(labels.size()), m.num_faces());
+  if (static_cast<int>(labels.size()) == m.num_faces()) {
+    int agree = 0;
+    for (int f = 0; f < m.num_faces(); ++f) agree += (labels[f] == part[f]);
+    EXPECT_TRUE(agree == 0 || agree == m.num_faces()) << "labels differ from the flood fill";
+  }
+  return {n0, n1};
+}
+
+struct Shape {
+  std::string name;
+  TriMesh mesh;
+};
+
+std::vector<Shape> shapes() {
+  return {{"icosphere3", qs::shapes::icosphere(3)},
+          {"ellipsoid", qs::shapes::ellipsoid(3, 2, 1, 3)},
+          {"star_blob", qs::shapes::star_blob(6, 1.5, 3)},
+          {"cube_sphere", qs::shapes::cube_sphere(8)},
+          {"bumpy_sphere", qs::shapes::bumpy_sphere(0.2, 5, 3)}};
+}
+
+TEST(SeedLoop, ChosenSeedsGiveAValidLoopOnEveryShape) {
+  for (const Shape& s : shapes()) {
+    SCOPED_TRACE(s.name);
+    const Seeds seeds = qs::dissect::choose_seeds(s.mesh);
+    const SeedLoop loop = qs::dissect::trace_seed_loop(s.mesh, seeds);
+    check_loop(s.mesh, seeds, loop);
+  }
+}
+
+TEST(SeedLoop, HandPickedSeedsGiveAValidLoopOnEveryShape) {
+  const std::vector<std::array<Vec3, 4>> layouts = {
+      {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)},
+      {Vec3(1, 0.2, 0.3), Vec3(0, 0, 1), Vec3(-0.5, -0.5, 0.3), Vec3(0.1, -1, -0.4)},
+      {Vec3(1, 1, 1), Vec3(-1, 1, -1), Vec3(1, -1, -1), Vec3(-1, -1, 1)},
+      // Crossing order: +x, -x, +y, -y. The paths must go over the poles.
+      {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0)},
+      // Close together.
+      {Vec3(1, 0, 0), Vec3(1, 0.3, 0), Vec3(1, 0.3, 0.3), Vec3(1, 0, 0.3)},
+  };
+  for (const Shape& s : shapes()) {
+    for (std::size_t l = 0; l < layouts.size(); ++l) {
+      SCOPED_TRACE(s.name + " layout " + std::to_string(l));
+      Seeds seeds{};
+      for (int i = 0; i < 4; ++i) seeds[i] = nearest_vertex(s.mesh, layouts[l][i]);
+      ASSERT_EQ(std::set<int>(seeds.begin(), seeds.end()).size(), 4u);
+      const SeedLoop loop = qs::dissect::trace_seed_loop(s.mesh, seeds);
+      check_loop(s.mesh, seeds, loop);
+    }
+  }
+}
+
+TEST(SeedLoop, ShortestPairIsAShortestPath) {
+  for (const Shape& s : shapes()) {
+    SCOPED_TRACE(s.name);
+    const Seeds seeds = qs::dissect::choose_seeds(s.mesh);
+    const SeedLoop loop = qs::dissect::trace_seed_loop(s.mesh, seeds);
+    double best_distance = std::numeric_limits<double>::infinity();
+    int best = -1;
+    for (int i = 0; i < 4; ++i) {
+      const double d = edge_distance(s.mesh, seeds[i], seeds[(i + 1) % 4]);
+      EXPECT_GE(path_length(s.mesh, loop.paths[i]), d * (1 - 1e-12)) << "path " << i;
+      if (d < best_distance) {
+        best_distance = d;
+        best = i;
+      }
+    }
+    EXPECT_NEAR(path_length(s.mesh, loop.paths[best]), best_distance, 1e-9 * best_distance);
+  }
+}
+
+TEST(SeedLoop, SeedsAtEllipsoidAxisEndsGiveFourShortestPaths) {
+  const TriMesh m = qs::shapes::ellipsoid(3, 2, 1, 4);
+  const Seeds seeds{nearest_vertex(m, Vec3(1, 0, 0)), nearest_vertex(m, Vec3(0, 1, 0)),
+                    nearest_vertex(m, Vec3(-1, 0, 0)), nearest_vertex(m, Vec3(0, -1, 0))};
+  const SeedLoop loop = qs::dissect::trace_seed_loop(m, seeds);
+  check_loop(m, seeds, loop);
+  for (int i = 0; i < 4; ++i) {
+    const double d = edge_distance(m, seeds[i], seeds[(i + 1) % 4]);
+    EXPECT_NEAR(path_length(m, loop.paths[i]), d, 1e-9 * d) << "path " << i;
+  }
+}
+
+TEST(SeedLoop, IsDeterministic) {
+  const TriMesh m = qs::shapes::bumpy_sphere(0.2, 5, 3);
+  const Seeds seeds = qs::dissect::choose_seeds(m);
+  const SeedLoop a = qs::dissect::trace_seed_loop(m, seeds);
+  const SeedLoop b = qs::dissect::trace_seed_loop(m, seeds);
+  EXPECT_EQ(a.paths, b.paths);
+}
+
+TEST(SeedLoop, LogsPathLengthsThroughTheContext) {
+  const TriMesh m = qs::shapes::icosphere(2);
+  std::vector<std::string> lines;
+  qs::Context context;
+  context.log = [&](qs::LogLevel, const std::string& line) { lines.push_back(line); };
+  qs::dissect::trace_seed_loop(m, qs::dissect::choose_seeds(m), context);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_THAT(lines.front(), HasSubstr("seed loop"));
+}
+
+TEST(ChooseSeeds, IsDeterministicAndDistinct) {
+  for (const Shape& s : shapes()) {
+    SCOPED_TRACE(s.name);
+    const Seeds a = qs::dissect::choose_seeds(s.mesh);
+    const Seeds b = qs::dissect::choose_seeds(s.mesh);
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(std::set<int>(a.begin(), a.end()).size(), 4u);
+    for (int v : a) {
+      EXPECT_GE(v, 0);
+      EXPECT_LT(v, s.mesh.num_vertices());
+    }
+  }
+}
+
+TEST(ChooseSeeds, EllipsoidSeedsAreAtTheEndsOfTheXAndYAxes) {
+  const TriMesh m = qs::shapes::ellipsoid(3, 2, 1, 3);
+  const Seeds s = qs::dissect::choose_seeds(m);
+  // Largest variance along x, then y; symmetric, so the signs come from the tie rule: +x, +y.
+  auto argext = [&](int axis, double sign) {
+    int best = 0;
+    for (int v = 1; v < m.num_vertices(); ++v)
+      if (sign * m.positions[v][axis] > sign * m.positions[best][axis]) best = v;
+    return best;
+  };
+  EXPECT_EQ(s[0], argext(0, +1));
+  EXPECT_EQ(s[1], argext(1, +1));
+  EXPECT_EQ(s[2], argext(0, -1));
+  EXPECT_EQ(s[3], argext(1, -1));
+  EXPECT_TRUE(m.positions[s[0]].isApprox(Vec3(3, 0, 0), 1e-9));
+  EXPECT_TRUE(m.positions[s[1]].isApprox(Vec3(0, 2, 0), 1e-9));
+  EXPECT_TRUE(m.positions[s[2]].isApprox(Vec3(-3, 0, 0), 1e-9));
+  EXPECT_TRUE(m.positions[s[3]].isApprox(Vec3(0, -2, 0), 1e-9));
+}
+
+TEST(ChooseSeeds, RotatedEllipsoidSeedsFollowTheAxesAndRunCounterClockwise) {
+  TriMesh m = qs::shapes::ellipsoid(3, 2, 1, 3);
+  const Eigen::Matrix3d r =
+      (Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()) * Eigen::AngleAxisd(0.3, Vec3::UnitX()))
+          .toRotationMatrix();
+  for (Vec3& p : m.positions) p = r * p;
+  const Seeds s = qs::dissect::choose_seeds(m);
+  const Vec3 ax = r * Vec3::UnitX(), ay = r * Vec3::UnitY(), az = r * Vec3::UnitZ();
+  EXPECT_NEAR(std::abs(m.positions[s[0]].dot(ax)), 3, 1e-9);
+  EXPECT_NEAR(std::abs(m.positions[s[2]].dot(ax)), 3, 1e-9);
+  EXPECT_NEAR(std::abs(m.positions[s[1]].dot(ay)), 2, 1e-9);
+  EXPECT_NEAR(std::abs(m.positions[s[3]].dot(ay)), 2, 1e-9);
+  EXPECT_LT(m.positions[s[0]].dot(m.positions[s[2]]), 0);
+  EXPECT_LT(m.positions[s[1]].dot(m.positions[s[3]]), 0);
+  // e3 = e1 x e2 is +-z of the ellipsoid; the loop turns counter-clockwise about it, and patch 0
+  // (left of the loop) lies on its side.
+  const Vec3 e3 = m.positions[s[0]].cross(m.positions[s[1]]).normalized();
+  EXPECT_NEAR(std::abs(e3.dot(az)), 1, 1e-9);
+  const SeedLoop loop = qs::dissect::trace_seed_loop(m, s);
+  const std::vector<int> labels = qs::dissect::seed_patch_of_faces(m, loop);
+  double side[2] = {0, 0};
+  for (int f = 0; f < m.num_faces(); ++f) {
+    const auto& t = m.faces[f];
+    side[labels[f]] += (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]).dot(e3);
+  }
+  EXPECT_GT(side[0], 0);
+  EXPECT_LT(side[1], 0);
+}
+
+TEST(ChooseSeeds, FarthestRuleGivesRoutableDistinctSeeds) {
+  for (const Shape& s : shapes()) {
+    SCOPED_TRACE(s.name);
+    const Seeds seeds = qs::dissect::choose_seeds_farthest(s.mesh);
+    EXPECT_EQ(std::set<int>(seeds.begin(), seeds.end()).size(), 4u);
+    const SeedLoop loop = qs::dissect::trace_seed_loop(s.mesh, seeds);
+    check_loop(s.mesh, seeds, loop);
+  }
+}
+
+TEST(ChooseSeeds, RejectsAMeshWithTooFewVertices) {
+  TriMesh m;
+  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  m.faces = {{0, 1, 2}, {0, 2, 1}};
+  try {
+    qs::dissect::choose_seeds(m);
+    FAIL() << "no exception";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("fewer than 4"));
+  }
+}
+
+// --- preconditions -----------------------------------------------------------------------------
+
+std::string error_of(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const qs::InvalidInput& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    return std::string("wrong exception type: ") + e.what();
+  }
+  return "no exception";
+}
+
+TEST(SeedLoopErrors, DuplicateSeeds) {
+  const TriMesh m = qs::shapes::icosphere(2);
+  const std::string msg = error_of([&] { qs::dissect::trace_seed_loop(m, {3, 7, 3, 9}); });
+  EXPECT_THAT(msg, HasSubstr("seeds 0 and 2 are the same vertex 3"));
+}
+
+TEST(SeedLoopErrors, SeedOutOfRange) {
+  const TriMesh m = qs::shapes::icosphere(2);
+  EXPECT_THAT(error_of([&] { qs::dissect::trace_seed_loop(m, {0, 1, 2, m.num_vertices()}); }),
+              HasSubstr("seed 3 is vertex " + std::to_string(m.num_vertices()) + ", outside"));
+  EXPECT_THAT(error_of([&] { qs::dissect::trace_seed_loop(m, {0, -1, 2, 3}); }),
+              HasSubstr("seed 1 is vertex -1, outside"));
+}
+
+TEST(SeedLoopErrors, OpenMesh) {
+  const TriMesh m = qs::shapes::open_disk(3);
+  EXPECT_THAT(error_of([&] { qs::dissect::trace_seed_loop(m, {0, 1, 2, 3}); }), HasSubstr("open"));
+}
+
+/// A closed mesh with a separating triangle (a, b, c): vertices p, q on one side of it, r, s on
+/// the other. A loop p -> r -> q -> s -> p crosses the triangle four times, but only three
+/// vertices are there to cross at: no routing exists.
+TriMesh separating_triangle_mesh() {
+  TriMesh m;
+  const double h = std::sqrt(3.0) / 2;
+  m.positions = {Vec3(1, 0, 0), Vec3(-0.5, h, 0), Vec3(-0.5, -h, 0),  // a b c
+                 Vec3(0, 0, 1), Vec3(-0.5, 0, 0.6),                   // p q (top)
+                 Vec3(0, 0, -1), Vec3(-0.5, 0, -0.6)};                // r s (bottom)
+  const int a = 0, b = 1, c = 2, p = 3, q = 4, r = 5, s = 6;
+  m.faces = {{a, b, p}, {c, a, p}, {p, b, q}, {b, c, q}, {c, p, q},
+             {a, b, r}, {c, a, r}, {r, b, s}, {b, c, s}, {c, r, s}};
+  for (auto& t : m.faces) {  // outward: the shape is star-shaped about a point near the origin
+    const Vec3 o(-0.1, 0, 0);
+    const Vec3& p0 = m.positions[t[0]];
+    const Vec3& p1 = m.positions[t[1]];
+    const Vec3& p2 = m.positions[t[2]];
+    if ((p1 - p0).cross(p2 - p0).dot(p0 + p1 + p2 - 3 * o) < 0) std::swap(t[1], t[2]);
+  }
+  return m;
+}
+
+TEST(SeedLoopErrors, SeparatingTriangleMeshIsValidAndRoutableInOneOrder) {
+  const TriMesh m = separating_triangle_mesh();
+  const auto v = qs::mesh::validate(m);
+  EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report("separating", v.report);
+  EXPECT_FALSE(v.report.orientation_flipped);
+  // p, q, r, s in the order p -> q -> r -> s crosses the triangle twice: fine.
+  const Seeds seeds{3, 4, 5, 6};
+  check_loop(m, seeds, qs::dissect::trace_seed_loop(m, seeds));
+}
+
+TEST(SeedLoopErrors, UnroutableSeedsNameTheSeeds) {
+  const TriMesh m = separating_triangle_mesh();
+  const std::string msg = error_of([&] { qs::dissect::trace_seed_loop(m, {3, 5, 4, 6}); });
+  EXPECT_THAT(msg, HasSubstr("cannot route the seed loop"));
+  EXPECT_THAT(msg, HasSubstr("no path from seed"));
+  EXPECT_THAT(msg, HasSubstr("(vertex "));
+  EXPECT_THAT(msg, HasSubstr("move the seeds apart"));
+}
+
+/// The separating-triangle mesh with other positions. The seed loop only sees the connectivity and
+/// the edge lengths, so a crumpled embedding is fine for testing the choice of seeds.
+TriMesh separating_triangle_mesh_at(const std::vector<Vec3>& positions) {
+  TriMesh m = separating_triangle_mesh();
+  m.positions = positions;
+  return m;
+}
+
+TEST(ChooseSeeds, FallsBackToFarthestPointsWhenTheAxisExtremesCannotBeRouted) {
+  // Found by a random search: the principal-axis extremes are r, q, s, p (r and s, on one side
+  // of the separating triangle, are not consecutive: unroutable); the farthest points q, s, r, c
+  // route.
+  const TriMesh m = separating_triangle_mesh_at(
+      {Vec3(0.5, 2.5, 1.5), Vec3(1.5, 2.5, 3), Vec3(-1.5, 1.5, 1.5), Vec3(-0.5, 3, 2.5),
+       Vec3(1, -1.5, 0.5), Vec3(-2.5, 0, -2), Vec3(2.5, 2, 2.5)});
+  EXPECT_THAT(error_of([&] { qs::dissect::trace_seed_loop(m, {5, 4, 6, 3}); }),
+              HasSubstr("cannot route the seed loop"));
+  const Seeds seeds = qs::dissect::choose_seeds(m);
+  EXPECT_EQ(seeds, qs::dissect::choose_seeds_farthest(m));
+  EXPECT_NE(seeds, (Seeds{5, 4, 6, 3}));
+  check_loop(m, seeds, qs::dissect::trace_seed_loop(m, seeds));
+}
+
+TEST(ChooseSeeds, ThrowsWhenNeitherRuleRoutes) {
+  // p, q are the extremes along x (the first axis) and r, s along y, on the two sides of the
+  // separating triangle; the farthest points are the same four.
+  const TriMesh m = separating_triangle_mesh_at(
+      {Vec3(1, 0, 0), Vec3(-0.5, 0.866, 0), Vec3(-0.5, -0.866, 0), Vec3(3, 0, 0.3),
+       Vec3(-3, 0, 0.3), Vec3(0, 2, -0.3), Vec3(0, -2, -0.3)});
+  const std::string msg = error_of([&] { qs::dissect::choose_seeds(m); });
+  EXPECT_THAT(msg, HasSubstr("neither the principal-axis extremes"));
+  EXPECT_THAT(msg, HasSubstr("give the four seeds by hand"));
+}
+
+TEST(SeedLoopErrors, PatchLabelsRejectABrokenLoop) {
+  const TriMesh m = qs::shapes::icosphere(2);
+  const Seeds seeds = qs::dissect::choose_seeds(m);
+  SeedLoop loop = qs::dissect::trace_seed_loop(m, seeds);
+  SeedLoop jumped = loop;
+  jumped.paths[1] = {seeds[1], seeds[2]};  // not an edge for well separated seeds
+  EXPECT_THAT(error_of([&] { qs::dissect::seed_patch_of_faces(m, jumped); }),
+              HasSubstr("not joined by an edge"));
+  SeedLoop wrong_end = loop;
+  wrong_end.paths[0].back() = seeds[2];
+  EXPECT_THAT(error_of([&] { qs::dissect::seed_patch_of_faces(m, wrong_end); }),
+              HasSubstr("path 0 does not run from seed 0 to seed 1"));
+}
+
+// --- the shared real meshes (skipped when the folder is absent) ------------------------------
+
+std::filesystem::path shared_meshes_dir() {
+  if (const char* env = std::getenv("QS_SHARED_MESHES"); env && *env) return env;
+  return std::filesystem::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
+}
+
+TEST(SeedLoopSharedMeshes, ChosenSeedsRouteOnEveryMesh) {
+  namespace fs = std::filesystem;
+  const fs::path dir = shared_meshes_dir();
+  if (!fs::is_directory(dir)) GTEST_SKIP() << "no shared mesh folder at " << dir;
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const auto ext = entry.path().extension();
+    if (ext == ".obj" || ext == ".off" || ext == ".ply" || ext == ".stl")
+      files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  for (const fs::path& file : files) {
+    SCOPED_TRACE(file.filename().string());
+    const auto validated = qs::mesh::validate(qs::io::read_mesh(file).mesh);
+    if (!validated.report.accepted) continue;  // the io/mesh tests report those
+    const TriMesh& m = validated.mesh;
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    const Seeds seeds = qs::dissect::choose_seeds(m);
+    const auto t1 = Clock::now();
+    const SeedLoop loop = qs::dissect::trace_seed_loop(m, seeds);
+    const auto t2 = Clock::now();
+    const auto [n0, n1] = check_loop(m, seeds, loop);
+    auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+    std::string lengths;
+    for (const auto& p : loop.paths) lengths.append(" ").append(std::to_string(p.size() - 1));
+    std::printf("%-24s V=%6d choose %7.1f ms  trace %7.1f ms  edges%s  faces %d/%d\n",
+                file.filename().string().c_str(), m.num_vertices(), ms(t1 - t0), ms(t2 - t1),
+                lengths.c_str(), n0, n1);
+  }
+}
+
+}  // namespace
