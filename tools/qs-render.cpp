@@ -1,0 +1,169 @@
+// qs-render: render meshes and dissection charts to a PNG, for looking at qs outputs.
+//
+// Each input is a mesh (.obj .off .ply .stl) or a chart written by qs-dissect (*.chart.ply, faces
+// coloured by patch). Several inputs are rendered side by side with the same view, each fitted
+// to its own bounding box. --patch-edges draws patch boundaries of charts; --uv shows a chart's
+// uv layout (one tile per patch) instead of its 3D view. Both apply to charts; plain meshes are
+// rendered as usual beside them.
+//
+// Exit codes: 0 written, 1 usage, 2 invalid input (unparsable mesh, unknown extension), 3 a file
+// that cannot be read or written, 70 internal error. No partial PNG is ever left behind.
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "qs/core/error.h"
+#include "qs/dissect/chart_io.h"
+#include "qs/io/read_mesh.h"
+#include "qs/render/render.h"
+#include "tool_main.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+bool is_chart(const std::string& file) {
+  const std::string f = lower(fs::path(file).filename().string());
+  const std::string suffix = ".chart.ply";
+  return f.size() >= suffix.size() && f.compare(f.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+qs::Vec3 to_vec3(const std::vector<double>& v, const char* option) {
+  if (v.size() != 3)
+    throw qs::UsageError(std::string(option) + " needs three comma-separated numbers, like 0.3,0.4,1");
+  const qs::Vec3 out(v[0], v[1], v[2]);
+  if (!out.allFinite() || out.norm() == 0)
+    throw qs::UsageError(std::string(option) + " must be a non-zero finite vector");
+  return out;
+}
+
+// Edges whose faces carry different patch labels, as sorted vertex pairs (deterministic order).
+std::vector<std::array<int, 2>> patch_boundary_edges(const qs::TriMesh& mesh, const std::vector<int>& face_patch) {
+  struct Entry {
+    int a, b, face;
+  };
+  std::vector<Entry> entries;
+  entries.reserve(3 * mesh.faces.size());
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      entries.push_back({std::min(a, b), std::max(a, b), f});
+    }
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& x, const Entry& y) { return std::tie(x.a, x.b, x.face) < std::tie(y.a, y.b, y.face); });
+  std::vector<std::array<int, 2>> edges;
+  for (size_t i = 0; i < entries.size();) {
+    size_t j = i + 1;
+    bool differ = false;
+    while (j < entries.size() && entries[j].a == entries[i].a && entries[j].b == entries[i].b) {
+      differ |= face_patch[entries[j].face] != face_patch[entries[i].face];
+      ++j;
+    }
+    if (differ) edges.push_back({entries[i].a, entries[i].b});
+    i = j;
+  }
+  return edges;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Render meshes and qs charts to a PNG (orthographic, z-buffered, deterministic).\n"
+               "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 70 internal.",
+               "qs-render"};
+  std::vector<std::string> inputs;
+  std::string output, size = "800";
+  std::vector<double> view_v, up_v;
+  bool uv = false, patch_edges = false, verbose = false;
+  qs::render::RenderOptions opt;
+  app.add_option("inputs", inputs,
+                 "Meshes (.obj .off .ply .stl) and charts (*.chart.ply); several are drawn side by side")
+      ->required();
+  app.add_option("-o,--output", output, "Output PNG file")->required();
+  app.add_option("--size", size, "Size of each view in pixels: W or WxH")->capture_default_str();
+  app.add_option("--view", view_v, "Direction from the object towards the camera: x,y,z (default 0.3,0.4,1)")
+      ->delimiter(',');
+  app.add_option("--up", up_v, "Up direction in the image: x,y,z (default 0,1,0)")->delimiter(',');
+  app.add_flag("--wireframe", opt.wireframe, "Draw every triangle edge");
+  app.add_flag("--smooth", opt.smooth, "Smooth shading (interpolated vertex normals)");
+  app.add_flag("--patch-edges", patch_edges, "Charts: draw patch boundaries as thick dark lines");
+  app.add_flag("--uv", uv, "Charts: draw the uv layout (one tile per patch; red = flipped or overlapping)");
+  app.add_flag("-v,--verbose", verbose, "Print read and render times");
+
+  return qs::tools::run_tool(app, argc, argv, [&] {
+    std::smatch m;
+    static const std::regex size_re(R"((\d{1,5})(?:[xX](\d{1,5}))?)");
+    if (!std::regex_match(size, m, size_re))
+      throw qs::UsageError("--size '" + size + "' is not W or WxH (e.g. 800 or 1024x768)");
+    opt.width = std::stoi(m[1].str());
+    opt.height = m[2].matched ? std::stoi(m[2].str()) : opt.width;
+    if (opt.width < 16 || opt.height < 16 || opt.width > 8192 || opt.height > 8192)
+      throw qs::UsageError("--size " + size + " is out of range; width and height must be 16..8192");
+    if (!view_v.empty()) opt.view_dir = to_vec3(view_v, "--view");
+    if (!up_v.empty()) opt.up = to_vec3(up_v, "--up");
+    if (lower(fs::path(output).extension().string()) != ".png")
+      throw qs::UsageError("output '" + output + "' must end in .png (qs-render writes PNG only)");
+    if ((uv || patch_edges) && std::none_of(inputs.begin(), inputs.end(), is_chart))
+      throw qs::UsageError(std::string(uv ? "--uv" : "--patch-edges") +
+                           " needs a chart (*.chart.ply, written by qs-dissect) among the inputs");
+
+    using clock = std::chrono::steady_clock;
+    const auto ms = [](clock::time_point a, clock::time_point b) {
+      return std::chrono::duration<double, std::milli>(b - a).count();
+    };
+    std::vector<qs::render::Image> views;
+    for (const std::string& file : inputs) {
+      const auto t0 = clock::now();
+      qs::render::Image img;
+      auto t1 = t0;
+      if (is_chart(file)) {
+        const qs::dissect::Chart chart = qs::dissect::read_chart_ply(file);
+        int patches = static_cast<int>(chart.patches.size());
+        for (int p : chart.face_patch) patches = std::max(patches, p + 1);
+        if (patches > 1000000)
+          throw qs::InvalidInput(file + ": " + std::to_string(patches) + " patch labels; not a chart qs-dissect wrote");
+        std::vector<qs::render::Rgb> colours(patches);
+        for (int p = 0; p < patches; ++p) {
+          const auto c = qs::dissect::patch_colour(p);
+          colours[p] = {c[0], c[1], c[2]};
+        }
+        t1 = clock::now();
+        if (uv) {
+          int cols = 1;
+          while (cols * cols < std::max(1, patches)) ++cols;
+          const int rows = (std::max(1, patches) + cols - 1) / cols;
+          const int tile = std::clamp(std::min(opt.width / cols, opt.height / rows), 8, 4096);
+          img = qs::render::render_uv_layout(chart.face_uv, chart.face_patch, std::max(1, patches), tile, colours);
+        } else {
+          std::vector<qs::render::Rgb> face_colours(chart.face_patch.size());
+          for (size_t f = 0; f < face_colours.size(); ++f) face_colours[f] = colours[chart.face_patch[f]];
+          std::vector<std::array<int, 2>> edges;
+          if (patch_edges) edges = patch_boundary_edges(chart.mesh, chart.face_patch);
+          img = qs::render::render_mesh(chart.mesh, &face_colours, opt, patch_edges ? &edges : nullptr);
+        }
+      } else {
+        const qs::io::ReadResult read = qs::io::read_mesh(file);
+        t1 = clock::now();
+        img = qs::render::render_mesh(read.mesh, nullptr, opt);
+      }
+      if (verbose)
+        std::cout << file << ": read " << ms(t0, t1) << " ms, render " << ms(t1, clock::now()) << " ms\n";
+      views.push_back(std::move(img));
+    }
+    const auto t2 = clock::now();
+    qs::render::write_png(output, views.size() == 1 ? views.front() : qs::render::side_by_side(views));
+    if (verbose) std::cout << output << ": written in " << ms(t2, clock::now()) << " ms\n";
+    return 0;
+  });
+}
