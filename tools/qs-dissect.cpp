@@ -137,6 +137,12 @@ int main(int argc, char** argv) {
           << std::chrono::duration<double>(t1 - t0).count() << " s, dissect " << dm.seconds << " s, write "
           << std::chrono::duration<double>(t3 - t2).count() << " s\n";
     if (!quiet) std::cout << text.str() << times.str();
+    if (flipped > 0) {
+      if (!report_file.empty()) qs::write_file_atomically(report_file, text.str() + times.str());
+      throw qs::SolverError(std::to_string(flipped) +
+                            " uv faces are flipped or of zero area in patches that could not be split further "
+                            "(see the report above); try a larger --max-depth or a smaller --min-faces");
+    }
     if (!report_file.empty()) {
       std::ostringstream full;
       full << text.str() << times.str();

@@ -423,29 +423,28 @@ TriMesh separating_triangle_mesh_at(const std::vector<Vec3>& positions) {
   return m;
 }
 
-TEST(ChooseSeeds, FallsBackToFarthestPointsWhenTheAxisExtremesCannotBeRouted) {
-  // Found by a random search: the principal-axis extremes are r, q, s, p (r and s, on one side
-  // of the separating triangle, are not consecutive: unroutable); the farthest points q, s, r, c
-  // route.
+TEST(ChooseSeeds, FallsBackToTheNextRuleWhenASeedSetCannotBeRouted) {
+  // Seeds 5, 4, 6, 3 lie on both sides of a separating triangle in crossing order: unroutable.
   const TriMesh m = separating_triangle_mesh_at(
       {Vec3(0.5, 2.5, 1.5), Vec3(1.5, 2.5, 3), Vec3(-1.5, 1.5, 1.5), Vec3(-0.5, 3, 2.5),
        Vec3(1, -1.5, 0.5), Vec3(-2.5, 0, -2), Vec3(2.5, 2, 2.5)});
   EXPECT_THAT(error_of([&] { qs::dissect::trace_seed_loop(m, {5, 4, 6, 3}); }),
               HasSubstr("cannot route the seed loop"));
+  const Seeds far = qs::dissect::choose_seeds_farthest(m);
+  EXPECT_EQ(qs::dissect::first_routable_seeds(m, {{"bad", {5, 4, 6, 3}}, {"farthest", far}}), far);
+  // The automatic rule itself gives a routable loop here.
   const Seeds seeds = qs::dissect::choose_seeds(m);
-  EXPECT_EQ(seeds, qs::dissect::choose_seeds_farthest(m));
-  EXPECT_NE(seeds, (Seeds{5, 4, 6, 3}));
   check_loop(m, seeds, qs::dissect::trace_seed_loop(m, seeds));
 }
 
-TEST(ChooseSeeds, ThrowsWhenNeitherRuleRoutes) {
-  // p, q are the extremes along x (the first axis) and r, s along y, on the two sides of the
-  // separating triangle; the farthest points are the same four.
+TEST(ChooseSeeds, ThrowsWhenNoRuleRoutes) {
   const TriMesh m = separating_triangle_mesh_at(
-      {Vec3(1, 0, 0), Vec3(-0.5, 0.866, 0), Vec3(-0.5, -0.866, 0), Vec3(3, 0, 0.3),
-       Vec3(-3, 0, 0.3), Vec3(0, 2, -0.3), Vec3(0, -2, -0.3)});
-  const std::string msg = error_of([&] { qs::dissect::choose_seeds(m); });
-  EXPECT_THAT(msg, HasSubstr("neither the principal-axis extremes"));
+      {Vec3(0.5, 2.5, 1.5), Vec3(1.5, 2.5, 3), Vec3(-1.5, 1.5, 1.5), Vec3(-0.5, 3, 2.5),
+       Vec3(1, -1.5, 0.5), Vec3(-2.5, 0, -2), Vec3(2.5, 2, 2.5)});
+  const std::string msg =
+      error_of([&] { qs::dissect::first_routable_seeds(m, {{"rule a", {5, 4, 6, 3}}, {"rule b", {4, 5, 3, 6}}}); });
+  EXPECT_THAT(msg, HasSubstr("rule a (vertices"));
+  EXPECT_THAT(msg, HasSubstr("rule b (vertices"));
   EXPECT_THAT(msg, HasSubstr("give the four seeds by hand"));
 }
 

@@ -2,15 +2,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "qs/io/write_mesh.h"
+#include "tool_runner.h"
 #include "qs/shapes/shapes.h"
 
 namespace fs = std::filesystem;
@@ -18,23 +16,7 @@ using ::testing::HasSubstr;
 
 namespace {
 
-struct RunResult {
-  int exit = -1;
-  std::string out;  // stdout and stderr together
-};
-
-RunResult run(const std::string& args) {
-  const std::string cmd = std::string(QS_TOOLS_DIR) + "/qs-inspect " + args + " 2>&1";
-  RunResult r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(p);
-  r.exit = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+RunResult run(const std::string& args) { return run_tool("qs-inspect", args); }
 
 class InspectTool : public ::testing::Test {
  protected:

@@ -470,10 +470,10 @@ Dissection Dissector::run(const std::array<int, 4>& seeds) {
     tn.stretch = p.st.patch;
     PatchInfo info;
     info.stretch = p.st.patch;
-    if (!p.sp.bijective())
-      throw SolverError("patch " + node.name + ": the parameterization has " + std::to_string(p.sp.flipped_faces) +
-                        " flipped and " + std::to_string(p.sp.zero_area_faces) + " zero-area faces");
-    const bool over = p.st.patch > opt_.tau;
+    // A long protrusion shrinks exponentially under a Floater map, down to UV triangles of zero
+    // area in floating point: such a patch is over tau whatever its RMS stretch, and splitting
+    // it around its peak is exactly the cure. Only a leaf must be bijective.
+    const bool over = p.st.patch > opt_.tau || !p.sp.bijective();
     const int nfaces = static_cast<int>(p.ex.faces.size());
     if (over && node.depth < opt_.max_depth && nfaces >= opt_.min_faces_to_split) {
       const size_t first_new_label = patch_faces_.size();

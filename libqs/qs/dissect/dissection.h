@@ -14,16 +14,19 @@ namespace qs::dissect {
 
 struct DissectOptions {
   /// A patch whose normalized L2 stretch (1 = isometric up to scale) exceeds tau is split.
-  double tau = 1.5;
+  double tau = 3.0;
   int max_depth = 6;             ///< seed patches have depth 0
-  int min_faces_to_split = 60;   ///< smaller patches are not split (stop reason "too_few_faces")
+  int min_faces_to_split = 150;  ///< smaller patches are not split (stop reason "too_few_faces")
   /// The w rule: w = clamp(w_bias + log10(s_peak), w_min, w_max), s_peak the smoothed peak
-  /// stretch (paper eq. 4 with psi = w_bias; see the README for why the bias differs).
-  double w_bias = 0.35;
-  double w_min = 0.25;
-  double w_max = 0.8;
-  /// The peak is clamped into [peak_margin, 1 - peak_margin]^2 so no child is a sliver.
-  double peak_margin = 0.12;
+  /// stretch (paper eq. 4 with psi = w_bias). With stretch normalized to 1 for an isometry, the
+  /// peak of a patch worth splitting is well above 1, so the clamp decides in practice: w_max
+  /// keeps the four outer children from becoming slivers (see the README).
+  double w_bias = 0.45;
+  double w_min = 0.5;
+  double w_max = 0.65;
+  /// The peak is clamped into [peak_margin, 1 - peak_margin]^2: a peak near a side would make
+  /// the child along that side a thin strip whose own map to the square is badly stretched.
+  double peak_margin = 0.35;
 };
 
 /// Why a patch over tau was left as it is.

@@ -11,11 +11,13 @@
 //      whose body is heavier); when that moment is negligible (|m3| <= 1e-6 sigma^3, a
 //      symmetric shape) its largest absolute component is made positive (first one on a tie).
 //      e3 = e1 x e2.
-//   4. s0 = the vertex of largest projection on e1, s1 = largest on e2, s2 = smallest on e1,
-//      s3 = smallest on e2; ties go to the lowest vertex id, and a vertex already taken is
-//      skipped (the next best one is used), so the four are distinct.
+//   4. s0, s1, s2, s3 = where the rays from the weighted centroid along +e1, +e2, -e1, -e2 first
+//      meet the surface (the nearest corner of the first face hit, not already taken): a belt
+//      around the body rather than out to the tips of protrusions, where two paths would run
+//      up and back down the same leg side by side. A ray that meets nothing (a centroid outside a
+//      very concave shape) takes the extreme vertex along its direction instead (ties: lowest id).
 //   5. The loop s0 -> s1 -> s2 -> s3 -> s0 then runs counter-clockwise around +e3 (seen from
-//      +e3 looking back): max e1, max e2, min e1, min e2.
+//      +e3 looking back): +e1, +e2, -e1, -e2.
 //   6. Fallback, only when the seeds of step 4 cannot be routed by trace_seed_loop (it never
 //      happened on the 24 meshes of ../shared/meshes; choose_seeds_farthest() is the rule on its
 //      own): edge-path distances; s0 = the vertex farthest from the vertex nearest the weighted
@@ -548,6 +550,40 @@ int extreme(const std::vector<double>& value, double sign, const std::vector<cha
   return best;
 }
 
+/// The nearest vertex of the first face hit by the ray from `origin` along `dir` (smallest
+/// positive distance, Moller-Trumbore), or -1 when the ray hits nothing.
+int ray_seed(const TriMesh& mesh, const Vec3& origin, const Vec3& dir, const std::array<int, 4>& taken) {
+  double best_t = std::numeric_limits<double>::infinity();
+  Vec3 hit = Vec3::Zero();
+  int best_f = -1;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Vec3& a = mesh.positions[mesh.faces[f][0]];
+    const Vec3 e1 = mesh.positions[mesh.faces[f][1]] - a, e2 = mesh.positions[mesh.faces[f][2]] - a;
+    const Vec3 p = dir.cross(e2);
+    const double det = e1.dot(p);
+    if (std::abs(det) < 1e-300) continue;
+    const Vec3 t0 = origin - a;
+    const double u = t0.dot(p) / det;
+    if (u < 0 || u > 1) continue;
+    const Vec3 q = t0.cross(e1);
+    const double v = dir.dot(q) / det;
+    if (v < 0 || u + v > 1) continue;
+    const double t = e2.dot(q) / det;
+    if (t > 0 && t < best_t) {
+      best_t = t;
+      best_f = f;
+      hit = origin + t * dir;
+    }
+  }
+  if (best_f < 0) return -1;
+  int best = -1;
+  for (int v : mesh.faces[best_f])
+    if (std::find(taken.begin(), taken.end(), v) == taken.end() &&
+        (best < 0 || (mesh.positions[v] - hit).norm() < (mesh.positions[best] - hit).norm()))
+      best = v;
+  return best;
+}
+
 std::array<int, 4> pca_seeds(const TriMesh& mesh, const std::vector<char>& used,
                              const Axes& axes) {
   const int nv = mesh.num_vertices();
@@ -557,11 +593,16 @@ std::array<int, 4> pca_seeds(const TriMesh& mesh, const std::vector<char>& used,
     p1[v] = d.dot(axes.e1);
     p2[v] = d.dot(axes.e2);
   }
+  // Where the rays from the centroid along +e1, +e2, -e1, -e2 first meet the surface: a belt
+  // around the body, not out to the tips of protrusions (a seed at a hoof makes two paths run up
+  // and down the same leg side by side). The extreme vertex when a ray meets nothing.
   std::array<int, 4> s{-1, -1, -1, -1};
-  s[0] = extreme(p1, +1, used, s);
-  s[1] = extreme(p2, +1, used, s);
-  s[2] = extreme(p1, -1, used, s);
-  s[3] = extreme(p2, -1, used, s);
+  const std::array<Vec3, 4> dirs = {axes.e1, axes.e2, -axes.e1, -axes.e2};
+  const std::array<const std::vector<double>*, 4> proj = {&p1, &p2, &p1, &p2};
+  for (int i = 0; i < 4; ++i) {
+    s[i] = ray_seed(mesh, axes.centroid, dirs[i], s);
+    if (s[i] < 0) s[i] = extreme(*proj[i], i < 2 ? +1 : -1, used, s);
+  }
   return s;
 }
 
@@ -642,6 +683,20 @@ std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop) 
   return labels;
 }
 
+std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
+                                        const std::vector<std::pair<std::string, std::array<int, 4>>>& candidates) {
+  const Graph g = build_graph(mesh);
+  Dijkstra dijkstra(g);
+  std::string why;
+  for (const auto& [name, seeds] : candidates) {
+    check_seeds(mesh, seeds);
+    const Attempt a = try_route(mesh, g, dijkstra, seeds, {});
+    if (a.ok) return seeds;
+    why += (why.empty() ? "" : "; ") + name + " (vertices " + seeds_text(seeds) + "): " + a.why;
+  }
+  throw InvalidInput("choose_seeds: no rule gives a routable seed loop: " + why + "; give the four seeds by hand");
+}
+
 std::array<int, 4> choose_seeds(const TriMesh& mesh) {
   std::vector<char> used;
   const std::vector<double> w = vertex_weights(mesh, used);
@@ -649,18 +704,15 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
     throw InvalidInput("choose_seeds: the mesh has fewer than 4 vertices used by faces");
   const Axes axes = principal_axes(mesh, w);
   const std::array<int, 4> pca = pca_seeds(mesh, used, axes);
+  {
+    const Graph g = build_graph(mesh);
+    Dijkstra dijkstra(g);
+    if (try_route(mesh, g, dijkstra, pca, {}).ok) return pca;
+  }
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
-  const Attempt first = try_route(mesh, g, dijkstra, pca, {});
-  if (first.ok) return pca;
   const std::array<int, 4> far = farthest_seeds(mesh, dijkstra, used, axes);
-  const Attempt second = try_route(mesh, g, dijkstra, far, {});
-  if (second.ok) return far;
-  throw InvalidInput("choose_seeds: neither the principal-axis extremes (vertices " +
-                     seeds_text(pca) + ": " + first.why +
-                     ") nor the geodesically farthest vertices (" + seeds_text(far) + ": " +
-                     second.why +
-                     ") give a routable seed loop; give the four seeds by hand");
+  return first_routable_seeds(mesh, {{"the principal-axis rays", pca}, {"the geodesically farthest vertices", far}});
 }
 
 std::array<int, 4> choose_seeds_farthest(const TriMesh& mesh) {

@@ -3,6 +3,8 @@
 // cut a closed genus-0 mesh into two quad patches.
 
 #include <array>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "qs/core/context.h"
@@ -49,6 +51,11 @@ std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop);
 ///  - if trace_seed_loop cannot route these, choose_seeds_farthest() is used instead.
 /// \throws InvalidInput when the mesh has fewer than 4 used vertices, or neither rule routes.
 std::array<int, 4> choose_seeds(const TriMesh& mesh);
+
+/// The first candidate (name, seeds) whose loop routes. \throws InvalidInput naming every rule
+/// and why it failed, asking for seeds by hand, when none routes.
+std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
+                                        const std::vector<std::pair<std::string, std::array<int, 4>>>& candidates);
 
 /// The fallback rule of choose_seeds: geodesic (edge-path) farthest points. s0 = the vertex
 /// farthest from the vertex nearest the area-weighted centroid, s2 = farthest from s0, s1 =

@@ -1,0 +1,269 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <unistd.h>
+
+#include "qs/core/error.h"
+#include "qs/dissect/chart_io.h"
+#include "qs/dissect/cut_mesh.h"
+#include "qs/dissect/dissection.h"
+#include "qs/dissect/dissection_json.h"
+#include "qs/mesh/validate.h"
+#include "qs/shapes/shapes.h"
+
+using qs::dissect::Dissection;
+using ::testing::HasSubstr;
+
+namespace {
+
+double cross2(const qs::Vec2& a, const qs::Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Checks every invariant of a dissection, computed independently of the implementation.
+void check_dissection(const Dissection& d, int input_faces) {
+  const auto& c = d.chart;
+  const int nf = c.mesh.num_faces();
+  ASSERT_GE(nf, input_faces);
+  ASSERT_EQ(c.face_patch.size(), static_cast<size_t>(nf));
+  // The cut mesh is still a valid closed genus-0 mesh.
+  const auto v = qs::mesh::validate(c.mesh);
+  EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report("chart", v.report);
+  EXPECT_FALSE(v.report.orientation_flipped);
+
+  const int np = static_cast<int>(c.patches.size());
+  std::vector<double> area(np, 0.0);
+  std::vector<int> faces(np, 0);
+  for (int f = 0; f < nf; ++f) {
+    const int p = c.face_patch[f];
+    ASSERT_GE(p, 0);
+    ASSERT_LT(p, np);  // every face in exactly one patch
+    const auto& uv = c.face_uv[f];
+    const double a = 0.5 * cross2(uv[1] - uv[0], uv[2] - uv[0]);
+    area[p] += a;
+    ++faces[p];
+    EXPECT_GT(a, 0.0) << "face " << f << " of patch " << c.patches[p].name << " is flipped or degenerate";
+  }
+  // Corner uv: the corner vertices sit at the square's corners in their own patch.
+  const std::array<qs::Vec2, 4> square = {qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(1, 1), qs::Vec2(0, 1)};
+  for (int p = 0; p < np; ++p) {
+    EXPECT_NEAR(area[p], 1.0, 1e-9) << c.patches[p].name;
+    EXPECT_EQ(faces[p], c.patches[p].faces);
+    EXPECT_EQ(c.patches[p].flipped_faces, 0);
+  }
+  std::vector<int> found(4 * np, 0);
+  for (int f = 0; f < nf; ++f) {
+    const auto& info = c.patches[c.face_patch[f]];
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 4; ++i)
+        if (c.mesh.faces[f][k] == info.corners[i]) {
+          EXPECT_LT((c.face_uv[f][k] - square[i]).norm(), 1e-12) << info.name << " corner " << i;
+          found[4 * c.face_patch[f] + i] = 1;
+        }
+  }
+  for (int x : found) EXPECT_EQ(x, 1);
+
+  // Each patch's boundary is one loop, through its 4 corners in counter-clockwise order.
+  std::map<std::pair<int, int>, int> edge_face;
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) edge_face[{c.mesh.faces[f][k], c.mesh.faces[f][(k + 1) % 3]}] = f;
+  std::vector<std::map<int, int>> next(np);
+  for (const auto& [e, f] : edge_face) {
+    const int g = edge_face.at({e.second, e.first});
+    if (c.face_patch[f] != c.face_patch[g]) {
+      auto& nx = next[c.face_patch[f]];
+      EXPECT_EQ(nx.count(e.first), 0u) << "patch " << c.patches[c.face_patch[f]].name << " is not a disk";
+      nx[e.first] = e.second;
+    }
+  }
+  for (int p = 0; p < np; ++p) {
+    const auto& corners = c.patches[p].corners;
+    std::vector<int> loop;
+    for (int v = corners[0];;) {
+      loop.push_back(v);
+      ASSERT_TRUE(next[p].count(v)) << c.patches[p].name;
+      v = next[p].at(v);
+      if (v == corners[0] || loop.size() > next[p].size()) break;
+    }
+    EXPECT_EQ(loop.size(), next[p].size()) << "patch " << c.patches[p].name << " has more than one boundary loop";
+    int last = -1;
+    for (int i = 0; i < 4; ++i) {
+      const int at = static_cast<int>(std::find(loop.begin(), loop.end(), corners[i]) - loop.begin());
+      EXPECT_GT(at, last) << c.patches[p].name << " corner " << i;
+      last = at;
+    }
+  }
+
+  // Base domain: closed, conforming, Euler characteristic 2 (counted here from the corners).
+  std::set<int> verts;
+  std::map<std::pair<int, int>, int> sides;
+  for (const auto& p : c.patches)
+    for (int k = 0; k < 4; ++k) {
+      verts.insert(p.corners[k]);
+      ++sides[{p.corners[k], p.corners[(k + 1) % 4]}];
+    }
+  for (const auto& [s, n] : sides) {
+    EXPECT_EQ(n, 1);
+    EXPECT_EQ(sides.count({s.second, s.first}), 1u) << "side " << s.first << "-" << s.second << " has no twin";
+  }
+  EXPECT_EQ(static_cast<int>(verts.size()) - static_cast<int>(sides.size()) / 2 + np, 2);
+  EXPECT_TRUE(d.base.closed_conforming);
+  EXPECT_EQ(d.base.euler_characteristic, 2);
+  EXPECT_EQ(d.base.quads.size(), c.patches.size());
+}
+
+}  // namespace
+
+TEST(Dissect, SmoothShapeNeedsOnlyTheSeedPatches) {
+  const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
+  const auto d = qs::dissect::dissect(m, std::nullopt);
+  EXPECT_EQ(d.chart.patches.size(), 2u);
+  EXPECT_LE(d.max_stretch, qs::dissect::DissectOptions().tau);
+  check_dissection(d, m.num_faces());
+}
+
+TEST(Dissect, ProtrusionsForceQuinarySplitsAndEveryInvariantHolds) {
+  const auto m = qs::shapes::star_blob(4, 1.5, 4);
+  qs::dissect::DissectOptions o;
+  o.tau = 1.4;
+  const auto d = qs::dissect::dissect(m, std::nullopt, o);
+  EXPECT_GT(d.chart.patches.size(), 2u);
+  EXPECT_EQ((d.chart.patches.size() - 2) % 4, 0u) << "each split turns 1 patch into 5";
+  check_dissection(d, m.num_faces());
+  // Every split node has its 5 children, named by path.
+  std::set<std::string> names;
+  for (const auto& n : d.tree) names.insert(n.name);
+  for (const auto& n : d.tree)
+    if (n.split) {
+      for (int k = 0; k < 5; ++k) { EXPECT_TRUE(names.count(n.name + "." + std::to_string(k))); }
+    }
+  for (const auto& p : d.chart.patches)
+    if (p.stretch > o.tau) { EXPECT_NE(p.stop, qs::dissect::StopReason::None) << p.name; }
+}
+
+TEST(Dissect, SplitPutsTheCentralChildOnTheStretchPeak) {
+  // A ball with one long arm along +x: the arm tip is the stretch peak of its seed patch, so it
+  // ends up in the central child (".4") of that patch's first split or in its descendants.
+  qs::TriMesh m = qs::shapes::displaced_sphere(
+      [](const qs::Vec3& d) { return 1.0 + 2.5 * std::pow(std::max(0.0, d.x()), 40); }, 5);
+  const std::array<int, 4> seeds = [&] {
+    // Seeds on the equator x = 0 so that the arm lies inside one seed patch.
+    std::array<int, 4> s{};
+    const std::array<qs::Vec3, 4> dirs = {qs::Vec3(0, 1, 0), qs::Vec3(0, 0, 1), qs::Vec3(0, -1, 0), qs::Vec3(0, 0, -1)};
+    for (int i = 0; i < 4; ++i) {
+      double best = -1e9;
+      for (int v = 0; v < m.num_vertices(); ++v)
+        if (m.positions[v].normalized().dot(dirs[i]) > best) {
+          best = m.positions[v].normalized().dot(dirs[i]);
+          s[i] = v;
+        }
+    }
+    return s;
+  }();
+  qs::dissect::DissectOptions o;
+  o.tau = 1.5;
+  const auto d = qs::dissect::dissect(m, seeds, o);
+  check_dissection(d, m.num_faces());
+  int tip = 0;
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (m.positions[v].x() > m.positions[tip].x()) tip = v;
+  std::string tip_patch;
+  for (int f = 0; f < d.chart.mesh.num_faces(); ++f)
+    for (int k : d.chart.mesh.faces[f])
+      if (k == tip) tip_patch = d.chart.patches[d.chart.face_patch[f]].name;
+  ASSERT_GE(tip_patch.size(), 3u) << "the arm's seed patch was not split";
+  EXPECT_EQ(tip_patch.substr(1, 2), ".4") << tip_patch;
+}
+
+TEST(Dissect, TerminatesOnAPathologicalMesh) {
+  // Many long thin arms on a coarse mesh: stretch can never reach tau = 1. Splitting must stop,
+  // and every patch left over tau must say why.
+  const auto m = qs::shapes::star_blob(12, 3.0, 3);
+  qs::dissect::DissectOptions o;
+  o.tau = 1.0;
+  o.max_depth = 4;
+  const auto d = qs::dissect::dissect(m, std::nullopt, o);
+  int depth = 0;
+  for (const auto& n : d.tree) depth = std::max(depth, n.depth);
+  EXPECT_LE(depth, 4);
+  for (const auto& p : d.chart.patches)
+    if (p.stretch > o.tau) { EXPECT_NE(p.stop, qs::dissect::StopReason::None) << p.name; }
+}
+
+TEST(Dissect, BadSeedsAndOptions) {
+  const auto m = qs::shapes::icosphere(2);
+  EXPECT_THROW(qs::dissect::dissect(m, std::array<int, 4>{0, 1, 1, 3}), qs::InvalidInput);
+  EXPECT_THROW(qs::dissect::dissect(m, std::array<int, 4>{0, 1, 2, 99999}), qs::InvalidInput);
+  qs::dissect::DissectOptions o;
+  o.tau = 0.5;
+  try {
+    qs::dissect::dissect(m, std::nullopt, o);
+    FAIL() << "tau < 1 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("tau"));
+  }
+}
+
+TEST(Dissect, ChartRoundTripAndDeterminism) {
+  const auto m = qs::shapes::star_blob(3, 1.2, 4);
+  qs::dissect::DissectOptions o;
+  o.tau = 1.4;
+  const auto a = qs::dissect::dissect(m, std::nullopt, o);
+  const auto b = qs::dissect::dissect(m, std::nullopt, o);
+  qs::dissect::DissectedMesh da, db;
+  da.dissection = a;
+  db.dissection = b;
+  EXPECT_EQ(qs::dissect::dissection_to_json({da}, o, false), qs::dissect::dissection_to_json({db}, o, false));
+
+  const auto dir = std::filesystem::temp_directory_path() / ("qs_chart_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  qs::dissect::write_chart_ply(dir / "a.chart.ply", a.chart);
+  qs::dissect::write_chart_ply(dir / "b.chart.ply", b.chart);
+  auto bytes = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  EXPECT_EQ(bytes(dir / "a.chart.ply"), bytes(dir / "b.chart.ply"));
+  const auto back = qs::dissect::read_chart_ply(dir / "a.chart.ply");
+  EXPECT_EQ(back.mesh.faces, a.chart.mesh.faces);
+  EXPECT_EQ(back.face_patch, a.chart.face_patch);
+  EXPECT_EQ(back.patches.size(), a.chart.patches.size());
+  for (size_t f = 0; f < back.face_uv.size(); ++f)
+    for (int k = 0; k < 3; ++k) EXPECT_LT((back.face_uv[f][k] - a.chart.face_uv[f][k]).norm(), 1e-6);
+  // A truncated chart is refused with a clear message.
+  const std::string full = bytes(dir / "a.chart.ply");
+  std::ofstream(dir / "cut.chart.ply", std::ios::binary) << full.substr(0, full.size() - 7);
+  try {
+    qs::dissect::read_chart_ply(dir / "cut.chart.ply");
+    FAIL() << "truncated chart accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("truncated"));
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CutMesh, SplitsKeepTheHalfEdgeStructureConsistent) {
+  qs::dissect::CutMesh cm(qs::shapes::icosphere(1));
+  cm.split_edge(0, 0.3);
+  cm.split_face(5, qs::Vec3(0.2, 0.3, 0.5));
+  cm.split_edge(3 * 7 + 2, 0.5);
+  const int nh = 3 * cm.num_faces();
+  for (int h = 0; h < nh; ++h) {
+    const int o = cm.opposite(h);
+    ASSERT_GE(o, 0);
+    EXPECT_EQ(cm.opposite(o), h);
+    EXPECT_EQ(cm.tail(o), cm.head(h));
+    EXPECT_EQ(cm.head(o), cm.tail(h));
+  }
+  for (int v = 0; v < cm.num_vertices(); ++v) EXPECT_EQ(cm.tail(cm.out_halfedge(v)), v);
+  const auto valid = qs::mesh::validate(cm.to_trimesh());
+  EXPECT_TRUE(valid.report.accepted);
+  EXPECT_FALSE(valid.report.orientation_flipped);
+  EXPECT_EQ(valid.report.euler_characteristic, 2);
+}
