@@ -54,6 +54,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -584,6 +585,22 @@ int ray_seed(const TriMesh& mesh, const Vec3& origin, const Vec3& dir, const std
   return best;
 }
 
+std::array<int, 4> extreme_seeds(const TriMesh& mesh, const std::vector<char>& used, const Axes& axes) {
+  const int nv = mesh.num_vertices();
+  std::vector<double> p1(nv), p2(nv);
+  for (int v = 0; v < nv; ++v) {
+    const Vec3 d = mesh.positions[v] - axes.centroid;
+    p1[v] = d.dot(axes.e1);
+    p2[v] = d.dot(axes.e2);
+  }
+  std::array<int, 4> s{-1, -1, -1, -1};
+  s[0] = extreme(p1, +1, used, s);
+  s[1] = extreme(p2, +1, used, s);
+  s[2] = extreme(p1, -1, used, s);
+  s[3] = extreme(p2, -1, used, s);
+  return s;
+}
+
 std::array<int, 4> pca_seeds(const TriMesh& mesh, const std::vector<char>& used,
                              const Axes& axes) {
   const int nv = mesh.num_vertices();
@@ -703,16 +720,48 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
   if (std::count(used.begin(), used.end(), 1) < 4)
     throw InvalidInput("choose_seeds: the mesh has fewer than 4 vertices used by faces");
   const Axes axes = principal_axes(mesh, w);
-  const std::array<int, 4> pca = pca_seeds(mesh, used, axes);
-  {
-    const Graph g = build_graph(mesh);
-    Dijkstra dijkstra(g);
-    if (try_route(mesh, g, dijkstra, pca, {}).ok) return pca;
-  }
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
-  const std::array<int, 4> far = farthest_seeds(mesh, dijkstra, used, axes);
-  return first_routable_seeds(mesh, {{"the principal-axis rays", pca}, {"the geodesically farthest vertices", far}});
+  // The rays' seeds, unless their loop cannot be routed or encloses less than 5% of the area
+  // (rays from a centroid that lies near the surface of a bent figure meet it close together,
+  // leaving one seed patch with nearly the whole shape). Then the routable candidate whose loop
+  // cuts the surface most evenly (largest area of its smaller side) wins.
+  std::vector<std::pair<std::string, std::array<int, 4>>> candidates = {
+      {"the principal-axis rays", pca_seeds(mesh, used, axes)},
+      {"the principal-axis extremes", extreme_seeds(mesh, used, axes)},
+      {"the geodesically farthest vertices", farthest_seeds(mesh, dijkstra, used, axes)}};
+  std::vector<double> face_area(mesh.num_faces());
+  double total = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Tri& t = mesh.faces[f];
+    face_area[f] = 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
+    total += face_area[f];
+  }
+  double best_score = -1;
+  std::array<int, 4> best{};
+  std::string why;
+  for (const auto& [name, seeds] : candidates) {
+    if (std::set<int>(seeds.begin(), seeds.end()).size() != 4 ||
+        std::any_of(seeds.begin(), seeds.end(), [](int v) { return v < 0; }))
+      continue;
+    const Attempt a = try_route(mesh, g, dijkstra, seeds, {});
+    if (!a.ok) {
+      why += (why.empty() ? "" : "; ") + name + " (vertices " + seeds_text(seeds) + "): " + a.why;
+      continue;
+    }
+    double side0 = 0;
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      if (a.labels[f] == 0) side0 += face_area[f];
+    const double score = std::min(side0, total - side0) / std::max(total, 1e-300);
+    if (&seeds == &candidates.front().second && score >= 0.05) return seeds;  // the rule itself
+    if (score > best_score + 1e-9) {
+      best_score = score;
+      best = seeds;
+    }
+  }
+  if (best_score < 0)
+    throw InvalidInput("choose_seeds: no rule gives a routable seed loop: " + why + "; give the four seeds by hand");
+  return best;
 }
 
 std::array<int, 4> choose_seeds_farthest(const TriMesh& mesh) {
