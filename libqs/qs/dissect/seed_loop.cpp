@@ -603,22 +603,16 @@ std::array<int, 4> extreme_seeds(const TriMesh& mesh, const std::vector<char>& u
 
 std::array<int, 4> pca_seeds(const TriMesh& mesh, const std::vector<char>& used,
                              const Axes& axes) {
-  const int nv = mesh.num_vertices();
-  std::vector<double> p1(nv), p2(nv);
-  for (int v = 0; v < nv; ++v) {
-    const Vec3 d = mesh.positions[v] - axes.centroid;
-    p1[v] = d.dot(axes.e1);
-    p2[v] = d.dot(axes.e2);
-  }
   // Where the rays from the centroid along +e1, +e2, -e1, -e2 first meet the surface: a belt
   // around the body, not out to the tips of protrusions (a seed at a hoof makes two paths run up
   // and down the same leg side by side). The extreme vertex when a ray meets nothing.
   std::array<int, 4> s{-1, -1, -1, -1};
   const std::array<Vec3, 4> dirs = {axes.e1, axes.e2, -axes.e1, -axes.e2};
-  const std::array<const std::vector<double>*, 4> proj = {&p1, &p2, &p1, &p2};
-  for (int i = 0; i < 4; ++i) {
-    s[i] = ray_seed(mesh, axes.centroid, dirs[i], s);
-    if (s[i] < 0) s[i] = extreme(*proj[i], i < 2 ? +1 : -1, used, s);
+  for (int i = 0; i < 4; ++i) s[i] = ray_seed(mesh, axes.centroid, dirs[i], s);
+  if (std::find(s.begin(), s.end(), -1) != s.end()) {
+    const std::array<int, 4> ext = extreme_seeds(mesh, used, axes);
+    for (int i = 0; i < 4; ++i)
+      if (s[i] < 0) s[i] = std::find(s.begin(), s.end(), ext[i]) == s.end() ? ext[i] : -1;
   }
   return s;
 }
