@@ -15,6 +15,7 @@
 
 #include "qs/core/error.h"
 #include "qs/render/render.h"
+#include "../tools/tool_runner.h"
 #include "qs/shapes/shapes.h"
 
 namespace fs = std::filesystem;
@@ -350,23 +351,7 @@ TEST_F(RenderFiles, WritePngToAnUnwritablePlaceThrowsIoError) {
 
 namespace {
 
-struct ToolRun {
-  int exit = -1;
-  std::string out;  // stdout and stderr together
-};
-
-ToolRun run_tool(const std::string& args) {
-  const std::string cmd = std::string(QS_TOOLS_DIR) + "/qs-render " + args + " 2>&1";
-  ToolRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(p);
-  r.exit = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+RunResult run_tool(const std::string& args) { return ::run_tool("qs-render", args); }
 
 std::string off_text(const qs::TriMesh& m) {
   std::ostringstream s;
@@ -389,7 +374,7 @@ class RenderTool : public RenderFiles {
 
 TEST_F(RenderTool, RendersSideBySide) {
   const std::string s = sphere(), out = (dir_ / "out.png").string();
-  const ToolRun r = run_tool(s + " " + s + " -o " + out + " --size 120x100 --wireframe --smooth --view 1,0,0");
+  const RunResult r = run_tool(s + " " + s + " -o " + out + " --size 120x100 --wireframe --smooth --view 1,0,0");
   ASSERT_EQ(r.exit, 0) << r.out;
   const std::string bytes = read_bytes(out);
   ASSERT_GT(bytes.size(), 24u);
@@ -404,7 +389,7 @@ TEST_F(RenderTool, RendersSideBySide) {
 
 TEST_F(RenderTool, ErrorsGiveDocumentedExitCodesAndNoOutput) {
   const std::string s = sphere(), out = (dir_ / "out.png").string();
-  ToolRun r = run_tool((dir_ / "missing.obj").string() + " -o " + out);
+  RunResult r = run_tool((dir_ / "missing.obj").string() + " -o " + out);
   EXPECT_EQ(r.exit, 3) << r.out;
   EXPECT_THAT(r.out, HasSubstr("missing.obj"));
   r = run_tool(s + " " + (dir_ / "missing.obj").string() + " -o " + out);  // fails after the first

@@ -67,7 +67,7 @@ enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3 };
 class Dissector {
  public:
   Dissector(const TriMesh& mesh, const DissectOptions& options, const Context& context)
-      : cm_(mesh), opt_(options), ctx_(context) {}
+      : mesh_(mesh), cm_(mesh), opt_(options), ctx_(context) {}
 
   Dissection run(const std::array<int, 4>& seeds);
 
@@ -116,6 +116,7 @@ class Dissector {
   int insert_point(int label, const Vec2& q);
   std::vector<int> trace(int label, int a, int b);
 
+  const TriMesh& mesh_;  // the input, before any cut
   CutMesh cm_;
   DissectOptions opt_;
   const Context& ctx_;
@@ -417,42 +418,18 @@ Dissection Dissector::run(const std::array<int, 4>& seeds) {
   Dissection out;
   out.seeds = seeds;
   ctx_.report("seed loop", 0.0);
-  const SeedLoop loop = trace_seed_loop(cm_.to_trimesh(), seeds, ctx_);
+  const SeedLoop loop = trace_seed_loop(mesh_, seeds, ctx_);
   grow();
 
   // Seed patches: "0" left of the loop s0->s1->s2->s3, "1" right of it.
-  std::vector<char> on_loop(3 * cm_.num_faces(), 0);
-  for (const auto& path : loop.paths)
-    for (size_t i = 0; i + 1 < path.size(); ++i) {
-      const int h = cm_.find_halfedge(path[i], path[i + 1]);
-      if (h < 0) throw InternalError("seed loop: path step " + std::to_string(path[i]) + "-" +
-                                     std::to_string(path[i + 1]) + " is not an edge");
-      on_loop[h] = on_loop[cm_.opposite(h)] = 1;
-    }
-  const int h01 = cm_.find_halfedge(loop.paths[0][0], loop.paths[0][1]);
   std::array<Node, 2> roots;
   roots[0] = {"0", 0, new_label(), {seeds[0], seeds[1], seeds[2], seeds[3]}};
   roots[1] = {"1", 0, new_label(), {seeds[0], seeds[3], seeds[2], seeds[1]}};
-  for (int f = 0; f < cm_.num_faces(); ++f) cm_.set_patch(f, -1);
-  const std::array<int, 2> start = {CutMesh::face_of(h01), CutMesh::face_of(cm_.opposite(h01))};
-  for (int r = 0; r < 2; ++r) {
-    std::vector<int> stack = {start[r]};
-    cm_.set_patch(start[r], roots[r].label);
-    while (!stack.empty()) {
-      const int f = stack.back();
-      stack.pop_back();
-      patch_faces_[roots[r].label].push_back(f);
-      for (int j = 0; j < 3; ++j) {
-        const int h = 3 * f + j;
-        const int g = CutMesh::face_of(cm_.opposite(h));
-        if (on_loop[h] || cm_.patch(g) >= 0) continue;
-        cm_.set_patch(g, roots[r].label);
-        stack.push_back(g);
-      }
-    }
+  const std::vector<int> side = seed_patch_of_faces(mesh_, loop);
+  for (int f = 0; f < cm_.num_faces(); ++f) {
+    cm_.set_patch(f, roots[side[f]].label);
+    patch_faces_[roots[side[f]].label].push_back(f);
   }
-  if (patch_faces_[0].size() + patch_faces_[1].size() != static_cast<size_t>(cm_.num_faces()))
-    throw InternalError("seed loop does not cut the mesh into two parts");
 
   std::deque<Node> queue(roots.begin(), roots.end());
   std::vector<Node> leaves;

@@ -54,6 +54,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -694,18 +695,56 @@ std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop) 
   return labels;
 }
 
+namespace {
+
+// Routes one candidate seed set: the area fraction on the smaller side of its loop, or nullopt
+// (with the reason appended to `why`) when the seeds are not 4 distinct vertices or do not route.
+std::optional<double> route_score(const TriMesh& mesh, const Graph& g, Dijkstra& dijkstra,
+                                  const std::vector<double>& face_area, const std::string& name,
+                                  const std::array<int, 4>& seeds, std::string& why) {
+  const bool distinct = std::set<int>(seeds.begin(), seeds.end()).size() == 4 &&
+                        std::none_of(seeds.begin(), seeds.end(), [](int v) { return v < 0; });
+  const Attempt a = distinct ? try_route(mesh, g, dijkstra, seeds, {}) : Attempt{};
+  if (!a.ok) {
+    why += (why.empty() ? "" : "; ") + name + " (vertices " + seeds_text(seeds) +
+           "): " + (distinct ? a.why : "not 4 distinct vertices");
+    return std::nullopt;
+  }
+  double side0 = 0, total = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    total += face_area[f];
+    if (a.labels[f] == 0) side0 += face_area[f];
+  }
+  return std::min(side0, total - side0) / std::max(total, 1e-300);
+}
+
+std::vector<double> face_areas(const TriMesh& mesh) {
+  std::vector<double> area(mesh.num_faces());
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Tri& t = mesh.faces[f];
+    const Vec3& a = mesh.positions[t[0]];
+    area[f] = 0.5 * (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).norm();
+  }
+  return area;
+}
+
+[[noreturn]] void no_routable_seeds(const std::string& why) {
+  throw InvalidInput("choose_seeds: no rule gives a routable seed loop: " + why + "; give the four seeds by hand");
+}
+
+}  // namespace
+
 std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
                                         const std::vector<std::pair<std::string, std::array<int, 4>>>& candidates) {
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
+  const std::vector<double> area = face_areas(mesh);
   std::string why;
   for (const auto& [name, seeds] : candidates) {
     check_seeds(mesh, seeds);
-    const Attempt a = try_route(mesh, g, dijkstra, seeds, {});
-    if (a.ok) return seeds;
-    why += (why.empty() ? "" : "; ") + name + " (vertices " + seeds_text(seeds) + "): " + a.why;
+    if (route_score(mesh, g, dijkstra, area, name, seeds, why)) return seeds;
   }
-  throw InvalidInput("choose_seeds: no rule gives a routable seed loop: " + why + "; give the four seeds by hand");
+  no_routable_seeds(why);
 }
 
 std::array<int, 4> choose_seeds(const TriMesh& mesh) {
@@ -716,45 +755,28 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
   const Axes axes = principal_axes(mesh, w);
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
+  const std::vector<double> area = face_areas(mesh);
+  std::string why;
   // The rays' seeds, unless their loop cannot be routed or encloses less than 5% of the area
   // (rays from a centroid that lies near the surface of a bent figure meet it close together,
   // leaving one seed patch with nearly the whole shape). Then the routable candidate whose loop
   // cuts the surface most evenly (largest area of its smaller side) wins.
-  std::vector<std::pair<std::string, std::array<int, 4>>> candidates = {
-      {"the principal-axis rays", pca_seeds(mesh, used, axes)},
+  const std::array<int, 4> rays = pca_seeds(mesh, used, axes);
+  const std::optional<double> ray_score = route_score(mesh, g, dijkstra, area, "the principal-axis rays", rays, why);
+  if (ray_score && *ray_score >= 0.05) return rays;
+  double best_score = ray_score.value_or(-1);
+  std::array<int, 4> best = rays;
+  const std::pair<std::string, std::array<int, 4>> fallbacks[] = {
       {"the principal-axis extremes", extreme_seeds(mesh, used, axes)},
       {"the geodesically farthest vertices", farthest_seeds(mesh, dijkstra, used, axes)}};
-  std::vector<double> face_area(mesh.num_faces());
-  double total = 0;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Tri& t = mesh.faces[f];
-    face_area[f] = 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).norm();
-    total += face_area[f];
-  }
-  double best_score = -1;
-  std::array<int, 4> best{};
-  std::string why;
-  for (const auto& [name, seeds] : candidates) {
-    if (std::set<int>(seeds.begin(), seeds.end()).size() != 4 ||
-        std::any_of(seeds.begin(), seeds.end(), [](int v) { return v < 0; }))
-      continue;
-    const Attempt a = try_route(mesh, g, dijkstra, seeds, {});
-    if (!a.ok) {
-      why += (why.empty() ? "" : "; ") + name + " (vertices " + seeds_text(seeds) + "): " + a.why;
-      continue;
-    }
-    double side0 = 0;
-    for (int f = 0; f < mesh.num_faces(); ++f)
-      if (a.labels[f] == 0) side0 += face_area[f];
-    const double score = std::min(side0, total - side0) / std::max(total, 1e-300);
-    if (&seeds == &candidates.front().second && score >= 0.05) return seeds;  // the rule itself
-    if (score > best_score + 1e-9) {
-      best_score = score;
+  for (const auto& [name, seeds] : fallbacks) {
+    const std::optional<double> score = route_score(mesh, g, dijkstra, area, name, seeds, why);
+    if (score && *score > best_score + 1e-9) {
+      best_score = *score;
       best = seeds;
     }
   }
-  if (best_score < 0)
-    throw InvalidInput("choose_seeds: no rule gives a routable seed loop: " + why + "; give the four seeds by hand");
+  if (best_score < 0) no_routable_seeds(why);
   return best;
 }
 
