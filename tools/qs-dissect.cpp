@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include "mesh_input.h"
@@ -43,20 +44,42 @@ std::array<int, 4> seeds_from_landmarks(const qs::landmarks::Landmarks& lm, cons
   return seeds;
 }
 
+std::string default_outdir(const std::vector<std::string>& files) {
+  std::string d;
+  for (size_t i = 0; i < files.size() && i < 3; ++i) d += (i ? "_" : "") + fs::path(files[i]).stem().string();
+  if (files.size() > 3) d += "_etc";
+  return d + ".dissection";
+}
+
+// Chart file names: <stem>.chart.ply, with -2, -3 ... for repeated stems.
+std::vector<std::string> chart_names(const std::vector<std::string>& files) {
+  std::vector<std::string> names;
+  std::map<std::string, int> seen;
+  for (const auto& f : files) {
+    const std::string stem = fs::path(f).stem().string();
+    const int n = ++seen[stem];
+    names.push_back(stem + (n > 1 ? "-" + std::to_string(n) : "") + ".chart.ply");
+  }
+  return names;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Dissect a closed genus-0 mesh into quad patches by quinary subdivision.\n"
+  CLI::App app{"Dissect closed genus-0 meshes into quad patches by quinary subdivision. Several meshes are\n"
+               "dissected together: one union quinary tree, the same patches on every mesh, features aligned.\n"
                "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal.",
                "qs-dissect"};
-  std::vector<std::string> meshes;
-  std::string landmark_file, outdir, report_file;
+  std::vector<std::string> meshes, landmark_files;
+  std::string outdir, report_file;
   bool quiet = false;
   qs::dissect::DissectOptions opt;
-  app.add_option("meshes", meshes, "The mesh (.obj .off .ply .stl)")->required();
-  app.add_option("--landmarks", landmark_file,
-                 "Landmarks (.json or MeshLab .pp) with 4 seeds; default <stem>.landmarks.json or <stem>.pp "
-                 "beside the mesh, else seeds are chosen automatically");
+  app.add_option("meshes", meshes, "The meshes (.obj .off .ply .stl); seeds correspond by order, features by name")
+      ->required();
+  app.add_option("--landmarks", landmark_files,
+                 "Landmark files (.json or MeshLab .pp), one per mesh in the same order; default "
+                 "<stem>.landmarks.json or <stem>.pp beside each mesh, else seeds are chosen automatically")
+      ->expected(1, -1);
   app.add_option("--tau", opt.tau, "Largest accepted patch L2 stretch (1 = isometric)")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 1e6));
@@ -64,28 +87,57 @@ int main(int argc, char** argv) {
   app.add_option("--min-faces", opt.min_faces_to_split, "Smallest patch (in faces) that may be split")
       ->capture_default_str()
       ->check(CLI::Range(10, 1 << 30));
-  app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection)");
+  app.add_option("--relax", opt.relax_rounds, "Rounds of seed-curve relaxation (paper 3.3; off by default, see README)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 16));
+  app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
-    if (meshes.size() != 1)
-      throw qs::UsageError("dissecting several meshes together (the union quinary tree) is not available yet; "
-                           "give one mesh");
-    const std::string file = meshes.front();
-    const std::string stem = fs::path(file).stem().string();
-    if (outdir.empty()) outdir = stem + ".dissection";
+    if (!landmark_files.empty() && landmark_files.size() != meshes.size())
+      throw qs::UsageError("--landmarks got " + std::to_string(landmark_files.size()) + " files for " +
+                           std::to_string(meshes.size()) + " meshes; give one per mesh, in the same order");
+    if (outdir.empty()) outdir = default_outdir(meshes);
     const auto t0 = std::chrono::steady_clock::now();
     std::ostringstream text;
-    const qs::tools::MeshInput in =
-        qs::tools::load_mesh_input(file, landmark_file.empty() ? std::nullopt : std::optional(landmark_file));
+    std::vector<qs::tools::MeshInput> inputs;
+    for (size_t i = 0; i < meshes.size(); ++i)
+      inputs.push_back(qs::tools::load_mesh_input(
+          meshes[i], landmark_files.empty() ? std::nullopt : std::optional(landmark_files[i])));
 
-    std::optional<std::array<int, 4>> seeds;
-    std::string seed_source = "automatic";
-    if (in.landmarks && in.landmarks->seeds.size() == 4) {
-      seeds = seeds_from_landmarks(*in.landmarks, in.valid.mesh, text);
-      seed_source = in.landmark_file;
+    std::vector<qs::dissect::MeshToDissect> set(inputs.size());
+    std::vector<std::string> seed_source(inputs.size(), "automatic");
+    int with_seeds = 0;
+    for (size_t i = 0; i < inputs.size(); ++i) {
+      const auto& in = inputs[i];
+      set[i].mesh = &in.valid.mesh;
+      set[i].name = in.file;
+      if (!in.landmarks) continue;
+      if (in.landmarks->seeds.size() == 4) {
+        set[i].seeds = seeds_from_landmarks(*in.landmarks, in.valid.mesh, text);
+        seed_source[i] = in.landmark_file;
+        ++with_seeds;
+      }
+      for (const auto& l : in.landmarks->features) {
+        qs::dissect::Feature f;
+        f.name = l.name;
+        f.vertex = l.vertex;
+        f.where = l.where;
+        set[i].features.push_back(f);
+      }
     }
+    if (with_seeds != 0 && with_seeds != static_cast<int>(inputs.size())) {
+      std::string which;
+      for (size_t i = 0; i < inputs.size(); ++i)
+        if (!set[i].seeds) which += (which.empty() ? "" : ", ") + inputs[i].file;
+      throw qs::InvalidInput("seeds correspond by order across the set, so every mesh needs them: " + which +
+                             " has no seeds (give a landmark file with 4 seeds for each mesh, or for none)");
+    }
+    if (inputs.size() > 1 && with_seeds == 0 && !quiet)
+      std::cerr << "qs-dissect: warning: no seeds given; each mesh gets automatic seeds from its own principal "
+                   "axes, which correspond only for similar poses. Give seeds for a reliable correspondence.\n";
+
     qs::Context ctx;
     int last_pct = -1;
     if (!quiet)
@@ -97,60 +149,72 @@ int main(int argc, char** argv) {
         }
       };
     const auto t1 = std::chrono::steady_clock::now();
-    qs::dissect::DissectedMesh dm;
-    dm.dissection = qs::dissect::dissect(in.valid.mesh, seeds, opt, ctx);
+    qs::dissect::DissectionSet result = qs::dissect::dissect_set(set, opt, ctx);
     const auto t2 = std::chrono::steady_clock::now();
-    dm.file = file;
-    dm.chart_file = stem + ".chart.ply";
-    dm.seed_source = seed_source;
-    dm.input_vertices = in.valid.report.vertices;
-    dm.input_faces = in.valid.report.faces;
-    dm.seconds = std::chrono::duration<double>(t2 - t1).count();
-    const auto& d = dm.dissection;
-    if (!d.base.closed_conforming || d.base.euler_characteristic != 2)
-      throw qs::InternalError("the base domain is not a closed conforming quad mesh of Euler characteristic 2 (" +
-                              std::to_string(d.base.euler_characteristic) + ")");
+    const double seconds = std::chrono::duration<double>(t2 - t1).count();
+    const auto charts = chart_names(meshes);
+    std::vector<qs::dissect::DissectedMesh> out(inputs.size());
+    int flipped = 0;
+    for (size_t i = 0; i < inputs.size(); ++i) {
+      auto& dm = out[i];
+      dm.dissection = std::move(result.meshes[i]);
+      dm.file = inputs[i].file;
+      dm.chart_file = charts[i];
+      dm.seed_source = seed_source[i];
+      dm.input_vertices = inputs[i].valid.report.vertices;
+      dm.input_faces = inputs[i].valid.report.faces;
+      dm.seconds = seconds;
+      const auto& d = dm.dissection;
+      if (!d.base.closed_conforming || d.base.euler_characteristic != 2 ||
+          d.base.quads != out[0].dissection.base.quads)
+        throw qs::InternalError("the base domain of " + dm.file +
+                                " is not a closed conforming quad mesh of Euler characteristic 2 shared by the set");
+      text << dm.file << ": " << d.chart.patches.size() << " patches (base domain V=" << d.base.vertices.size()
+           << " E=" << d.base.edges << " F=" << d.base.quads.size() << "), max stretch " << std::setprecision(4)
+           << d.max_stretch << " (tau " << opt.tau << "), seeds " << dm.seed_source << " [" << d.seeds[0] << " "
+           << d.seeds[1] << " " << d.seeds[2] << " " << d.seeds[3] << "]\n";
+      int mesh_flipped = 0;
+      for (const auto& p : d.chart.patches) {
+        mesh_flipped += p.flipped_faces + p.zero_area_faces;
+        if (p.stop != qs::dissect::StopReason::None)
+          text << "  patch " << p.name << ": stretch " << p.stretch << " over tau, left as is: "
+               << qs::dissect::stop_reason_name(p.stop) << (p.stop_detail.empty() ? "" : " (" + p.stop_detail + ")")
+               << ", " << p.faces << " faces\n";
+      }
+      text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
+           << " flipped or zero-area uv faces)\n";
+      for (const auto& f : d.features)
+        text << "  feature " << f.name << ": patch " << d.chart.patches[f.patch].name << " uv (" << std::setprecision(6)
+             << f.uv.x() << ", " << f.uv.y() << ")\n";
+      flipped += mesh_flipped;
+    }
+    if (inputs.size() > 1)
+      text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
+           << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events
+           << " warp flip events, max stretch " << std::setprecision(4) << result.max_stretch << "\n";
 
     fs::create_directories(outdir);
-    qs::dissect::write_chart_ply(fs::path(outdir) / dm.chart_file, d.chart);
-    qs::write_file_atomically(fs::path(outdir) / "dissection.json",
-                              qs::dissect::dissection_to_json({dm}, opt, false));
+    for (const auto& dm : out) qs::dissect::write_chart_ply(fs::path(outdir) / dm.chart_file, dm.dissection.chart);
+    qs::write_file_atomically(fs::path(outdir) / "dissection.json", qs::dissect::dissection_to_json(out, opt, false));
     const auto t3 = std::chrono::steady_clock::now();
-
-    text << file << ": " << d.chart.patches.size() << " patches (base domain V=" << d.base.vertices.size()
-         << " E=" << d.base.edges << " F=" << d.base.quads.size() << "), max stretch " << std::setprecision(4)
-         << d.max_stretch << " (tau " << opt.tau << "), seeds " << seed_source << " [" << d.seeds[0] << " "
-         << d.seeds[1] << " " << d.seeds[2] << " " << d.seeds[3] << "]\n";
-    int flipped = 0;
-    for (const auto& p : d.chart.patches) {
-      flipped += p.flipped_faces + p.zero_area_faces;
-      if (p.stop != qs::dissect::StopReason::None)
-        text << "  patch " << p.name << ": stretch " << p.stretch << " over tau, left as is: "
-             << qs::dissect::stop_reason_name(p.stop) << (p.stop_detail.empty() ? "" : " (" + p.stop_detail + ")")
-             << ", " << p.faces << " faces\n";
-    }
-    text << "  bijective: " << (flipped == 0 ? "yes" : "NO") << " (" << flipped << " flipped or zero-area uv faces)\n";
-    text << "  wrote " << (fs::path(outdir) / "dissection.json").string() << " and "
-         << (fs::path(outdir) / dm.chart_file).string() << "\n";
+    text << "  wrote " << (fs::path(outdir) / "dissection.json").string() << " and " << out.size() << " chart file"
+         << (out.size() > 1 ? "s" : "") << "\n";
     std::ostringstream times;
     times << std::fixed << std::setprecision(3) << "  time: read+validate "
-          << std::chrono::duration<double>(t1 - t0).count() << " s, dissect " << dm.seconds << " s, write "
+          << std::chrono::duration<double>(t1 - t0).count() << " s, dissect " << seconds << " s, write "
           << std::chrono::duration<double>(t3 - t2).count() << " s\n";
     if (!quiet) std::cout << text.str() << times.str();
-    if (flipped > 0) {
-      if (!report_file.empty()) qs::write_file_atomically(report_file, text.str() + times.str());
+    std::ostringstream full;
+    full << text.str() << times.str();
+    for (const auto& dm : out)
+      for (const auto& p : dm.dissection.chart.patches)
+        full << "  " << dm.file << " " << p.name << ": " << p.faces << " faces, stretch " << p.stretch
+             << ", flipped " << p.flipped_faces << "\n";
+    if (!report_file.empty()) qs::write_file_atomically(report_file, full.str());
+    if (flipped > 0)
       throw qs::SolverError(std::to_string(flipped) +
                             " uv faces are flipped or of zero area in patches that could not be split further "
                             "(see the report above); try a larger --max-depth or a smaller --min-faces");
-    }
-    if (!report_file.empty()) {
-      std::ostringstream full;
-      full << text.str() << times.str();
-      for (const auto& p : d.chart.patches)
-        full << "  " << p.name << ": " << p.faces << " faces, stretch " << p.stretch << ", flipped "
-             << p.flipped_faces << "\n";
-      qs::write_file_atomically(report_file, full.str());
-    }
     return 0;
   });
 }

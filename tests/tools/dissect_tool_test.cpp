@@ -40,7 +40,7 @@ TEST_F(DissectTool, WritesTheChartAndTheJsonContract) {
   std::ifstream in(out / "dissection.json");
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["format"], "qs-dissection");
-  EXPECT_EQ(j["version"], 1);
+  EXPECT_EQ(j["version"], 2);
   EXPECT_EQ(j["base_domain"]["euler_characteristic"], 2);
   EXPECT_TRUE(j["base_domain"]["closed_conforming"].get<bool>());
   const auto& mesh = j["meshes"][0];
@@ -69,7 +69,7 @@ TEST_F(DissectTool, ExitCodes) {
   EXPECT_THAT(bad.out, HasSubstr("genus"));
   EXPECT_FALSE(fs::exists(dir_ / "t" / "dissection.json"));
   const std::string ball = write("ball.obj", qs::shapes::icosphere(2));
-  EXPECT_EQ(run_tool("qs-dissect", ball + " " + ball).exit, 1);
+  EXPECT_EQ(run_tool("qs-dissect", ball + " " + ball + " --landmarks " + ball).exit, 1);  // 1 file, 2 meshes
   EXPECT_EQ(run_tool("qs-dissect", ball + " --tau 0.5").exit, 1);
   EXPECT_EQ(run_tool("qs-dissect", (dir_ / "missing.obj").string()).exit, 3);
   std::ofstream(dir_ / "ball.landmarks.json") << R"({"seeds": [0, 1, 1, 2]})";
@@ -80,4 +80,55 @@ TEST_F(DissectTool, ExitCodes) {
   const RunResult ok = run_tool("qs-dissect", ball + " -o " + (dir_ / "c").string());
   EXPECT_EQ(ok.exit, 0) << ok.out;
   EXPECT_THAT(ok.out, HasSubstr("ball.landmarks.json"));
+}
+
+TEST_F(DissectTool, SetOfTwoMeshesWithFeatures) {
+  // The same sphere twice, stretched: seeds and features by vertex id in landmark files.
+  qs::TriMesh a = qs::shapes::icosphere(3), b = a;
+  for (auto& p : b.positions) p = qs::Vec3(1.6 * p.x(), p.y(), 0.8 * p.z() + 0.2 * p.x() * p.x());
+  const std::string fa = write("a.obj", a), fb = write("b.obj", b);
+  int top = 0, other = 0;
+  for (int v = 0; v < a.num_vertices(); ++v) {
+    if (a.positions[v].z() > a.positions[top].z()) top = v;
+    if ((a.positions[v] - qs::Vec3(0.5, 0.5, 0.7)).norm() < (a.positions[other] - qs::Vec3(0.5, 0.5, 0.7)).norm()) other = v;
+  }
+  int s[4] = {0, 0, 0, 0};
+  const qs::Vec3 dirs[4] = {{1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+  for (int i = 0; i < 4; ++i)
+    for (int v = 0; v < a.num_vertices(); ++v)
+      if (a.positions[v].dot(dirs[i]) > a.positions[s[i]].dot(dirs[i])) s[i] = v;
+  const std::string lm = "{\"seeds\": [" + std::to_string(s[0]) + ", " + std::to_string(s[1]) + ", " +
+                         std::to_string(s[2]) + ", " + std::to_string(s[3]) + "], \"features\": {\"top\": " +
+                         std::to_string(top) + ", \"side\": " + std::to_string(other) + "}}";
+  std::ofstream(dir_ / "a.landmarks.json") << lm;
+  std::ofstream(dir_ / "b.landmarks.json") << lm;
+  const fs::path out = dir_ / "set";
+  const RunResult r = run_tool("qs-dissect", fa + " " + fb + " --tau 1.2 -o " + out.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("set: 2 meshes"));
+  std::ifstream in(out / "dissection.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_EQ(j["meshes"].size(), 2u);
+  EXPECT_EQ(j["meshes"][0]["chart"], "a.chart.ply");
+  EXPECT_EQ(j["meshes"][1]["chart"], "b.chart.ply");
+  EXPECT_EQ(j["meshes"][0]["patches"].size(), j["meshes"][1]["patches"].size());
+  ASSERT_EQ(j["meshes"][0]["features"].size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const auto& f0 = j["meshes"][0]["features"][k];
+    const auto& f1 = j["meshes"][1]["features"][k];
+    EXPECT_EQ(f0["patch"], f1["patch"]);
+    EXPECT_NEAR(f0["uv"][0].get<double>(), f1["uv"][0].get<double>(), 1e-6);
+    EXPECT_NEAR(f0["uv"][1].get<double>(), f1["uv"][1].get<double>(), 1e-6);
+  }
+  // A feature missing from one mesh: exit 2, naming it.
+  std::ofstream(dir_ / "b.landmarks.json") << "{\"seeds\": [" << s[0] << ", " << s[1] << ", " << s[2] << ", " << s[3]
+                                           << "], \"features\": {\"top\": " << top << "}}";
+  const RunResult missing = run_tool("qs-dissect", fa + " " + fb + " -o " + (dir_ / "set2").string());
+  EXPECT_EQ(missing.exit, 2) << missing.out;
+  EXPECT_THAT(missing.out, HasSubstr("lacks 'side'"));
+  // Seeds on one mesh only: exit 2.
+  fs::remove(dir_ / "b.landmarks.json");
+  const RunResult half = run_tool("qs-dissect", fa + " " + fb + " -o " + (dir_ / "set3").string());
+  EXPECT_EQ(half.exit, 2) << half.out;
+  EXPECT_THAT(half.out, HasSubstr("has no seeds"));
 }

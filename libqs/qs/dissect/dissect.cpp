@@ -9,17 +9,21 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 #include <cstdint>
 
 #include "qs/core/error.h"
 #include "qs/dissect/cut_mesh.h"
 #include "qs/dissect/dissection.h"
+#include "qs/dissect/relax.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/param/square_param.h"
+#include "qs/warp/warp.h"
 
 namespace qs::dissect {
 
@@ -62,14 +66,43 @@ struct Extracted {
   std::vector<int> faces;  // local -> global face
 };
 
-enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3 };
+enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
 
-class Dissector {
+// The per-node result of one mesh: its patch extracted and parameterized (after alignment).
+struct Param {
+  Extracted ex;
+  param::SquareParam sp;
+  param::Stretch st;
+  std::vector<std::pair<int, int>> features;  // (feature index, local vertex), by feature index
+};
+
+// The dissection state of one mesh of the set: the cut mesh and the faces of every tree node.
+// The set driver (SetDissector) walks the union tree and asks each mesh to parameterize, split,
+// restore or keep a node; labels are handed out in the same order in every mesh.
+class MeshDissector {
  public:
-  Dissector(const TriMesh& mesh, const DissectOptions& options, const Context& context)
-      : mesh_(mesh), cm_(mesh), opt_(options), ctx_(context) {}
+  MeshDissector(const MeshToDissect& in, int index, const std::vector<std::string>& feature_names,
+                const DissectOptions& options, const Context& context);
 
-  Dissection run(const std::array<int, 4>& seeds);
+  /// Traces the seed loop (avoiding the features) and labels the two seed patches.
+  std::array<Node, 2> seed(const std::array<int, 4>& seeds);
+  Param parameterize(const Node& node);
+  std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
+  /// Puts a node's faces back after a failed split (in any mesh of the set).
+  void restore(const Node& node, size_t first_new_label);
+  size_t labels() const { return patch_faces_.size(); }
+  /// Drops the parent's face list once every mesh of the set has split it.
+  void commit_split(const Node& node) { patch_faces_[node.label].clear(); }
+  /// Records a node as a leaf with its (aligned) parameterization.
+  void keep_leaf(const Node& node, const Param& p, PatchInfo info);
+  Dissection finish(const std::vector<TreeNode>& tree);
+  const std::string& name() const { return name_; }
+  int feature_vertex(int k) const { return feature_vertex_[k]; }
+  /// The label of the patch holding feature k (features never lie on a patch border).
+  int feature_label(int k) const { return cm_.patch(CutMesh::face_of(cm_.out_halfedge(feature_vertex_[k]))); }
+
+  /// Smoothed per-face stretch peak: (face, value). One sliver cannot decide.
+  std::pair<int, double> peak(const Param& p) const;
 
  private:
   void grow() {
@@ -104,31 +137,30 @@ class Dissector {
   bool interior_edge(int h, int label) const {
     return cm_.patch(CutMesh::face_of(h)) == label && cm_.patch(CutMesh::face_of(cm_.opposite(h))) == label;
   }
-
+  int insert_feature(const Feature& f);
   Extracted extract(const Node& node);
-  struct Param {
-    Extracted ex;
-    param::SquareParam sp;
-    param::Stretch st;
-  };
-  Param parameterize(const Node& node);
-  std::array<Node, 5> split(const Node& node, const Param& p, TreeNode& tn);
-  int insert_point(int label, const Vec2& q);
+  int insert_point(int label, const Vec2& q, bool snap);
   std::vector<int> trace(int label, int a, int b);
 
   const TriMesh& mesh_;  // the input, before any cut
+  std::string name_;
   CutMesh cm_;
   DissectOptions opt_;
   const Context& ctx_;
+  std::vector<int> feature_vertex_;            // by feature index (names sorted)
+  std::vector<int> feature_of_;                // by vertex: feature index or -1
   std::vector<std::vector<int>> patch_faces_;  // by label
   std::vector<int> local_of_;                  // scratch: global vertex -> local, -1
   std::vector<Vec2> uv_of_;                    // scratch: uv of the patch being split
   std::vector<char> flag_;                     // scratch: Flag of the patch being split
   std::vector<std::array<Vec2, 3>> face_uv_;   // leaves' wedge uv, by global face
   std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
+  std::vector<Node> leaves_;
+  std::vector<PatchInfo> infos_;
+  std::array<int, 4> seeds_{};
 };
 
-Extracted Dissector::extract(const Node& node) {
+Extracted MeshDissector::extract(const Node& node) {
   Extracted ex;
   std::vector<int>& faces = patch_faces_[node.label];
   std::sort(faces.begin(), faces.end());
@@ -193,7 +225,110 @@ Extracted Dissector::extract(const Node& node) {
   return ex;
 }
 
-Dissector::Param Dissector::parameterize(const Node& node) {
+MeshDissector::MeshDissector(const MeshToDissect& in, int index, const std::vector<std::string>& feature_names,
+                             const DissectOptions& options, const Context& context)
+    : mesh_(*in.mesh),
+      name_(in.name.empty() ? "mesh " + std::to_string(index) : in.name),
+      cm_(*in.mesh),
+      opt_(options),
+      ctx_(context) {
+  grow();
+  // Features become vertices of the cut mesh (a point on a face splits it), so that cuts can be
+  // kept off them and their (u,v) is exact.
+  feature_vertex_.assign(feature_names.size(), -1);
+  for (const Feature& f : in.features) {
+    const auto it = std::lower_bound(feature_names.begin(), feature_names.end(), f.name);
+    const int k = static_cast<int>(it - feature_names.begin());
+    feature_vertex_[k] = insert_feature(f);
+  }
+  feature_of_.assign(cm_.num_vertices(), -1);
+  for (size_t k = 0; k < feature_vertex_.size(); ++k) {
+    const int v = feature_vertex_[k];
+    if (feature_of_[v] >= 0)
+      throw InvalidInput(name_ + ": features '" + feature_names[feature_of_[v]] + "' and '" + feature_names[k] +
+                         "' are the same point (vertex " + std::to_string(v) + "); give distinct points");
+    feature_of_[v] = static_cast<int>(k);
+  }
+}
+
+int MeshDissector::insert_feature(const Feature& f) {
+  if (f.vertex >= 0) {
+    if (f.vertex >= cm_.num_vertices())
+      throw InvalidInput(name_ + ": feature '" + f.name + "' refers to vertex " + std::to_string(f.vertex) +
+                         ", out of range");
+    return f.vertex;
+  }
+  // The face may have been split by an earlier feature: find the current face nearest the point.
+  const Vec3 p = landmarks::position_of(mesh_, f.where);
+  const landmarks::SurfacePoint sp = landmarks::closest_surface_point(cm_.to_trimesh(), p);
+  const Tri t = cm_.face(sp.face);
+  const Vec3 b(sp.bary[0], sp.bary[1], sp.bary[2]);
+  int kmax, kmin;
+  b.maxCoeff(&kmax);
+  b.minCoeff(&kmin);
+  if (b[kmax] > 1 - 1e-9) return t[kmax];
+  if (b[kmin] < 1e-9) {
+    const int i = (kmin + 1) % 3, j = (kmin + 2) % 3;
+    const int m = cm_.split_edge(3 * sp.face + i, b[j] / (b[i] + b[j]));
+    grow();
+    return m;
+  }
+  const int m = cm_.split_face(sp.face, b / b.sum());
+  grow();
+  return m;
+}
+
+std::array<Node, 2> MeshDissector::seed(const std::array<int, 4>& seeds) {
+  seeds_ = seeds;
+  for (size_t k = 0; k < feature_vertex_.size(); ++k)
+    for (int i = 0; i < 4; ++i)
+      if (feature_vertex_[k] == seeds[i])
+        throw InvalidInput(name_ + ": a feature is the seed s" + std::to_string(i) + " (vertex " +
+                           std::to_string(seeds[i]) + "); seeds are features already, remove it");
+  TriMesh tm = cm_.to_trimesh();
+  SeedLoop loop = trace_seed_loop(tm, seeds, feature_vertex_, ctx_);
+  if (opt_.relax_rounds > 0) {
+    // Paper 3.3: each seed curve becomes the straight line of the map of the mesh cut along the
+    // other three. New vertices are appended, so input and feature ids stay valid.
+    RelaxOptions ro;
+    ro.rounds = opt_.relax_rounds;
+    ro.avoid = feature_vertex_;
+    RelaxedLoop r = relax_seed_loop(tm, loop, ro, ctx_);
+    tm = std::move(r.mesh);
+    loop = std::move(r.loop);
+    cm_ = CutMesh(tm);
+    grow();
+    feature_of_.resize(cm_.num_vertices(), -1);
+  }
+  // Seed patches: "0" left of the loop s0->s1->s2->s3, "1" right of it.
+  std::array<Node, 2> roots;
+  roots[0] = {"0", 0, new_label(), {seeds[0], seeds[1], seeds[2], seeds[3]}};
+  roots[1] = {"1", 0, new_label(), {seeds[0], seeds[3], seeds[2], seeds[1]}};
+  const std::vector<int> side = seed_patch_of_faces(tm, loop);
+  for (int f = 0; f < cm_.num_faces(); ++f) {
+    cm_.set_patch(f, roots[side[f]].label);
+    patch_faces_[roots[side[f]].label].push_back(f);
+  }
+  return roots;
+}
+
+namespace {
+double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) { return 0.5 * cross2(b - a, c - a); }
+
+// Recounts what parameterize_square counted, for a map changed after the solve (the warp).
+void count_uv_faces(const param::PatchMesh& pm, param::SquareParam& sp) {
+  sp.flipped_faces = sp.zero_area_faces = 0;
+  sp.uv_area_sum = 0;
+  for (const Tri& t : pm.faces) {
+    const double a = signed_area(sp.uv[t[0]], sp.uv[t[1]], sp.uv[t[2]]);
+    sp.uv_area_sum += a;
+    if (std::abs(a) <= param::kZeroUvArea) ++sp.zero_area_faces;
+    else if (a < 0) ++sp.flipped_faces;
+  }
+}
+}  // namespace
+
+Param MeshDissector::parameterize(const Node& node) {
   Param p;
   for (int round = 0;; ++round) {
     p.ex = extract(node);
@@ -208,12 +343,105 @@ Dissector::Param Dissector::parameterize(const Node& node) {
   quiet.progress = nullptr;
   p.sp = param::parameterize_square(p.ex.pm, {}, quiet);
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
+  for (size_t i = 0; i < p.ex.verts.size(); ++i) {
+    const int v = p.ex.verts[i];
+    if (v < static_cast<int>(feature_of_.size()) && feature_of_[v] >= 0)
+      p.features.emplace_back(feature_of_[v], static_cast<int>(i));
+  }
+  std::sort(p.features.begin(), p.features.end());
+  for (int b : p.ex.pm.boundary)
+    for (const auto& [k, local] : p.features)
+      if (local == b)
+        throw InternalError(name_ + ": feature vertex " + std::to_string(p.ex.verts[b]) + " is on the border of patch " +
+                            node.name);
   return p;
+}
+
+std::pair<int, double> MeshDissector::peak(const Param& p) const {
+  const Extracted& ex = p.ex;
+  const int nv = static_cast<int>(ex.verts.size());
+  std::vector<double> vs(nv, 0.0), va(nv, 0.0);
+  const auto& F = ex.pm.faces;
+  for (size_t f = 0; f < F.size(); ++f) {
+    const Tri& t = F[f];
+    const Vec3& q0 = ex.pm.positions[t[0]];
+    const double area = 0.5 * (ex.pm.positions[t[1]] - q0).cross(ex.pm.positions[t[2]] - q0).norm() + 1e-300;
+    const double s = std::min(p.st.face[f], 1e6);
+    for (int v : t) {
+      vs[v] += s * area;
+      va[v] += area;
+    }
+  }
+  int peak = 0;
+  double peak_s = -1;
+  for (size_t f = 0; f < F.size(); ++f) {
+    const Tri& t = F[f];
+    const double s = (vs[t[0]] + vs[t[1]] + vs[t[2]]) / (va[t[0]] + va[t[1]] + va[t[2]]);
+    if (s > peak_s) {
+      peak_s = s;
+      peak = static_cast<int>(f);
+    }
+  }
+  return {peak, peak_s};
+}
+
+void MeshDissector::restore(const Node& node, size_t first_new_label) {
+  // patch_faces_[node.label] still lists all its faces, those the cuts added included; the mesh
+  // stays refined, which is harmless.
+  for (int f : patch_faces_[node.label]) cm_.set_patch(f, node.label);
+  if (patch_faces_.size() > first_new_label) patch_faces_.resize(first_new_label);
+}
+
+void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) {
+  info.name = node.name;
+  info.corners = node.corners;
+  info.faces = static_cast<int>(p.ex.faces.size());
+  info.stretch = p.st.patch;
+  info.flipped_faces = p.sp.flipped_faces;
+  info.zero_area_faces = p.sp.zero_area_faces;
+  info.uv_area_sum = p.sp.uv_area_sum;
+  for (size_t lf = 0; lf < p.ex.faces.size(); ++lf)
+    for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = p.sp.uv[p.ex.pm.faces[lf][k]];
+  leaves_.push_back(node);
+  infos_.push_back(std::move(info));
+}
+
+Dissection MeshDissector::finish(const std::vector<TreeNode>& tree) {
+  Dissection out;
+  out.seeds = seeds_;
+  out.tree = tree;
+  // Leaves sorted by name; the chart's face labels index them.
+  std::vector<int> order(leaves_.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return leaves_[a].name < leaves_[b].name; });
+  std::vector<int> leaf_of_label(patch_faces_.size(), -1);
+  for (size_t i = 0; i < order.size(); ++i) {
+    leaf_of_label[leaves_[order[i]].label] = static_cast<int>(i);
+    out.chart.patches.push_back(infos_[order[i]]);
+    out.max_stretch = std::max(out.max_stretch, infos_[order[i]].stretch);
+  }
+  out.chart.mesh = cm_.to_trimesh();
+  out.chart.face_patch.resize(cm_.num_faces());
+  for (int f = 0; f < cm_.num_faces(); ++f) out.chart.face_patch[f] = leaf_of_label[cm_.patch(f)];
+  out.chart.face_uv = face_uv_;
+  out.chart.face_uv.resize(cm_.num_faces());
+  out.base = build_base_domain(out.chart.patches);
+  // Each feature is an interior vertex of one leaf: read its uv from any face around it.
+  for (size_t k = 0; k < feature_vertex_.size(); ++k) {
+    FeaturePlacement fp;
+    fp.vertex = feature_vertex_[k];
+    const int h = cm_.out_halfedge(fp.vertex);
+    const int f = CutMesh::face_of(h);
+    fp.patch = out.chart.face_patch[f];
+    fp.uv = out.chart.face_uv[f][h % 3];
+    out.features.push_back(fp);
+  }
+  return out;
 }
 
 // Inserts (or reuses) a vertex at parameter point q inside patch `label`, whose vertices have
 // their uv in uv_of_. Crossings near an existing free vertex snap to it; near an edge split it.
-int Dissector::insert_point(int label, const Vec2& q) {
+int MeshDissector::insert_point(int label, const Vec2& q, bool snap) {
   int best_f = -1;
   Vec3 best_b(0, 0, 0);
   double best_min = -std::numeric_limits<double>::infinity();
@@ -234,7 +462,7 @@ int Dissector::insert_point(int label, const Vec2& q) {
   int kmax, kmin;
   best_b.maxCoeff(&kmax);
   best_b.minCoeff(&kmin);
-  if (best_b[kmax] > 0.8 && flag_[t[kmax]] == kFree) return t[kmax];
+  if (snap && best_b[kmax] > 0.8 && flag_[t[kmax]] == kFree) return t[kmax];
   const Vec3 bary = best_b.cwiseMax(0.0) / best_b.cwiseMax(0.0).sum();
   if (bary[kmin] < 0.1) {
     const int h = 3 * best_f + (kmin + 1) % 3;  // the edge opposite corner kmin
@@ -254,7 +482,7 @@ int Dissector::insert_point(int label, const Vec2& q) {
 // Cuts the straight parameter-domain segment from vertex a to vertex b into the mesh: walks from
 // vertex to vertex, splitting each crossed edge (or passing through a free vertex when the
 // crossing is within 5% of it). Returns the path's vertices, a and b included.
-std::vector<int> Dissector::trace(int label, int a, int b) {
+std::vector<int> MeshDissector::trace(int label, int a, int b) {
   std::vector<int> path = {a};
   const Vec2 target = uv_of_[b];
   const size_t limit = 4 * patch_faces_[label].size() + 16;
@@ -312,7 +540,7 @@ std::vector<int> Dissector::trace(int label, int a, int b) {
   return path;
 }
 
-std::array<Node, 5> Dissector::split(const Node& node, const Param& p, TreeNode& tn) {
+std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const Vec2& peak_uv, double w) {
   const Extracted& ex = p.ex;
   const int nv = static_cast<int>(ex.verts.size());
   for (int i = 0; i < nv; ++i) {
@@ -320,44 +548,16 @@ std::array<Node, 5> Dissector::split(const Node& node, const Param& p, TreeNode&
     flag_[ex.verts[i]] = kFree;
   }
   for (int v : ex.pm.boundary) flag_[ex.verts[v]] = kBoundary;
-
-  // Peak: the face of greatest stretch after smoothing over the faces around its corners, so
-  // that one sliver cannot decide.
-  std::vector<double> vs(nv, 0.0), va(nv, 0.0);
-  const auto& F = ex.pm.faces;
-  for (size_t f = 0; f < F.size(); ++f) {
-    const Tri& t = F[f];
-    const Vec3& q0 = ex.pm.positions[t[0]];
-    const double area = 0.5 * (ex.pm.positions[t[1]] - q0).cross(ex.pm.positions[t[2]] - q0).norm() + 1e-300;
-    const double s = std::min(p.st.face[f], 1e6);
-    for (int v : t) {
-      vs[v] += s * area;
-      va[v] += area;
-    }
-  }
-  int peak = 0;
-  double peak_s = -1;
-  for (size_t f = 0; f < F.size(); ++f) {
-    const Tri& t = F[f];
-    const double s = (vs[t[0]] + vs[t[1]] + vs[t[2]]) / (va[t[0]] + va[t[1]] + va[t[2]]);
-    if (s > peak_s) {
-      peak_s = s;
-      peak = static_cast<int>(f);
-    }
-  }
-  const Tri& pt = F[peak];
-  Vec2 peak_uv = (p.sp.uv[pt[0]] + p.sp.uv[pt[1]] + p.sp.uv[pt[2]]) / 3.0;
-  peak_uv = peak_uv.cwiseMax(opt_.peak_margin).cwiseMin(1 - opt_.peak_margin);
-  const double w = std::clamp(opt_.w_bias + std::log10(std::max(peak_s, 1e-12)), opt_.w_min, opt_.w_max);
-  tn.peak_uv = peak_uv;
-  tn.w = w;
+  for (const auto& f : p.features) flag_[ex.verts[f.second]] = kFeature;  // cuts never snap to features
 
   // Inner corners p4..p7 and the 8 cuts.
   cut_edges_.clear();
   std::array<int, 8> c;
   for (int i = 0; i < 4; ++i) c[i] = node.corners[i];
   for (int i = 0; i < 4; ++i) {
-    c[i + 4] = insert_point(node.label, (1 - w) * kSquare[i] + w * peak_uv);
+    // With features in the patch the inner corners never snap to a vertex: the cuts must be the
+    // same segments in every mesh, or a feature near one could change sides.
+    c[i + 4] = insert_point(node.label, (1 - w) * kSquare[i] + w * peak_uv, p.features.empty());
     flag_[c[i + 4]] = kCorner;
   }
   for (int i = 0; i < 4; ++i)
@@ -410,119 +610,389 @@ std::array<Node, 5> Dissector::split(const Node& node, const Param& p, TreeNode&
   }
   for (int f : parent_faces)
     if (cm_.patch(f) == node.label) throw SplitFailure("a region is bounded by no child's corners");
-  patch_faces_[node.label].clear();
-  return kids;
+  return kids;  // the parent's face list stays until the whole set has split (restore needs it)
 }
 
-Dissection Dissector::run(const std::array<int, 4>& seeds) {
-  Dissection out;
-  out.seeds = seeds;
-  ctx_.report("seed loop", 0.0);
-  const SeedLoop loop = trace_seed_loop(mesh_, seeds, ctx_);
-  grow();
+// Distance from q to the segment ab.
+double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const double t = std::clamp((q - a).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+  return (a + t * d - q).norm();
+}
 
-  // Seed patches: "0" left of the loop s0->s1->s2->s3, "1" right of it.
-  std::array<Node, 2> roots;
-  roots[0] = {"0", 0, new_label(), {seeds[0], seeds[1], seeds[2], seeds[3]}};
-  roots[1] = {"1", 0, new_label(), {seeds[0], seeds[3], seeds[2], seeds[1]}};
-  const std::vector<int> side = seed_patch_of_faces(mesh_, loop);
-  for (int f = 0; f < cm_.num_faces(); ++f) {
-    cm_.set_patch(f, roots[side[f]].label);
-    patch_faces_[roots[side[f]].label].push_back(f);
+// The smallest distance from the features to the 8 cuts (and their ends) of a split at (peak, w).
+double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w) {
+  std::array<Vec2, 8> c;
+  for (int i = 0; i < 4; ++i) {
+    c[i] = kSquare[i];
+    c[i + 4] = (1 - w) * kSquare[i] + w * peak;
   }
+  double best = std::numeric_limits<double>::infinity();
+  for (const Vec2& q : features)
+    for (int i = 0; i < 4; ++i) {
+      best = std::min(best, segment_distance(q, c[i], c[i + 4]));
+      best = std::min(best, segment_distance(q, c[i + 4], c[(i + 1) % 4 + 4]));
+    }
+  return best;
+}
 
-  std::deque<Node> queue(roots.begin(), roots.end());
-  std::vector<Node> leaves;
-  std::vector<PatchInfo> infos;
-  const double total_faces = cm_.num_faces();
-  double done_faces = 0;
+// Walks the union quinary tree over every mesh of the set at once.
+class SetDissector {
+ public:
+  SetDissector(const std::vector<MeshToDissect>& in, const DissectOptions& options, const Context& context);
+  DissectionSet run();
+
+ private:
+  // Parameterizes a node in every mesh and aligns its features to their mean (u,v).
+  // `nodes` holds the node of every mesh (same name and label, each mesh's own corner ids).
+  std::vector<Param> evaluate(const std::vector<Node>& nodes, TreeNode& tn);
+  void align(std::vector<Param>& ps, TreeNode& tn);
+  std::pair<Vec2, double> choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
+                                       const std::vector<bool>& over);
+
+  const std::vector<MeshToDissect>& in_;
+  DissectOptions opt_;
+  const Context& ctx_;
+  std::vector<std::string> feature_names_;
+  std::vector<MeshDissector> meshes_;
+};
+
+SetDissector::SetDissector(const std::vector<MeshToDissect>& in, const DissectOptions& options,
+                           const Context& context)
+    : in_(in), opt_(options), ctx_(context) {
+  // Features correspond by name: every mesh must have the same names, each once.
+  for (size_t i = 0; i < in.size(); ++i) {
+    std::vector<std::string> names;
+    for (const auto& f : in[i].features) names.push_back(f.name);
+    std::sort(names.begin(), names.end());
+    const auto dup = std::adjacent_find(names.begin(), names.end());
+    if (dup != names.end())
+      throw InvalidInput((in[i].name.empty() ? "mesh " + std::to_string(i) : in[i].name) + ": feature '" + *dup +
+                         "' is given twice");
+    if (i == 0) {
+      feature_names_ = names;
+      continue;
+    }
+    std::vector<std::string> missing, extra;
+    std::set_difference(feature_names_.begin(), feature_names_.end(), names.begin(), names.end(),
+                        std::back_inserter(missing));
+    std::set_difference(names.begin(), names.end(), feature_names_.begin(), feature_names_.end(),
+                        std::back_inserter(extra));
+    if (!missing.empty() || !extra.empty()) {
+      std::string m = "features must have the same names in every mesh of the set;";
+      auto list = [](const std::vector<std::string>& v) {
+        std::string r;
+        for (const auto& x : v) r += (r.empty() ? "'" : ", '") + x + "'";
+        return r;
+      };
+      if (!missing.empty()) m += " " + in[i].name + " lacks " + list(missing) + " (found in " + in[0].name + ");";
+      if (!extra.empty()) m += " " + in[i].name + " has " + list(extra) + " that " + in[0].name + " lacks;";
+      throw InvalidInput(m);
+    }
+  }
+  meshes_.reserve(in.size());
+  for (size_t i = 0; i < in.size(); ++i)
+    meshes_.emplace_back(in[i], static_cast<int>(i), feature_names_, opt_, ctx_);
+}
+
+std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNode& tn) {
+  const Node& node = nodes[0];
+  std::vector<Param> ps;
+  ps.reserve(meshes_.size());
+  for (size_t i = 0; i < meshes_.size(); ++i) ps.push_back(meshes_[i].parameterize(nodes[i]));
+  // The same features must lie inside the node in every mesh: they are aligned before every split,
+  // so only the seed loops (traced on each mesh independently) can separate them.
+  for (size_t i = 1; i < ps.size(); ++i) {
+    if (ps[i].features.size() == ps[0].features.size() &&
+        std::equal(ps[i].features.begin(), ps[i].features.end(), ps[0].features.begin(),
+                   [](const auto& a, const auto& b) { return a.first == b.first; }))
+      continue;
+    std::vector<int> a, b, diff;
+    for (const auto& f : ps[0].features) a.push_back(f.first);
+    for (const auto& f : ps[i].features) b.push_back(f.first);
+    std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(diff));
+    if (node.depth > 0)
+      throw SolverError("feature '" + feature_names_[diff.front()] + "' ended in different children of patch " +
+                        node.name.substr(0, node.name.rfind('.')) + " across the set (please report this)");
+    throw InvalidInput("feature '" + feature_names_[diff.front()] + "' lies in seed patch " + node.name + " of " +
+                       (std::binary_search(a.begin(), a.end(), diff.front()) ? meshes_[0].name() : meshes_[i].name()) +
+                       " but not of " +
+                       (std::binary_search(a.begin(), a.end(), diff.front()) ? meshes_[i].name() : meshes_[0].name()) +
+                       ": the seed loop s0-s1-s2-s3 separates the features differently on the two meshes; "
+                       "place the seeds so that each feature is on the same side of the loop in every mesh");
+  }
+  tn.features = static_cast<int>(ps[0].features.size());
+  if (meshes_.size() > 1 && !ps[0].features.empty()) align(ps, tn);
+  tn.stretch = 0;
+  tn.mesh_stretch.clear();
+  for (const auto& p : ps) {
+    tn.mesh_stretch.push_back(p.st.patch);
+    tn.stretch = std::max(tn.stretch, p.st.patch);
+  }
+  return ps;
+}
+
+// Moves the features of one node to their mean (u,v) over the set. Features closer than
+// feature_group_distance to each other (in any mesh, or as targets) move as one group, by their
+// centroid, and so do features that near to the border: a warp cannot separate them at this
+// level, and the next split's fresh maps will spread them apart.
+void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
+  const size_t nf = ps[0].features.size(), nm = ps.size();
+  auto uv = [&](size_t i, size_t k) -> const Vec2& { return ps[i].sp.uv[ps[i].features[k].second]; };
+  std::vector<Vec2> target(nf, Vec2::Zero());
+  for (size_t i = 0; i < nm; ++i)
+    for (size_t k = 0; k < nf; ++k) target[k] += uv(i, k);
+  for (auto& t : target) t /= static_cast<double>(nm);
+  const double d = opt_.feature_group_distance;
+  std::vector<int> group(nf);
+  for (size_t k = 0; k < nf; ++k) group[k] = static_cast<int>(k);
+  std::function<int(int)> find = [&](int k) { return group[k] == k ? k : group[k] = find(group[k]); };
+  std::vector<std::vector<Vec2>> rep(nm);  // per mesh, per group root: centroid
+  std::vector<Vec2> rep_target;
+  std::vector<int> roots;
+  for (bool merged = true; merged;) {
+    merged = false;
+    roots.clear();
+    for (size_t k = 0; k < nf; ++k)
+      if (find(static_cast<int>(k)) == static_cast<int>(k)) roots.push_back(static_cast<int>(k));
+    auto centroid = [&](const std::function<Vec2(size_t)>& at, int root) {
+      Vec2 c = Vec2::Zero();
+      int n = 0;
+      for (size_t k = 0; k < nf; ++k)
+        if (find(static_cast<int>(k)) == root) {
+          c += at(k);
+          ++n;
+        }
+      return Vec2(c / n);
+    };
+    rep_target.clear();
+    for (int r : roots) rep_target.push_back(centroid([&](size_t k) { return target[k]; }, r));
+    for (size_t i = 0; i < nm; ++i) {
+      rep[i].clear();
+      for (int r : roots) rep[i].push_back(centroid([&](size_t k) { return uv(i, k); }, r));
+    }
+    for (size_t a = 0; a < roots.size() && !merged; ++a)
+      for (size_t b = a + 1; b < roots.size() && !merged; ++b) {
+        bool close = (rep_target[a] - rep_target[b]).norm() < d;
+        for (size_t i = 0; i < nm && !close; ++i) close = (rep[i][a] - rep[i][b]).norm() < d;
+        if (close) {
+          group[roots[b]] = roots[a];
+          merged = true;
+        }
+      }
+  }
+  // Groups too near the border stay where they are in this node.
+  auto near_border = [&](const Vec2& q) { return q.minCoeff() < d || q.maxCoeff() > 1 - d; };
+  std::vector<size_t> moving;
+  for (size_t g = 0; g < roots.size(); ++g) {
+    bool ok = !near_border(rep_target[g]);
+    for (size_t i = 0; i < nm && ok; ++i) ok = !near_border(rep[i][g]);
+    if (ok) moving.push_back(g);
+  }
+  tn.feature_groups = static_cast<int>(roots.size());
+  tn.features_held = static_cast<int>(roots.size() - moving.size());
+  std::vector<Vec2> to;
+  for (size_t g : moving) to.push_back(rep_target[g]);
+  for (size_t i = 0; i < nm; ++i) {
+    Param& p = ps[i];
+    std::vector<Vec2> from;
+    for (size_t g : moving) from.push_back(rep[i][g]);
+    warp::WarpResult wr;
+    try {
+      wr = warp::warp_square(from, to, p.sp.uv, {}, ctx_);
+    } catch (const Error& e) {
+      const std::string m = "aligning the features of patch " + tn.name + " on " + meshes_[i].name() + ": " + e.what();
+      if (e.code() == ErrorCode::InvalidInput) throw InvalidInput(m);
+      throw SolverError(m);
+    }
+    param::SquareParam warped = p.sp;
+    warped.uv = std::move(wr.points);
+    tn.warp_events += wr.events;
+    count_uv_faces(p.ex.pm, warped);
+    if (!warped.bijective()) {
+      // The warp is a bijection of the square, but a mesh face whose corners lie in different
+      // warp triangles is mapped by its corners only and can fold where a feature moved far.
+      // Then solve the mean-value map again with the features pinned where the warp put them,
+      // and keep whichever folds less (ties: the warp).
+      param::SquareParamOptions po;
+      for (size_t k = 0; k < nf; ++k) po.pinned.emplace_back(p.features[k].second, warped.uv[p.features[k].second]);
+      Context quiet = ctx_;
+      quiet.progress = nullptr;
+      quiet.log = nullptr;
+      const param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, quiet);
+      if (pinned.flipped_faces + pinned.zero_area_faces < warped.flipped_faces + warped.zero_area_faces) {
+        warped = pinned;
+        ++tn.pinned_solves;
+      }
+    }
+    p.sp = std::move(warped);
+    p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
+  }
+}
+
+// The split point: the smoothed stretch peak of the most stretched mesh that is over tau, in the
+// aligned domain (so the children correspond in every mesh), nudged off the features if needed.
+std::pair<Vec2, double> SetDissector::choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
+                                                   const std::vector<bool>& over) {
+  int best = -1;
+  for (size_t i = 0; i < ps.size(); ++i)
+    if (over[i] && (best < 0 || ps[i].st.patch > ps[best].st.patch)) best = static_cast<int>(i);
+  const auto [face, peak_s] = meshes_[best].peak(ps[best]);
+  const Param& p = ps[best];
+  const Tri& t = p.ex.pm.faces[face];
+  const Vec2 raw = (p.sp.uv[t[0]] + p.sp.uv[t[1]] + p.sp.uv[t[2]]) / 3.0;
+  const double w = std::clamp(opt_.w_bias + std::log10(std::max(peak_s, 1e-12)), opt_.w_min, opt_.w_max);
+  auto clamp = [&](const Vec2& q) { return Vec2(q.cwiseMax(opt_.peak_margin).cwiseMin(1 - opt_.peak_margin)); };
+  Vec2 peak = clamp(raw);
+  tn.split_mesh = best;
+  if (!p.features.empty()) {
+    // Every mesh's features must clear the cuts (grouped or held features are not aligned).
+    std::vector<Vec2> fuv;
+    for (const auto& q : ps)
+      for (const auto& f : q.features) fuv.push_back(q.sp.uv[f.second]);
+    // Candidates: the peak, then rings of 8 around it; the first clear by the margin wins, else
+    // the one with the largest clearance.
+    Vec2 best_peak = peak;
+    double best_clear = feature_clearance(fuv, peak, w);
+    for (double r : {0.03, 0.06, 0.1, 0.15}) {
+      if (best_clear >= opt_.feature_cut_margin) break;
+      for (int k = 0; k < 8 && best_clear < opt_.feature_cut_margin; ++k) {
+        const double a = k * M_PI / 4;
+        const Vec2 q = clamp(peak + r * Vec2(std::cos(a), std::sin(a)));
+        const double c = feature_clearance(fuv, q, w);
+        if (c > best_clear) {
+          best_clear = c;
+          best_peak = q;
+        }
+      }
+    }
+    if (best_clear < 1e-6)
+      throw InvalidInput("patch " + node.name + ": a feature lies on every candidate cut line (clearance " +
+                         std::to_string(best_clear) + "); features too close together or to a patch corner");
+    peak = best_peak;
+  }
+  tn.peak_uv = peak;
+  tn.w = w;
+  return {peak, w};
+}
+
+DissectionSet SetDissector::run() {
+  ctx_.report("seed loop", 0.0);
+  std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
+  for (size_t i = 0; i < meshes_.size(); ++i) {
+    const std::array<int, 4> s = in_[i].seeds ? *in_[i].seeds : choose_seeds(*in_[i].mesh);
+    const auto r = meshes_[i].seed(s);
+    for (int k = 0; k < 2; ++k) roots[k].push_back(r[k]);
+  }
+  DissectionSet out;
+  std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
+  double total_faces = 0, done_faces = 0;
+  for (const auto& m : in_) total_faces += static_cast<double>(m.mesh->faces.size());
   while (!queue.empty()) {
     ctx_.check_cancel();
-    Node node = queue.front();
+    const std::vector<Node> nodes = queue.front();
     queue.pop_front();
-    Param p = parameterize(node);
+    const Node& node = nodes[0];
     TreeNode tn;
     tn.name = node.name;
     tn.depth = node.depth;
-    tn.stretch = p.st.patch;
-    PatchInfo info;
-    info.stretch = p.st.patch;
+    std::vector<Param> ps = evaluate(nodes, tn);
     // A long protrusion shrinks exponentially under a Floater map, down to UV triangles of zero
     // area in floating point: such a patch is over tau whatever its RMS stretch, and splitting
     // it around its peak is exactly the cure. Only a leaf must be bijective.
-    const bool over = p.st.patch > opt_.tau || !p.sp.bijective();
-    const int nfaces = static_cast<int>(p.ex.faces.size());
-    if (over && node.depth < opt_.max_depth && nfaces >= opt_.min_faces_to_split) {
-      const size_t first_new_label = patch_faces_.size();
+    std::vector<bool> over(ps.size());
+    bool any_over = false;
+    int biggest_over = 0;
+    for (size_t i = 0; i < ps.size(); ++i) {
+      over[i] = ps[i].st.patch > opt_.tau || !ps[i].sp.bijective();
+      if (over[i]) {
+        any_over = true;
+        biggest_over = std::max(biggest_over, static_cast<int>(ps[i].ex.faces.size()));
+      }
+    }
+    StopReason stop = StopReason::None;
+    std::string detail;
+    if (any_over && node.depth < opt_.max_depth && biggest_over >= opt_.min_faces_to_split) {
+      const size_t first_new_label = meshes_[0].labels();
+      const auto [peak, w] = choose_split(node, ps, tn, over);
+      std::vector<std::array<Node, 5>> kids;
       try {
-        const auto kids = split(node, p, tn);
+        for (size_t i = 0; i < meshes_.size(); ++i) {
+          try {
+            kids.push_back(meshes_[i].split(nodes[i], ps[i], peak, w));
+          } catch (const SplitFailure& e) {
+            throw SplitFailure(meshes_.size() > 1 ? meshes_[i].name() + ": " + e.what() : std::string(e.what()));
+          }
+        }
+        // Counterparts must land in the same child. They do when every mesh's map is bijective
+        // (the cuts are the same segments of the aligned domain); a folded map can break that.
+        for (const auto& [k, local] : ps[0].features)
+          for (size_t i = 1; i < meshes_.size(); ++i)
+            if (meshes_[i].feature_label(k) != meshes_[0].feature_label(k))
+              throw SplitFailure("feature '" + feature_names_[k] + "' would land in different children (a folded map)");
+      } catch (const SplitFailure& e) {
+        for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
+        tn = TreeNode{};
+        tn.name = node.name;
+        tn.depth = node.depth;
+        ps = evaluate(nodes, tn);
+        stop = StopReason::SplitFailed;
+        detail = e.what();
+      }
+      if (stop == StopReason::None) {
+        for (size_t i = 0; i < meshes_.size(); ++i) {
+          meshes_[i].commit_split(nodes[i]);
+          for (int k = 0; k < 5; ++k)
+            if (kids[i][k].label != kids[0][k].label) throw InternalError("tree labels differ across the set");
+        }
         tn.split = true;
         out.tree.push_back(tn);
-        for (const auto& k : kids) queue.push_back(k);
+        for (int k = 0; k < 5; ++k) {
+          std::vector<Node> child;
+          for (const auto& kk : kids) child.push_back(kk[k]);
+          queue.push_back(std::move(child));
+        }
         continue;
-      } catch (const SplitFailure& e) {
-        // Restore the parent (its mesh is refined, which is harmless) and keep it as a leaf.
-        // patch_faces_[node.label] still lists all its faces, those the cuts added included.
-        for (int f : patch_faces_[node.label]) cm_.set_patch(f, node.label);
-        patch_faces_.resize(first_new_label);
-        p = parameterize(node);
-        info.stretch = tn.stretch = p.st.patch;
-        info.stop = StopReason::SplitFailed;
-        info.stop_detail = e.what();
       }
-    } else if (over) {
-      info.stop = node.depth >= opt_.max_depth ? StopReason::MaxDepth : StopReason::TooFewFaces;
+    } else if (any_over) {
+      stop = node.depth >= opt_.max_depth ? StopReason::MaxDepth : StopReason::TooFewFaces;
     }
     out.tree.push_back(tn);
-    info.name = node.name;
-    info.corners = node.corners;
-    info.faces = static_cast<int>(p.ex.faces.size());
-    info.flipped_faces = p.sp.flipped_faces;
-    info.zero_area_faces = p.sp.zero_area_faces;
-    info.uv_area_sum = p.sp.uv_area_sum;
-    for (size_t lf = 0; lf < p.ex.faces.size(); ++lf)
-      for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = p.sp.uv[p.ex.pm.faces[lf][k]];
-    leaves.push_back(node);
-    infos.push_back(info);
-    done_faces += info.faces;
-    ctx_.report("quinary subdivision", done_faces / total_faces);
+    for (size_t i = 0; i < meshes_.size(); ++i) {
+      PatchInfo info;
+      const bool over_i = ps[i].st.patch > opt_.tau || !ps[i].sp.bijective();
+      if (over_i) {
+        info.stop = stop;
+        info.stop_detail = detail;
+      }
+      meshes_[i].keep_leaf(nodes[i], ps[i], info);
+      done_faces += static_cast<double>(ps[i].ex.faces.size());
+    }
+    ctx_.report("quinary subdivision", std::min(1.0, done_faces / total_faces));
   }
-
-  // Leaves sorted by name; the chart's face labels index them.
-  std::vector<int> order(leaves.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return leaves[a].name < leaves[b].name; });
-  std::vector<int> leaf_of_label(patch_faces_.size(), -1);
-  for (size_t i = 0; i < order.size(); ++i) {
-    leaf_of_label[leaves[order[i]].label] = static_cast<int>(i);
-    out.chart.patches.push_back(infos[order[i]]);
-    out.max_stretch = std::max(out.max_stretch, infos[order[i]].stretch);
-  }
-  out.chart.mesh = cm_.to_trimesh();
-  out.chart.face_patch.resize(cm_.num_faces());
-  for (int f = 0; f < cm_.num_faces(); ++f) out.chart.face_patch[f] = leaf_of_label[cm_.patch(f)];
-  out.chart.face_uv = face_uv_;
-  out.chart.face_uv.resize(cm_.num_faces());
   std::stable_sort(out.tree.begin(), out.tree.end(), [](const TreeNode& a, const TreeNode& b) {
     return a.depth != b.depth ? a.depth < b.depth : a.name < b.name;
   });
-  out.base = build_base_domain(out.chart.patches);
+  for (auto& m : meshes_) {
+    out.meshes.push_back(m.finish(out.tree));
+    out.max_stretch = std::max(out.max_stretch, out.meshes.back().max_stretch);
+    for (size_t k = 0; k < feature_names_.size(); ++k) out.meshes.back().features[k].name = feature_names_[k];
+  }
+  for (const auto& n : out.tree) out.warp_events += n.warp_events;
   return out;
 }
-
 }  // namespace
 
 BaseDomain build_base_domain(const std::vector<PatchInfo>& patches) {
   BaseDomain bd;
-  std::vector<int> ids;
-  for (const auto& p : patches) ids.insert(ids.end(), p.corners.begin(), p.corners.end());
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  bd.vertices = ids;
+  std::unordered_map<int, int> base_of;  // chart vertex -> base vertex, by first appearance
+  for (const auto& p : patches)
+    for (int c : p.corners)
+      if (base_of.emplace(c, static_cast<int>(bd.vertices.size())).second) bd.vertices.push_back(c);
   std::vector<std::pair<int, int>> sides;
   for (const auto& p : patches) {
     std::array<int, 4> q;
-    for (int k = 0; k < 4; ++k) q[k] = static_cast<int>(std::lower_bound(ids.begin(), ids.end(), p.corners[k]) - ids.begin());
+    for (int k = 0; k < 4; ++k) q[k] = base_of.at(p.corners[k]);
     bd.quads.push_back(q);
     for (int k = 0; k < 4; ++k) sides.emplace_back(q[k], q[(k + 1) % 4]);
   }
@@ -535,12 +1005,23 @@ BaseDomain build_base_domain(const std::vector<PatchInfo>& patches) {
   return bd;
 }
 
+DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
+                          const Context& context) {
+  if (!(options.tau >= 1.0)) throw InvalidInput("--tau must be at least 1 (the stretch of an isometry)");
+  if (meshes.empty()) throw InvalidInput("no mesh to dissect");
+  for (const auto& m : meshes)
+    if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
+  SetDissector d(meshes, options, context);
+  return d.run();
+}
+
 Dissection dissect(const TriMesh& mesh, const std::optional<std::array<int, 4>>& seeds,
                    const DissectOptions& options, const Context& context) {
-  if (!(options.tau >= 1.0)) throw InvalidInput("--tau must be at least 1 (the stretch of an isometry)");
-  const std::array<int, 4> s = seeds ? *seeds : choose_seeds(mesh);
-  Dissector d(mesh, options, context);
-  return d.run(s);
+  MeshToDissect m;
+  m.mesh = &mesh;
+  m.seeds = seeds;
+  DissectionSet set = dissect_set({m}, options, context);
+  return std::move(set.meshes.front());
 }
 
 }  // namespace qs::dissect

@@ -1,6 +1,8 @@
 #pragma once
-// Dissection of one closed genus-0 mesh into quad patches by recursive quinary subdivision
-// (paper sections 3.1-3.3), each patch parameterized onto the unit square.
+// Dissection of closed genus-0 meshes into quad patches by recursive quinary subdivision
+// (paper sections 3.1-3.4), each patch parameterized onto the unit square. A set of meshes is
+// dissected together: one union quinary tree, so that every mesh ends with the same patches, and
+// named feature points aligned in every patch by a foldover-free warp before it is split.
 
 #include <array>
 #include <optional>
@@ -9,6 +11,7 @@
 
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
+#include "qs/landmarks/landmarks.h"
 
 namespace qs::dissect {
 
@@ -27,6 +30,15 @@ struct DissectOptions {
   /// The peak is clamped into [peak_margin, 1 - peak_margin]^2: a peak near a side would make
   /// the child along that side a thin strip whose own map to the square is badly stretched.
   double peak_margin = 0.35;
+  /// Features (in the aligned parameter domain of the patch being split) must stay at least this
+  /// far from the 8 cut segments and 4 inner corners: the peak is nudged to keep them clear.
+  double feature_cut_margin = 0.02;
+  /// Features closer than this in a node's parameter domain (in any mesh, or their targets) are
+  /// aligned as one group by their centroid; groups nearer the border than this are held.
+  double feature_group_distance = 1e-3;
+  /// Rounds of seed-curve relaxation (relax_seed_loop) before splitting. Off by default: on the
+  /// 24 shared meshes it straightens the curves but does not lower the maximum stretch (README).
+  int relax_rounds = 0;
 };
 
 /// Why a patch over tau was left as it is.
@@ -50,7 +62,14 @@ struct PatchInfo {
 struct TreeNode {
   std::string name;
   int depth = 0;
-  double stretch = 0;              ///< of the node's own parameterization
+  double stretch = 0;              ///< of the node's own parameterization (max over the set)
+  std::vector<double> mesh_stretch;  ///< per mesh of the set, after feature alignment
+  int features = 0;                ///< features inside the node (aligned before splitting)
+  int warp_events = 0;             ///< edge flips of the alignment warps, summed over the set
+  int feature_groups = 0;          ///< features closer than feature_group_distance move as one
+  int features_held = 0;           ///< groups left in place (too near the border)
+  int pinned_solves = 0;           ///< meshes whose warped map folded and was solved again pinned
+  int split_mesh = -1;             ///< split nodes: the mesh whose peak was used
   bool split = false;              ///< children are name + ".0" .. ".4"
   Vec2 peak_uv = Vec2::Zero();     ///< split nodes: the peak point used
   double w = 0;                    ///< split nodes: the w used
@@ -73,12 +92,45 @@ struct BaseDomain {
   bool closed_conforming = false;             ///< every quad side shared with exactly one other
 };
 
+/// Where a named feature ended: a vertex of the chart, inside (never on the border of) a leaf.
+struct FeaturePlacement {
+  std::string name;
+  int vertex = -1;            ///< chart vertex id
+  int patch = -1;             ///< index into chart.patches
+  Vec2 uv = Vec2::Zero();     ///< in that patch; equal across the set (the aligned mean)
+};
+
 struct Dissection {
   std::array<int, 4> seeds{};                 ///< input-mesh vertex ids
   std::vector<TreeNode> tree;                 ///< parents before children, siblings by name
   Chart chart;
   BaseDomain base;
   double max_stretch = 0;
+  std::vector<FeaturePlacement> features;     ///< sorted by name
+};
+
+/// A named feature point of one mesh: a vertex (vertex >= 0) or a point on a face.
+struct Feature {
+  std::string name;
+  int vertex = -1;
+  landmarks::SurfacePoint where;
+};
+
+/// One mesh of a set to dissect. Seeds correspond by order across the set, features by name.
+struct MeshToDissect {
+  const TriMesh* mesh = nullptr;                 ///< validated (closed, manifold, genus 0)
+  std::optional<std::array<int, 4>> seeds;       ///< vertex ids; nullopt: choose_seeds
+  std::vector<Feature> features;                 ///< the same names in every mesh of the set
+  std::string name;                              ///< for messages (e.g. the file)
+};
+
+/// The common dissection of a set: one union tree, and per mesh a chart whose patches have the
+/// same names, order and base-domain connectivity as every other mesh's.
+struct DissectionSet {
+  std::vector<TreeNode> tree;
+  std::vector<Dissection> meshes;
+  double max_stretch = 0;
+  int warp_events = 0;
 };
 
 /// Dissects a validated mesh. `seeds` are vertex ids of `mesh`; nullopt chooses them
@@ -87,7 +139,17 @@ struct Dissection {
 Dissection dissect(const TriMesh& mesh, const std::optional<std::array<int, 4>>& seeds,
                    const DissectOptions& options = {}, const Context& context = {});
 
-/// Builds and checks the base domain of a chart's leaves.
+/// Dissects a set of meshes together (paper 3.4): a leaf over tau in ANY mesh is split in every
+/// mesh at one peak point of the aligned parameter domain (the peak of the mesh with the greatest
+/// stretch), after the features inside it were moved to their mean (u,v) over the set by
+/// warp::warp_square. \throws InvalidInput for a feature missing from a mesh, features on
+/// different seed patches or on a cut line, features too close; SolverError as dissect().
+DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options = {},
+                          const Context& context = {});
+
+/// Builds and checks the base domain of a chart's leaves. Base vertices are numbered by first
+/// appearance walking the patches in order, corners 0..3, so that meshes with corresponding
+/// patches get identical quads.
 BaseDomain build_base_domain(const std::vector<PatchInfo>& patches);
 
 }  // namespace qs::dissect

@@ -1,6 +1,10 @@
 #include "qs/dissect/dissection_json.h"
 
+#include <fstream>
 #include <nlohmann/json.hpp>
+
+#include "qs/core/error.h"
+#include "qs/dissect/chart_io.h"
 
 namespace qs::dissect {
 
@@ -17,15 +21,23 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"w_bias", options.w_bias},
                     {"w_min", options.w_min},
                     {"w_max", options.w_max},
-                    {"peak_margin", options.peak_margin}};
+                    {"peak_margin", options.peak_margin},
+                    {"feature_cut_margin", options.feature_cut_margin},
+                    {"feature_group_distance", options.feature_group_distance},
+                    {"relax_rounds", options.relax_rounds}};
   if (meshes.empty()) return doc.dump(2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();
   for (const auto& n : first.tree) {
-    ordered_json j = {{"name", n.name}, {"depth", n.depth}, {"split", n.split}};
+    ordered_json j = {{"name", n.name}, {"depth", n.depth}, {"split", n.split}, {"stretch", n.stretch}};
     if (n.split) {
       j["peak_uv"] = {n.peak_uv.x(), n.peak_uv.y()};
       j["w"] = n.w;
+      j["peak_mesh"] = n.split_mesh;
+    }
+    if (n.features > 0) {
+      j["features"] = n.features;
+      j["warp_events"] = n.warp_events;
     }
     tree.push_back(j);
   }
@@ -43,7 +55,8 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                         {"patches", names},
                         {"quads", quads}};
   ordered_json list = ordered_json::array();
-  for (const auto& m : meshes) {
+  for (size_t mi = 0; mi < meshes.size(); ++mi) {
+    const auto& m = meshes[mi];
     const Dissection& d = m.dissection;
     ordered_json patches = ordered_json::array();
     int over = 0;
@@ -63,7 +76,14 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
       patches.push_back(j);
     }
     ordered_json node_stretch = ordered_json::object();
-    for (const auto& n : d.tree) node_stretch[n.name] = n.stretch;
+    for (const auto& n : d.tree)
+      node_stretch[n.name] = mi < n.mesh_stretch.size() ? n.mesh_stretch[mi] : n.stretch;
+    ordered_json features = ordered_json::array();
+    for (const auto& f : d.features)
+      features.push_back({{"name", f.name},
+                          {"vertex", f.vertex},
+                          {"patch", d.chart.patches[f.patch].name},
+                          {"uv", {f.uv.x(), f.uv.y()}}});
     ordered_json j = {{"file", m.file},
                       {"chart", m.chart_file},
                       {"input_vertices", m.input_vertices},
@@ -76,12 +96,148 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                       {"max_stretch", d.max_stretch},
                       {"patches_over_tau", over},
                       {"node_stretch", node_stretch},
+                      {"features", features},
                       {"patches", patches}};
     if (include_times) j["seconds"] = m.seconds;
     list.push_back(j);
   }
   doc["meshes"] = list;
   return doc.dump(2) + "\n";
+}
+
+}  // namespace qs::dissect
+
+namespace qs::dissect {
+
+namespace {
+
+// Field access with messages that name the file and the field.
+struct Reader {
+  std::string file;
+  const nlohmann::json& at(const nlohmann::json& j, const char* key, const std::string& where) const {
+    if (!j.is_object() || !j.contains(key))
+      throw InvalidInput(file + ": " + where + " lacks \"" + key + "\"");
+    return j.at(key);
+  }
+  template <class T>
+  T get(const nlohmann::json& j, const char* key, const std::string& where) const {
+    try {
+      return at(j, key, where).get<T>();
+    } catch (const nlohmann::json::exception&) {
+      throw InvalidInput(file + ": " + where + "." + key + " has the wrong type");
+    }
+  }
+};
+
+}  // namespace
+
+LoadedDissection read_dissection(const std::filesystem::path& folder) {
+  const std::filesystem::path path = folder / "dissection.json";
+  std::ifstream in(path);
+  if (!in) throw IoError(path.string() + ": cannot open (is " + folder.string() + " a qs-dissect output folder?)");
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InvalidInput(path.string() + ": not valid JSON (" + e.what() + ")");
+  }
+  const Reader r{path.string()};
+  if (!doc.is_object() || doc.value("format", "") != "qs-dissection")
+    throw InvalidInput(path.string() + ": not a qs-dissection file (\"format\" must be \"qs-dissection\")");
+  const int version = r.get<int>(doc, "version", "the document");
+  if (version != kDissectionFormatVersion)
+    throw InvalidInput(path.string() + ": format version " + std::to_string(version) + ", this qs reads version " +
+                       std::to_string(kDissectionFormatVersion) + "; run qs-dissect again");
+  LoadedDissection out;
+  const auto& o = r.at(doc, "options", "the document");
+  out.options.tau = r.get<double>(o, "tau", "options");
+  out.options.max_depth = r.get<int>(o, "max_depth", "options");
+  out.options.min_faces_to_split = r.get<int>(o, "min_faces_to_split", "options");
+  std::vector<TreeNode> tree;
+  for (const auto& n : r.at(doc, "tree", "the document")) {
+    TreeNode t;
+    t.name = r.get<std::string>(n, "name", "a tree node");
+    t.depth = r.get<int>(n, "depth", "tree node " + t.name);
+    t.split = r.get<bool>(n, "split", "tree node " + t.name);
+    tree.push_back(t);
+  }
+  const auto& meshes = r.at(doc, "meshes", "the document");
+  if (!meshes.is_array() || meshes.empty()) throw InvalidInput(path.string() + ": \"meshes\" is empty");
+  for (size_t mi = 0; mi < meshes.size(); ++mi) {
+    const auto& m = meshes[mi];
+    const std::string where = "meshes[" + std::to_string(mi) + "]";
+    DissectedMesh dm;
+    dm.file = r.get<std::string>(m, "file", where);
+    dm.chart_file = r.get<std::string>(m, "chart", where);
+    dm.seed_source = r.get<std::string>(m, "seed_source", where);
+    dm.input_vertices = r.get<int>(m, "input_vertices", where);
+    dm.input_faces = r.get<int>(m, "input_faces", where);
+    if (dm.chart_file.find('/') != std::string::npos || dm.chart_file.find('\\') != std::string::npos)
+      throw InvalidInput(path.string() + ": " + where + ".chart must be a file name in the folder");
+    Dissection& d = dm.dissection;
+    d.chart = read_chart_ply(folder / dm.chart_file);
+    d.tree = tree;
+    d.seeds = r.get<std::array<int, 4>>(m, "seeds", where);
+    const auto& patches = r.at(m, "patches", where);
+    if (!patches.is_array() || patches.size() < d.chart.patches.size())
+      throw InvalidInput(path.string() + ": " + where + " lists " + std::to_string(patches.size()) +
+                         " patches but its chart uses " + std::to_string(d.chart.patches.size()));
+    d.chart.patches.clear();
+    const int nv = static_cast<int>(d.chart.mesh.positions.size());
+    for (const auto& pj : patches) {
+      PatchInfo p;
+      p.name = r.get<std::string>(pj, "name", where + ".patches");
+      const std::string pw = where + " patch " + p.name;
+      p.corners = r.get<std::array<int, 4>>(pj, "corners", pw);
+      for (int c : p.corners)
+        if (c < 0 || c >= nv)
+          throw InvalidInput(path.string() + ": " + pw + " has corner vertex " + std::to_string(c) +
+                             " outside its chart's " + std::to_string(nv) + " vertices");
+      p.faces = r.get<int>(pj, "faces", pw);
+      p.stretch = r.get<double>(pj, "stretch", pw);
+      p.flipped_faces = r.get<int>(pj, "flipped_faces", pw);
+      p.zero_area_faces = r.get<int>(pj, "zero_area_faces", pw);
+      p.uv_area_sum = r.get<double>(pj, "uv_area_sum", pw);
+      d.max_stretch = std::max(d.max_stretch, p.stretch);
+      d.chart.patches.push_back(p);
+    }
+    std::vector<int> count(d.chart.patches.size(), 0);
+    for (int p : d.chart.face_patch) ++count[p];
+    for (size_t p = 0; p < count.size(); ++p)
+      if (count[p] != d.chart.patches[p].faces)
+        throw InvalidInput(path.string() + ": patch " + d.chart.patches[p].name + " of " + dm.chart_file + " has " +
+                           std::to_string(count[p]) + " faces in the chart but " +
+                           std::to_string(d.chart.patches[p].faces) + " in dissection.json");
+    if (m.contains("features"))
+      for (const auto& fj : m.at("features")) {
+        FeaturePlacement f;
+        f.name = r.get<std::string>(fj, "name", where + ".features");
+        f.vertex = r.get<int>(fj, "vertex", where + " feature " + f.name);
+        const std::string pn = r.get<std::string>(fj, "patch", where + " feature " + f.name);
+        const auto uv = r.get<std::array<double, 2>>(fj, "uv", where + " feature " + f.name);
+        f.uv = Vec2(uv[0], uv[1]);
+        for (size_t p = 0; p < d.chart.patches.size(); ++p)
+          if (d.chart.patches[p].name == pn) f.patch = static_cast<int>(p);
+        if (f.patch < 0 || f.vertex < 0 || f.vertex >= nv)
+          throw InvalidInput(path.string() + ": " + where + " feature " + f.name + " names an unknown patch or vertex");
+        d.features.push_back(f);
+      }
+    d.base = build_base_domain(d.chart.patches);
+    if (!d.base.closed_conforming || d.base.euler_characteristic != 2)
+      throw InvalidInput(path.string() + ": the patches of " + dm.chart_file +
+                         " do not form a closed quad base domain of Euler characteristic 2");
+    if (!out.meshes.empty()) {
+      const Dissection& first = out.meshes.front().dissection;
+      bool same = first.chart.patches.size() == d.chart.patches.size() && first.base.quads == d.base.quads;
+      for (size_t p = 0; same && p < d.chart.patches.size(); ++p)
+        same = first.chart.patches[p].name == d.chart.patches[p].name;
+      if (!same)
+        throw InvalidInput(path.string() + ": " + dm.chart_file + " does not have the same patches and base domain as " +
+                           out.meshes.front().chart_file);
+    }
+    out.meshes.push_back(std::move(dm));
+  }
+  return out;
 }
 
 }  // namespace qs::dissect

@@ -2,6 +2,7 @@
 // dissection.json: format version, options, the quinary tree, the base domain, and per mesh per
 // patch its face count, L2 stretch, flipped-face count and stop reason. Layout in the README.
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -9,7 +10,9 @@
 
 namespace qs::dissect {
 
-inline constexpr int kDissectionFormatVersion = 1;
+/// 2: base vertices numbered by first appearance (identical across a set), features, per-node
+/// stretch and alignment figures.
+inline constexpr int kDissectionFormatVersion = 2;
 
 /// One dissected mesh with what the report needs about where it came from.
 struct DissectedMesh {
@@ -21,8 +24,26 @@ struct DissectedMesh {
   Dissection dissection;
 };
 
-/// The whole document, pretty-printed, deterministic (no times unless include_times).
+/// The whole document, pretty-printed, deterministic (no times unless include_times). The tree
+/// and base domain are taken from the first mesh (they are common to the set).
 std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const DissectOptions& options,
                                bool include_times);
+
+}  // namespace qs::dissect
+
+namespace qs::dissect {
+
+/// A dissection folder read back: the options, the tree and per mesh its chart with the patch
+/// list (names, corners, stretch, stop reasons) and feature placements from dissection.json.
+struct LoadedDissection {
+  DissectOptions options;
+  std::vector<DissectedMesh> meshes;  ///< dissection.chart read from each chart PLY
+};
+
+/// Reads OUTDIR/dissection.json and the chart PLYs it names, and checks that they agree (face
+/// counts, patch counts, corner ids in range, identical base domains across the set).
+/// \throws IoError for missing or unreadable files, InvalidInput for a malformed or
+/// inconsistent folder (naming the file and the field).
+LoadedDissection read_dissection(const std::filesystem::path& folder);
 
 }  // namespace qs::dissect

@@ -11,21 +11,23 @@
 //      whose body is heavier); when that moment is negligible (|m3| <= 1e-6 sigma^3, a
 //      symmetric shape) its largest absolute component is made positive (first one on a tie).
 //      e3 = e1 x e2.
-//   4. s0, s1, s2, s3 = where the rays from the weighted centroid along +e1, +e2, -e1, -e2 first
-//      meet the surface (the nearest corner of the first face hit, not already taken): a belt
-//      around the body rather than out to the tips of protrusions, where two paths would run
-//      up and back down the same leg side by side. A ray that meets nothing (a centroid outside a
-//      very concave shape) takes the extreme vertex along its direction instead (ties: lowest id).
-//   5. The loop s0 -> s1 -> s2 -> s3 -> s0 then runs counter-clockwise around +e3 (seen from
-//      +e3 looking back): +e1, +e2, -e1, -e2.
-//   6. Fallback, only when the seeds of step 4 cannot be routed by trace_seed_loop (it never
-//      happened on the 24 meshes of ../shared/meshes; choose_seeds_farthest() is the rule on its
-//      own): edge-path distances; s0 = the vertex farthest from the vertex nearest the weighted
-//      centroid, s2 = the vertex farthest from s0, s1 = the vertex maximizing
-//      min(d(s0,v), d(s2,v)), s3 = the vertex maximizing min(d(s0,v), d(s1,v), d(s2,v)); s1 and
-//      s3 are swapped when the quadrilateral s0 s1 s2 s3 projected on the (e1, e2) plane has
-//      negative signed area, so the loop again runs counter-clockwise around +e3. If neither rule
-//      routes, choose_seeds throws InvalidInput asking for seeds given by hand.
+//   4. Ray seeds in a plane spanned by (a, b): where the rays from the weighted centroid along
+//      +a, +b, -a, -b first meet the surface (the nearest corner of the first face hit, not
+//      already taken): a belt around the body rather than out to the tips of protrusions, where
+//      two paths would run up and back down the same leg side by side. A ray that meets nothing
+//      takes the extreme vertex along its direction instead (ties: lowest id). The loop runs
+//      counter-clockwise around a x b. Candidates: (e1, e2), (e1, e3), (e2, e3), each also turned
+//      by 45 degrees about its normal.
+//   5. Two more candidates: the extreme vertices along +e1, +e2, -e1, -e2, and the geodesically
+//      farthest vertices (choose_seeds_farthest): edge-path distances; s0 = the vertex farthest
+//      from the vertex nearest the weighted centroid, s2 = the vertex farthest from s0, s1 = the
+//      vertex maximizing min(d(s0,v), d(s2,v)), s3 = the vertex maximizing
+//      min(d(s0,v), d(s1,v), d(s2,v)); s1 and s3 swapped so that the loop runs counter-clockwise
+//      around +e3 (signed area of the quadrilateral projected on (e1, e2)).
+//   6. Every candidate is routed (trace_seed_loop's rule). Among those that route and leave at
+//      least 5% of the area on their smaller side, the largest
+//      (smaller side's area fraction) / (loop length / sqrt(total area)) wins; if none leaves 5%,
+//      the most even one. If none routes, choose_seeds throws InvalidInput asking for seeds.
 //
 // Routing (trace_seed_loop): shortest paths on the vertex graph with 3D edge lengths, one path at
 // a time (A* with the straight-line distance to the target, which is exact for 3D edge lengths
@@ -41,8 +43,7 @@
 // simple loop passes; the check guards against inputs that break the precondition.
 //
 // Cost on a 50k-vertex mesh (CPU time, this 2-core machine): adjacency ~6 ms, four paths and the
-// check ~10 ms, trace_seed_loop ~20 ms; choose_seeds ~25 ms (it routes its seeds once to check
-// them).
+// check ~10 ms, trace_seed_loop ~20 ms; choose_seeds routes its 8 candidates, about 8 times that.
 
 #include "qs/dissect/seed_loop.h"
 
@@ -393,7 +394,8 @@ struct Attempt {
 
 /// Routes the loop trying the orders in turn; never throws for an unroutable configuration.
 Attempt try_route(const TriMesh& mesh, const Graph& g, Dijkstra& dijkstra,
-                  const std::array<int, 4>& seeds, const Context& context) {
+                  const std::array<int, 4>& seeds, const Context& context,
+                  const std::vector<int>& avoid = {}) {
   Attempt result;
   std::array<std::vector<int>, 4> free;
   std::array<double, 4> length{};
@@ -411,6 +413,7 @@ Attempt try_route(const TriMesh& mesh, const Graph& g, Dijkstra& dijkstra,
     context.check_cancel();
     std::fill(blocked.begin(), blocked.end(), 0);
     for (int s : seeds) blocked[s] = 1;
+    for (int v : avoid) blocked[v] = 1;
     SeedLoop loop;
     loop.seeds = seeds;
     std::string why;
@@ -618,7 +621,7 @@ std::array<int, 4> pca_seeds(const TriMesh& mesh, const std::vector<char>& used,
   return s;
 }
 
-/// The fallback rule (step 6 of the comment at the top).
+/// The geodesic candidate (step 5 of the comment at the top).
 std::array<int, 4> farthest_seeds(const TriMesh& mesh, Dijkstra& dijkstra,
                                   const std::vector<char>& used, const Axes& axes) {
   const int nv = mesh.num_vertices();
@@ -667,12 +670,21 @@ std::string seeds_text(const std::array<int, 4>& s) {
 
 SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
                          const Context& context) {
+  return trace_seed_loop(mesh, seeds, {}, context);
+}
+
+SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
+                         const Context& context) {
   check_seeds(mesh, seeds);
+  for (int v : avoid)
+    if (v < 0 || v >= static_cast<int>(mesh.positions.size()))
+      throw InvalidInput("seed loop: vertex to avoid " + std::to_string(v) + " is out of range");
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
-  Attempt attempt = try_route(mesh, g, dijkstra, seeds, context);
+  Attempt attempt = try_route(mesh, g, dijkstra, seeds, context, avoid);
   if (!attempt.ok)
-    throw InvalidInput("cannot route the seed loop: " + attempt.why + "; move the seeds apart");
+    throw InvalidInput("cannot route the seed loop: " + attempt.why +
+                       (avoid.empty() ? "; move the seeds apart" : "; move the seeds or the features apart"));
   if (context.log) {
     std::string m = "seed loop: path lengths";
     for (const auto& p : attempt.loop.paths)
@@ -697,11 +709,20 @@ std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop) 
 
 namespace {
 
-// Routes one candidate seed set: the area fraction on the smaller side of its loop, or nullopt
-// (with the reason appended to `why`) when the seeds are not 4 distinct vertices or do not route.
-std::optional<double> route_score(const TriMesh& mesh, const Graph& g, Dijkstra& dijkstra,
-                                  const std::vector<double>& face_area, const std::string& name,
-                                  const std::array<int, 4>& seeds, std::string& why) {
+// How a candidate seed loop cuts the surface: the area fraction of its smaller side and its
+// length relative to sqrt(total area) (a belt around a sphere scores sqrt(pi) = 1.77; a loop that
+// runs up a limb and back down scores far more).
+struct LoopScore {
+  double fraction = 0;
+  double length = 0;
+  double value() const { return fraction / std::max(length, 1e-12); }
+};
+
+// Routes one candidate seed set, or returns nullopt (with the reason appended to `why`) when the
+// seeds are not 4 distinct vertices or do not route.
+std::optional<LoopScore> route_score(const TriMesh& mesh, const Graph& g, Dijkstra& dijkstra,
+                                     const std::vector<double>& face_area, const std::string& name,
+                                     const std::array<int, 4>& seeds, std::string& why) {
   const bool distinct = std::set<int>(seeds.begin(), seeds.end()).size() == 4 &&
                         std::none_of(seeds.begin(), seeds.end(), [](int v) { return v < 0; });
   const Attempt a = distinct ? try_route(mesh, g, dijkstra, seeds, {}) : Attempt{};
@@ -715,7 +736,11 @@ std::optional<double> route_score(const TriMesh& mesh, const Graph& g, Dijkstra&
     total += face_area[f];
     if (a.labels[f] == 0) side0 += face_area[f];
   }
-  return std::min(side0, total - side0) / std::max(total, 1e-300);
+  LoopScore score;
+  score.fraction = std::min(side0, total - side0) / std::max(total, 1e-300);
+  for (const auto& p : a.loop.paths) score.length += path_length(mesh, p);
+  score.length /= std::sqrt(std::max(total, 1e-300));
+  return score;
 }
 
 std::vector<double> face_areas(const TriMesh& mesh) {
@@ -757,27 +782,44 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
   Dijkstra dijkstra(g);
   const std::vector<double> area = face_areas(mesh);
   std::string why;
-  // The rays' seeds, unless their loop cannot be routed or encloses less than 5% of the area
-  // (rays from a centroid that lies near the surface of a bent figure meet it close together,
-  // leaving one seed patch with nearly the whole shape). Then the routable candidate whose loop
-  // cuts the surface most evenly (largest area of its smaller side) wins.
-  const std::array<int, 4> rays = pca_seeds(mesh, used, axes);
-  const std::optional<double> ray_score = route_score(mesh, g, dijkstra, area, "the principal-axis rays", rays, why);
-  if (ray_score && *ray_score >= 0.05) return rays;
-  double best_score = ray_score.value_or(-1);
-  std::array<int, 4> best = rays;
-  const std::pair<std::string, std::array<int, 4>> fallbacks[] = {
-      {"the principal-axis extremes", extreme_seeds(mesh, used, axes)},
-      {"the geodesically farthest vertices", farthest_seeds(mesh, dijkstra, used, axes)}};
-  for (const auto& [name, seeds] : fallbacks) {
-    const std::optional<double> score = route_score(mesh, g, dijkstra, area, name, seeds, why);
-    if (score && *score > best_score + 1e-9) {
+  // Candidates: ray belts in the three principal planes, each also turned by 45 degrees about the
+  // plane's normal, then the principal-axis extremes and the geodesically farthest vertices. The
+  // loop with the best area fraction per length wins among those enclosing at least 5% of the
+  // area (else the most even one): a short belt that cuts the shape in two sizable halves.
+  const Vec3 e3 = axes.e1.cross(axes.e2);
+  std::vector<std::pair<std::string, std::array<int, 4>>> candidates;
+  const std::array<std::pair<Vec3, Vec3>, 3> planes = {
+      std::pair{axes.e1, axes.e2}, std::pair{axes.e1, e3}, std::pair{axes.e2, e3}};
+  const char* plane_names[] = {"e1-e2", "e1-e3", "e2-e3"};
+  for (int pl = 0; pl < 3; ++pl)
+    for (int turn = 0; turn < 2; ++turn) {
+      Axes a = axes;
+      const double c = std::cos(turn * M_PI / 4), s = std::sin(turn * M_PI / 4);
+      a.e1 = c * planes[pl].first + s * planes[pl].second;
+      a.e2 = -s * planes[pl].first + c * planes[pl].second;
+      candidates.emplace_back(std::string("the ") + plane_names[pl] + " rays" + (turn ? " turned 45 degrees" : ""),
+                              pca_seeds(mesh, used, a));
+    }
+  candidates.emplace_back("the principal-axis extremes", extreme_seeds(mesh, used, axes));
+  candidates.emplace_back("the geodesically farthest vertices", farthest_seeds(mesh, dijkstra, used, axes));
+  int best = -1;
+  LoopScore best_score;
+  bool best_ok = false;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const auto score = route_score(mesh, g, dijkstra, area, candidates[i].first, candidates[i].second, why);
+    if (!score) continue;
+    const bool ok = score->fraction >= 0.05;
+    const bool better = best < 0 || (ok && !best_ok) ||
+                        (ok == best_ok && (ok ? score->value() > best_score.value() + 1e-12
+                                              : score->fraction > best_score.fraction + 1e-12));
+    if (better) {
+      best = static_cast<int>(i);
       best_score = *score;
-      best = seeds;
+      best_ok = ok;
     }
   }
-  if (best_score < 0) no_routable_seeds(why);
-  return best;
+  if (best < 0) no_routable_seeds(why);
+  return candidates[best].second;
 }
 
 std::array<int, 4> choose_seeds_farthest(const TriMesh& mesh) {

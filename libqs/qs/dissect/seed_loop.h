@@ -32,6 +32,10 @@ struct SeedLoop {
 /// Also \throws InvalidInput for a seed out of range, two equal seeds, or an edge with one face
 /// or more than two. O(F log F) per path; ~20 ms for 50k vertices.
 SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const Context& context = {});
+/// The same, with paths that also avoid the vertices in `avoid` (feature points, which must lie
+/// inside a seed patch). Loops found by the unobstructed search are kept when they avoid them.
+SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
+                         const Context& context = {});
 
 /// Which seed patch each face lies in: #F labels, 0 for the faces left of the loop
 /// s0 -> s1 -> s2 -> s3 -> s0 (the loop runs counter-clockwise around patch 0 seen from outside,
@@ -40,16 +44,14 @@ SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, c
 /// not joined edge paths between the seeds or do not cut the mesh into exactly two parts.
 std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop);
 
-/// Four seeds chosen automatically (the documented rule is in the .cpp and the README):
-/// the extreme vertices along the first two principal axes, in loop order.
-///  - axes: eigenvectors of the vertex-area-weighted covariance of the positions (vertex area =
-///    a third of its faces' areas); e1 largest variance, e2 second, e3 = e1 x e2; each axis
-///    points to the side of positive third central moment, or, for a symmetric shape (moment
-///    below 1e-6 sigma^3), so that its largest absolute component is positive;
-///  - s0 = max along e1, s1 = max along e2, s2 = min along e1, s3 = min along e2 (lowest id on
-///    ties, a vertex already taken skipped), so the loop runs counter-clockwise around +e3;
-///  - if trace_seed_loop cannot route these, choose_seeds_farthest() is used instead.
-/// \throws InvalidInput when the mesh has fewer than 4 used vertices, or neither rule routes.
+/// Four seeds chosen automatically (the rule is in the README): with e1, e2, e3 the principal
+/// axes of the area-weighted vertices, the candidates are the ray seeds (where rays from the
+/// centroid first meet the surface, 4 rays 90 degrees apart) in each principal plane, also turned
+/// by 45 degrees, then the axis-extreme and the geodesically farthest vertices. Among the loops
+/// that route and enclose at least 5% of the area, the largest (smaller side's area fraction) /
+/// (loop length / sqrt(area)) wins (else the most even loop): a short belt cutting the shape into
+/// two sizable parts. Deterministic.
+/// \throws InvalidInput when the mesh has fewer than 4 used vertices, or no candidate routes.
 std::array<int, 4> choose_seeds(const TriMesh& mesh);
 
 /// The first candidate (name, seeds) whose loop routes. \throws InvalidInput naming every rule

@@ -396,6 +396,13 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     }
   }
 
+  for (const auto& [v, q] : options.pinned) {
+    if (v < 0 || v >= nv || on_border[v] || !q.allFinite() || q.minCoeff() < 0 || q.maxCoeff() > 1)
+      throw InvalidInput("parameterize_square: pinned vertex " + std::to_string(v) +
+                         " is out of range, on the border, pinned twice or pinned outside the square");
+    on_border[v] = 1;  // a fixed row, like the border
+    result.uv[v] = q;
+  }
   int ni = 0;
   for (int v = 0; v < nv; ++v)
     if (!on_border[v]) interior_index[v] = ni++;

@@ -3,6 +3,7 @@
 // Sander et al. 2001 L2 stretch (paper 3.2).
 
 #include <array>
+#include <utility>
 #include <vector>
 
 #include "qs/core/context.h"
@@ -37,6 +38,10 @@ struct SquareParamOptions {
   /// In [0, 1); 0 gives pure arc length.
   double min_border_spacing = 1e-6;
   LuOrdering ordering = LuOrdering::SymmetricAmd;  ///< both give the same map (to rounding)
+  /// Interior vertices held at given (u,v) like the border (feature alignment): (local id, uv),
+  /// ids distinct, not on the boundary loop, uv inside the square. With pins the map may fold
+  /// (Tutte's guarantee needs every fixed vertex on the convex border): count the flips.
+  std::vector<std::pair<int, Vec2>> pinned;
 };
 
 /// A UV face with |signed area| <= this counts as zero-area (and neither as flipped).

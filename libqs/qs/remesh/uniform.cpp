@@ -1,0 +1,192 @@
+#include "qs/remesh/uniform.h"
+
+#include <climits>
+#include <string>
+
+#include "qs/core/error.h"
+#include "qs/remesh/chart_sampler.h"
+
+namespace qs::remesh {
+
+UniformNumbering::UniformNumbering(const BaseTopology& topology, int level) : topology_(&topology), level_(level) {
+  if (level < 0 || level > kMaxUniformLevel)
+    throw InvalidInput("remesh: level " + std::to_string(level) + " is out of range; expected 0.." +
+                       std::to_string(kMaxUniformLevel));
+  n_ = 1 << level;
+  edge_first_ = topology.num_vertices;
+  interior_first_ = edge_first_ + static_cast<std::int64_t>(topology.num_edges()) * (n_ - 1);
+}
+
+std::int64_t UniformNumbering::vertex(int patch, int i, int j) const {
+  const int n = n_;
+  const bool bi = i == 0 || i == n, bj = j == 0 || j == n;
+  if (bi && bj) return topology_->quads[patch][j == 0 ? (i == 0 ? 0 : 1) : (i == n ? 2 : 3)];
+  if (bi || bj) {
+    int k, s;
+    if (j == 0) k = 0, s = i;
+    else if (i == n) k = 1, s = j;
+    else if (j == n) k = 2, s = n - i;
+    else k = 3, s = n - j;
+    const int off = topology_->side_forward[patch][k] ? s - 1 : n - 1 - s;
+    return edge_first_ + static_cast<std::int64_t>(topology_->side_edge[patch][k]) * (n - 1) + off;
+  }
+  return interior_first_ + (static_cast<std::int64_t>(patch) * (n - 1) + (j - 1)) * (n - 1) + (i - 1);
+}
+
+void UniformNumbering::site(std::int64_t id, int& patch, int& i, int& j) const {
+  const int n = n_;
+  static constexpr int kCornerI[4] = {0, 1, 1, 0}, kCornerJ[4] = {0, 0, 1, 1};
+  if (id < edge_first_) {
+    const auto [p, k] = topology_->vertex_corner[static_cast<size_t>(id)];
+    patch = p, i = kCornerI[k] * n, j = kCornerJ[k] * n;
+  } else if (id < interior_first_) {
+    const std::int64_t e = (id - edge_first_) / (n - 1);
+    const int s = static_cast<int>((id - edge_first_) % (n - 1)) + 1;
+    const auto [p, k] = topology_->edge_sides[static_cast<size_t>(e)][0];
+    patch = p;
+    switch (k) {
+      case 0: i = s, j = 0; break;
+      case 1: i = n, j = s; break;
+      case 2: i = n - s, j = n; break;
+      default: i = 0, j = n - s; break;
+    }
+  } else {
+    const std::int64_t r = id - interior_first_, per = static_cast<std::int64_t>(n - 1) * (n - 1);
+    patch = static_cast<int>(r / per);
+    j = static_cast<int>((r % per) / (n - 1)) + 1;
+    i = static_cast<int>(r % (n - 1)) + 1;
+  }
+}
+
+SemiRegularConnectivity uniform_connectivity(const BaseTopology& topology, int level, const UniformOptions& options) {
+  const UniformNumbering num(topology, level);
+  const int n = num.cells(), np = topology.num_patches();
+  const std::int64_t nv = num.num_vertices(), nf = 2 * static_cast<std::int64_t>(np) * n * n;
+  if (nv > INT_MAX || nf > INT_MAX)
+    throw InvalidInput("remesh: level " + std::to_string(level) + " of " + std::to_string(np) + " patches would make " +
+                       std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                       " faces; at most 2147483647 of each are supported");
+  SemiRegularConnectivity c;
+  c.num_base_vertices = topology.num_vertices;
+  c.num_base_edges = topology.num_edges();
+  c.num_patches = np;
+  c.level = level;
+  c.vertex_patch.resize(nv);
+  c.vertex_uv.resize(nv);
+  const double inv = 1.0 / n;
+  for (std::int64_t v = 0; v < nv; ++v) {
+    int p, i, j;
+    num.site(v, p, i, j);
+    c.vertex_patch[v] = p;
+    c.vertex_uv[v] = Vec2(i * inv, j * inv);
+  }
+  c.faces.reserve(nf);
+  if (options.quads) c.quads.reserve(nf / 2);
+  std::vector<int> row0(n + 1), row1(n + 1);
+  for (int p = 0; p < np; ++p) {
+    for (int i = 0; i <= n; ++i) row1[i] = static_cast<int>(num.vertex(p, i, 0));
+    for (int j = 0; j < n; ++j) {
+      row0.swap(row1);
+      for (int i = 0; i <= n; ++i) row1[i] = static_cast<int>(num.vertex(p, i, j + 1));
+      for (int i = 0; i < n; ++i) {
+        const int v00 = row0[i], v10 = row0[i + 1], v11 = row1[i + 1], v01 = row1[i];
+        const bool diag02 = level == 0 ? bool(topology.level0_diagonal02[p]) : ((2 * i < n) == (2 * j < n));
+        if (diag02) {
+          c.faces.push_back({v00, v10, v11});
+          c.faces.push_back({v00, v11, v01});
+        } else {
+          c.faces.push_back({v00, v10, v01});
+          c.faces.push_back({v10, v11, v01});
+        }
+        if (options.quads) c.quads.push_back({v00, v10, v11, v01});
+      }
+    }
+  }
+  return c;
+}
+
+SemiRegularConnectivity uniform_connectivity(const std::vector<dissect::PatchInfo>& patches, int level,
+                                             const UniformOptions& options) {
+  return uniform_connectivity(build_base_topology(patches), level, options);
+}
+
+namespace {
+
+// sample_positions() for a uniform connectivity: corners and sides point by point, each patch's
+// interior as one grid (ChartSampler::locate_grid: no search per point).
+std::vector<Vec3> uniform_positions(const ChartSampler& sampler, const SemiRegularConnectivity& c,
+                                    const Context& context) {
+  const int n = 1 << c.level, m = n - 1;
+  const int interior_first = c.num_base_vertices + c.num_base_edges * m;
+  std::vector<Vec3> positions(c.num_vertices());
+  for (int v = 0; v < interior_first; ++v) positions[v] = sampler.point(c.vertex_patch[v], c.vertex_uv[v]);
+  for (int p = 0; p < c.num_patches && m > 0; ++p) {
+    if ((p & 15) == 15) context.check_cancel();
+    const auto locs = sampler.locate_grid(p, m, 1.0 / n, 1.0 / n);
+    Vec3* out = positions.data() + interior_first + static_cast<size_t>(p) * m * m;
+    for (size_t k = 0; k < locs.size(); ++k) out[k] = sampler.position(locs[k]);
+  }
+  return positions;
+}
+
+}  // namespace
+
+SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const UniformOptions& options,
+                           const Context& context) {
+  const ChartSampler sampler(chart, context);
+  SemiRegular out;
+  out.connectivity = uniform_connectivity(sampler.topology(), level, options);
+  out.positions = uniform_positions(sampler, out.connectivity, context);
+  return out;
+}
+
+void check_same_structure(const std::vector<const ChartSampler*>& samplers) {
+  if (samplers.empty()) throw InvalidInput("remesh: no charts given");
+  const auto& first = samplers[0]->chart().patches;
+  const auto& t0 = samplers[0]->topology();
+  for (size_t m = 1; m < samplers.size(); ++m) {
+    const auto& patches = samplers[m]->chart().patches;
+    const std::string which = "remesh: chart " + std::to_string(m) + " does not match chart 0: ";
+    if (patches.size() != first.size())
+      throw InvalidInput(which + std::to_string(patches.size()) + " patches instead of " +
+                         std::to_string(first.size()) + "; remesh charts of one common dissection (qs-dissect on the whole set)");
+    for (size_t p = 0; p < patches.size(); ++p) {
+      if (patches[p].name != first[p].name)
+        throw InvalidInput(which + "patch " + std::to_string(p) + " is '" + patches[p].name + "' instead of '" +
+                           first[p].name + "'");
+      if (samplers[m]->topology().quads[p] != t0.quads[p])
+        throw InvalidInput(which + "the corners of patch " + std::to_string(p) + " ('" + first[p].name +
+                           "') join other base vertices; the base domains differ");
+    }
+  }
+}
+
+SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, int level,
+                              const UniformOptions& options, const Context& context) {
+  if (charts.empty()) throw InvalidInput("remesh: no charts given");
+  std::vector<ChartSampler> samplers;
+  samplers.reserve(charts.size());
+  std::vector<const ChartSampler*> ptrs;
+  for (const auto* c : charts) {
+    samplers.emplace_back(*c, context);
+    ptrs.push_back(&samplers.back());
+  }
+  check_same_structure(ptrs);
+  SemiRegularSet out;
+  out.connectivity = uniform_connectivity(samplers[0].topology(), level, options);
+  for (size_t m = 0; m < samplers.size(); ++m) {
+    context.report("remesh", static_cast<double>(m) / samplers.size());
+    out.positions.push_back(uniform_positions(samplers[m], out.connectivity, context));
+  }
+  context.report("remesh", 1.0);
+  return out;
+}
+
+SemiRegularSet remesh_uniform(const std::vector<dissect::Chart>& charts, int level, const UniformOptions& options,
+                              const Context& context) {
+  std::vector<const dissect::Chart*> ptrs;
+  for (const auto& c : charts) ptrs.push_back(&c);
+  return remesh_uniform(ptrs, level, options, context);
+}
+
+}  // namespace qs::remesh

@@ -1,0 +1,89 @@
+#pragma once
+// Uniform semi-regular remeshing (paper 4.1): (2^n + 1)^2 samples per patch on the regular grid
+// u = i / 2^n, v = j / 2^n, shared along patch sides and at corners (no duplicates), two
+// triangles per grid cell. Vertex order: see semi_regular.h.
+//
+// Diagonal rule (depends only on the cell's place in its patch, so all meshes of a set agree):
+//  - level n >= 1, N = 2^n: cell (i, j) (its corners (i,j), (i+1,j), (i+1,j+1), (i,j+1)) is cut
+//    along the diagonal that points to the patch corner of its quadrant: cells with i < N/2 and
+//    j < N/2 (near corner 0) or i >= N/2 and j >= N/2 (near corner 2) by (i,j)-(i+1,j+1), the two
+//    other quadrants by (i+1,j)-(i,j+1). Every patch gets the same symmetric pattern (diagonals
+//    along the patch's own two diagonals, a vertex of valence 8 at the patch centre), and every
+//    corner cell is cut by the diagonal THROUGH the corner: a corner is never isolated, so a
+//    valence-2 base vertex (two patches along two consecutive sides) never gets the same
+//    triangle from both patches (which would make the output non-manifold).
+//  - level 0 (one cell per patch): BaseTopology::level0_diagonal02 (corner 0 - corner 2 unless
+//    that pair is already joined and corner 1 - corner 3 is not). The two seed patches then form
+//    a tetrahedron. Level 0 is closed and manifold when every patch's diagonal joins two base
+//    vertices that nothing else joins, which the greedy choice ensures whenever one of its two
+//    diagonals is free (a quinary split only joins new corners, so in practice it always is;
+//    levels >= 1 need no such condition).
+//
+// Result size: V = Vb + Eb (N-1) + P (N-1)^2, F = 2 P N^2 (Vb, Eb, P: base vertices, edges,
+// patches). For a closed base domain V - E + F = Vb - Eb + P.
+
+#include <cstdint>
+#include <vector>
+
+#include "qs/core/context.h"
+#include "qs/dissect/dissection.h"
+#include "qs/remesh/base_topology.h"
+#include "qs/remesh/semi_regular.h"
+
+namespace qs::remesh {
+
+/// Largest uniform level accepted (4^12 = 16.8M cells per patch; a further check limits the
+/// vertex and face counts to 2^31 - 1). At least kMaxAdaptiveLevel.
+inline constexpr int kMaxUniformLevel = 12;
+
+struct UniformOptions {
+  bool quads = false;  ///< also fill SemiRegularConnectivity::quads with the grid cells
+};
+
+/// Vertex numbering of the uniform level-n grid of a base topology (semi_regular.h's order),
+/// as 64-bit ids so that fine levels of big base domains can be numbered too.
+class UniformNumbering {
+ public:
+  /// \throws InvalidInput when level is outside [0, kMaxUniformLevel].
+  UniformNumbering(const BaseTopology& topology, int level);
+  int level() const { return level_; }
+  int cells() const { return n_; }  ///< N = 2^level cells along a side
+  std::int64_t num_vertices() const { return interior_first_ + static_cast<std::int64_t>(topology_->num_patches()) * (n_ - 1) * (n_ - 1); }
+  /// The id of grid point (i, j) of `patch`, 0 <= i, j <= N.
+  std::int64_t vertex(int patch, int i, int j) const;
+  /// Where vertex `id` is recorded: (patch, i, j) in the lowest-index patch holding it.
+  void site(std::int64_t id, int& patch, int& i, int& j) const;
+
+ private:
+  const BaseTopology* topology_;
+  int level_, n_;
+  std::int64_t edge_first_, interior_first_;
+};
+
+/// The connectivity of the uniform level-`level` remesh of a patch list (no geometry needed):
+/// meshes whose patch lists have the same structure get identical results.
+/// \throws InvalidInput for a bad patch list (see build_base_topology), a level outside
+///         [0, kMaxUniformLevel], or more than 2^31 - 1 vertices or faces.
+SemiRegularConnectivity uniform_connectivity(const BaseTopology& topology, int level,
+                                             const UniformOptions& options = {});
+SemiRegularConnectivity uniform_connectivity(const std::vector<dissect::PatchInfo>& patches, int level,
+                                             const UniformOptions& options = {});
+
+/// Uniform remesh of one chart. \throws InvalidInput (see ChartSampler and uniform_connectivity).
+SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const UniformOptions& options = {},
+                           const Context& context = {});
+
+/// Uniform remesh of a set with one connectivity. \pre the charts' patch lists have the same
+/// structure (same count, names and base-domain quads), as dissect_set produces.
+/// \throws InvalidInput naming the first chart that differs from chart 0, and as above.
+SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, int level,
+                              const UniformOptions& options = {}, const Context& context = {});
+SemiRegularSet remesh_uniform(const std::vector<dissect::Chart>& charts, int level,
+                              const UniformOptions& options = {}, const Context& context = {});
+
+/// Throws InvalidInput unless every sampler's patch list matches sampler 0's (count, names,
+/// base-domain quads). Used by the set remeshers.
+class ChartSampler;
+void check_same_structure(const std::vector<const ChartSampler*>& samplers);
+
+}  // namespace qs::remesh

@@ -1,0 +1,181 @@
+// The union quinary tree and feature alignment across a set of meshes (paper 3.4).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "check_dissection.h"
+#include "qs/core/error.h"
+#include "qs/dissect/dissection.h"
+#include "qs/shapes/shapes.h"
+
+using qs::dissect::DissectionSet;
+using qs::dissect::MeshToDissect;
+using qs::testing::check_dissection;
+using ::testing::HasSubstr;
+
+namespace {
+
+// An analytic smooth deformation: same connectivity, positions bent, twisted and bulged.
+qs::TriMesh deform(const qs::TriMesh& m) {
+  qs::TriMesh out = m;
+  for (auto& p : out.positions) {
+    const double a = 0.6 * p.z();
+    const double x = p.x() * std::cos(a) - p.y() * std::sin(a), y = p.x() * std::sin(a) + p.y() * std::cos(a);
+    p = qs::Vec3(1.3 * x + 0.2 * std::sin(2 * p.z()), 0.8 * y, p.z() + 0.25 * x * x);
+  }
+  return out;
+}
+
+// The vertex whose direction from the origin is closest to d.
+int vertex_towards(const qs::TriMesh& m, const qs::Vec3& d) {
+  int best = 0;
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (m.positions[v].normalized().dot(d.normalized()) > m.positions[best].normalized().dot(d.normalized())) best = v;
+  return best;
+}
+
+std::array<int, 4> equator_seeds(const qs::TriMesh& m) {
+  return {vertex_towards(m, {1, 0, 0}), vertex_towards(m, {0, 1, 0}), vertex_towards(m, {-1, 0, 0}),
+          vertex_towards(m, {0, -1, 0})};
+}
+
+std::vector<qs::dissect::Feature> features_at(const qs::TriMesh& m, const std::vector<qs::Vec3>& dirs) {
+  std::vector<qs::dissect::Feature> f;
+  for (size_t i = 0; i < dirs.size(); ++i) f.push_back({"f" + std::to_string(i), vertex_towards(m, dirs[i]), {}});
+  return f;
+}
+
+void expect_common_structure(const DissectionSet& s, const std::vector<int>& input_faces) {
+  ASSERT_EQ(s.meshes.size(), input_faces.size());
+  for (size_t i = 0; i < s.meshes.size(); ++i) {
+    SCOPED_TRACE("mesh " + std::to_string(i));
+    check_dissection(s.meshes[i], input_faces[i]);
+    EXPECT_EQ(s.meshes[i].base.quads, s.meshes[0].base.quads) << "base domains differ";
+    ASSERT_EQ(s.meshes[i].chart.patches.size(), s.meshes[0].chart.patches.size());
+    for (size_t p = 0; p < s.meshes[0].chart.patches.size(); ++p)
+      EXPECT_EQ(s.meshes[i].chart.patches[p].name, s.meshes[0].chart.patches[p].name);
+    // Features: the same patch and the same (u,v) in every mesh.
+    ASSERT_EQ(s.meshes[i].features.size(), s.meshes[0].features.size());
+    for (size_t k = 0; k < s.meshes[0].features.size(); ++k) {
+      const auto& a = s.meshes[0].features[k];
+      const auto& b = s.meshes[i].features[k];
+      EXPECT_EQ(a.name, b.name);
+      EXPECT_EQ(a.patch, b.patch) << a.name;
+      EXPECT_LT((a.uv - b.uv).norm(), 1e-6) << a.name;
+      // The placement agrees with the chart: the feature vertex carries that uv in that patch.
+      const auto& c = s.meshes[i].chart;
+      for (int f = 0; f < c.mesh.num_faces(); ++f)
+        for (int j = 0; j < 3; ++j)
+          if (c.mesh.faces[f][j] == b.vertex) {
+            EXPECT_EQ(c.face_patch[f], b.patch) << b.name << " is on a patch border";
+            EXPECT_LT((c.face_uv[f][j] - b.uv).norm(), 1e-9) << b.name;
+          }
+    }
+  }
+}
+
+}  // namespace
+
+TEST(DissectSet, DeformedPairGetsOneBaseDomainAndAlignedFeatures) {
+  const auto a = qs::shapes::bumpy_sphere(0.08, 3, 4);
+  const auto b = deform(a);
+  const std::vector<qs::Vec3> dirs = {{0.3, 0.2, 1}, {-0.4, 0.5, 0.8}, {0.6, -0.5, 0.7}, {0.2, 0.3, -1}, {-0.5, -0.4, -0.8}};
+  // Features at different vertices of the two meshes (the same directions on the deformed
+  // shape), so that the alignment has real work to do.
+  MeshToDissect ma{&a, equator_seeds(a), features_at(a, dirs), "a"};
+  MeshToDissect mb{&b, ma.seeds, features_at(b, dirs), "b"};
+  qs::dissect::DissectOptions o;
+  o.tau = 1.1;  // forces splits
+  const DissectionSet s = qs::dissect::dissect_set({ma, mb}, o);
+  EXPECT_GT(s.meshes[0].chart.patches.size(), 2u);
+  expect_common_structure(s, {a.num_faces(), b.num_faces()});
+  for (const auto& n : s.tree) {
+    ASSERT_EQ(n.mesh_stretch.size(), 2u);
+    if (n.split) {
+      // A node is split only when some mesh needed it.
+      EXPECT_TRUE(n.mesh_stretch[0] > o.tau || n.mesh_stretch[1] > o.tau) << n.name;
+    }
+  }
+  for (const auto& d : s.meshes)
+    for (const auto& p : d.chart.patches)
+      if (p.stretch > o.tau) { EXPECT_NE(p.stop, qs::dissect::StopReason::None) << p.name; }
+}
+
+TEST(DissectSet, UnionTreeHoldsEverySplitOfTheMeshThatNeedsThem) {
+  // A smooth ellipsoid needs no split; a star blob needs several. Together, the set's tree must be
+  // the star's own tree (its peaks decide every split), and the ellipsoid follows it.
+  const auto smooth = qs::shapes::ellipsoid(1.2, 1, 0.9, 3);
+  const auto star = qs::shapes::star_blob(4, 1.5, 4);
+  qs::dissect::DissectOptions o;
+  o.tau = 1.6;
+  const auto seeds_smooth = equator_seeds(smooth), seeds_star = equator_seeds(star);
+  const auto alone = qs::dissect::dissect(star, seeds_star, o);
+  const auto alone_smooth = qs::dissect::dissect(smooth, seeds_smooth, o);
+  ASSERT_EQ(alone_smooth.chart.patches.size(), 2u);
+  ASSERT_GT(alone.chart.patches.size(), 2u);
+  const DissectionSet s = qs::dissect::dissect_set(
+      {{&smooth, seeds_smooth, {}, "smooth"}, {&star, seeds_star, {}, "star"}}, o);
+  std::set<std::string> set_splits, star_splits;
+  for (const auto& n : s.tree)
+    if (n.split) set_splits.insert(n.name);
+  for (const auto& n : alone.tree)
+    if (n.split) star_splits.insert(n.name);
+  for (const auto& n : star_splits) EXPECT_TRUE(set_splits.count(n)) << "split " << n << " missing from the union";
+  expect_common_structure(s, {smooth.num_faces(), star.num_faces()});
+}
+
+TEST(DissectSet, AlignmentThroughFlipEventsStaysBijective) {
+  // The second mesh is the first rotated about z inside its seed frame, so features move far in
+  // the parameter domain and cross each other's warp triangles.
+  const auto a = qs::shapes::ellipsoid(1.4, 1, 0.8, 4);
+  std::vector<qs::Vec3> dirs;
+  for (int i = 0; i < 6; ++i) dirs.push_back(qs::Vec3(std::cos(i * 1.1), std::sin(i * 1.1), 1.2));
+  std::vector<qs::Vec3> dirs_b;
+  for (int i = 0; i < 6; ++i) dirs_b.push_back(qs::Vec3(std::cos(i * 1.1 + 2.0), std::sin(i * 1.1 + 2.0), 0.6));
+  MeshToDissect ma{&a, equator_seeds(a), features_at(a, dirs), "a"};
+  MeshToDissect mb{&a, ma.seeds, features_at(a, dirs_b), "a-rotated-features"};
+  const DissectionSet s = qs::dissect::dissect_set({ma, mb});
+  EXPECT_GT(s.warp_events, 0) << "the test should exercise flip events";
+  expect_common_structure(s, {a.num_faces(), a.num_faces()});
+}
+
+TEST(DissectSet, FeaturesMustMatchAcrossTheSet) {
+  const auto a = qs::shapes::ellipsoid(1.2, 1, 0.9, 3);
+  MeshToDissect ma{&a, equator_seeds(a), features_at(a, {{0, 0, 1}, {0.3, 0.3, 1}}), "a.obj"};
+  MeshToDissect mb{&a, ma.seeds, features_at(a, {{0, 0, 1}}), "b.obj"};
+  try {
+    qs::dissect::dissect_set({ma, mb});
+    FAIL() << "expected InvalidInput";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("b.obj lacks 'f1'"));
+  }
+  // A feature on opposite sides of the seed loop in the two meshes.
+  MeshToDissect mc{&a, ma.seeds, features_at(a, {{0, 0, 1}, {0.3, 0.3, -1}}), "c.obj"};
+  try {
+    qs::dissect::dissect_set({ma, mc});
+    FAIL() << "expected InvalidInput";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'f1' lies in seed patch"));
+  }
+  // Two features on one vertex; a feature on a seed.
+  MeshToDissect md{&a, ma.seeds, features_at(a, {{0, 0, 1}, {0, 0, 1}}), "d.obj"};
+  EXPECT_THROW(qs::dissect::dissect_set({md}), qs::InvalidInput);
+  MeshToDissect me{&a, ma.seeds, {{"on-seed", ma.seeds->at(0), {}}}, "e.obj"};
+  EXPECT_THROW(qs::dissect::dissect_set({me}), qs::InvalidInput);
+}
+
+TEST(DissectSet, FeatureOnAFaceBecomesAVertex) {
+  const auto a = qs::shapes::ellipsoid(1.2, 1, 0.9, 3);
+  const int f = 17;
+  qs::dissect::Feature on_face{"mid", -1, {f, {0.2, 0.3, 0.5}}};
+  const auto d = qs::dissect::dissect_set({{&a, equator_seeds(a), {on_face}, "a"}});
+  ASSERT_EQ(d.meshes[0].features.size(), 1u);
+  const auto& fp = d.meshes[0].features[0];
+  EXPECT_GE(fp.vertex, a.num_vertices()) << "a new vertex";
+  const qs::Vec3 want = 0.2 * a.positions[a.faces[f][0]] + 0.3 * a.positions[a.faces[f][1]] +
+                        0.5 * a.positions[a.faces[f][2]];
+  EXPECT_LT((d.meshes[0].chart.mesh.positions[fp.vertex] - want).norm(), 1e-12);
+  check_dissection(d.meshes[0], a.num_faces());
+}

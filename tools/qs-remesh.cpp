@@ -1,0 +1,172 @@
+// qs-remesh: uniform or adaptive semi-regular remeshes of a dissected set, all with one face list.
+// Reads a qs-dissect output folder; writes OUTDIR/<stem>.obj|.ply per mesh and OUTDIR/remesh.json.
+//
+// Exit codes: 0 done, 1 usage, 2 invalid input (a folder that is not a consistent dissection),
+// 3 i/o, 4 solver, 70 internal error.
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "qs/core/atomic_file.h"
+#include "qs/dissect/dissection_json.h"
+#include "qs/io/write_mesh.h"
+#include "qs/metro/metro.h"
+#include "qs/remesh/adaptive.h"
+#include "qs/remesh/uniform.h"
+#include "tool_main.h"
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+std::string stem_of_chart(const std::string& chart) {
+  const std::string suffix = ".chart.ply";
+  return chart.size() > suffix.size() && chart.compare(chart.size() - suffix.size(), suffix.size(), suffix) == 0
+             ? chart.substr(0, chart.size() - suffix.size())
+             : fs::path(chart).stem().string();
+}
+
+// OBJ with quad faces (the grid cells), written atomically.
+void write_quad_obj(const fs::path& path, const std::vector<qs::Vec3>& positions,
+                    const std::vector<std::array<int, 4>>& quads) {
+  qs::AtomicFile file(path);
+  std::ostream& out = file.stream();
+  out << "# qs-remesh quads\n" << std::setprecision(17);
+  for (const auto& p : positions) out << "v " << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const auto& q : quads) out << "f " << q[0] + 1 << ' ' << q[1] + 1 << ' ' << q[2] + 1 << ' ' << q[3] + 1 << '\n';
+  file.commit();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Semi-regular remeshes of a dissected set with one common connectivity (uniform level or adaptive).\n"
+               "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal.",
+               "qs-remesh"};
+  std::string folder, outdir, format = "obj";
+  int level = -1;
+  double eps = 0;
+  bool quads = false, quiet = false, no_metro = false;
+  qs::remesh::AdaptiveOptions aopt;
+  app.add_option("dissection", folder, "A qs-dissect output folder (dissection.json + charts)")->required();
+  auto* lvl = app.add_option("--level", level, "Uniform level n: (2^n+1)^2 samples per patch")
+                  ->check(CLI::Range(0, qs::remesh::kMaxUniformLevel));
+  auto* ad = app.add_option("--adaptive", eps,
+                            "Adaptive: refine each patch's quadtree while the error (fraction of the bounding-box "
+                            "diagonal, max over the set) exceeds EPS")
+                 ->check(CLI::PositiveNumber);
+  lvl->excludes(ad);
+  app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));
+  app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
+  app.add_flag("--quads", quads, "Uniform: write the grid cells as quads (OBJ only)");
+  app.add_flag("--no-metro", no_metro, "Skip the error measurement against the originals");
+  app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/remesh-L<n> or remesh-adaptive)");
+  app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
+
+  return qs::tools::run_tool(app, argc, argv, [&] {
+    if (level < 0 && eps <= 0) throw qs::UsageError("give --level N or --adaptive EPS");
+    if (quads && (level < 0 || format != "obj")) throw qs::UsageError("--quads needs --level and --format obj");
+    const auto t0 = Clock::now();
+    const qs::dissect::LoadedDissection in = qs::dissect::read_dissection(folder);
+    const auto t1 = Clock::now();
+    std::vector<const qs::dissect::Chart*> charts;
+    for (const auto& m : in.meshes) charts.push_back(&m.dissection.chart);
+    qs::Context ctx;
+    qs::remesh::SemiRegularSet set;
+    nlohmann::ordered_json adaptive_stats;
+    if (level >= 0) {
+      qs::remesh::UniformOptions uo;
+      uo.quads = quads;
+      set = qs::remesh::remesh_uniform(charts, level, uo, ctx);
+    } else {
+      aopt.epsilon = eps;
+      const qs::remesh::AdaptiveRemesh ar = qs::remesh::remesh_adaptive(charts, aopt, ctx);
+      set = ar.remesh;
+      adaptive_stats = {{"epsilon", eps},
+                        {"max_level", aopt.max_level},
+                        {"finest_level", ar.forest.max_level},
+                        {"error_splits", ar.stats.error_splits},
+                        {"balance_splits", ar.stats.balance_splits},
+                        {"unresolved_leaves", ar.stats.unresolved_leaves},
+                        {"max_unresolved_error", ar.stats.max_unresolved_error},
+                        {"leaves_per_level", ar.stats.leaves_per_level}};
+    }
+    const auto t2 = Clock::now();
+    if (outdir.empty())
+      outdir = (fs::path(folder) / (level >= 0 ? "remesh-L" + std::to_string(level) : std::string("remesh-adaptive"))).string();
+    fs::create_directories(outdir);
+    const auto& c = set.connectivity;
+    std::ostringstream text;
+    text << std::setprecision(4);
+    text << "remesh " << (level >= 0 ? "uniform level " + std::to_string(level) : "adaptive eps " + std::to_string(eps))
+         << ": " << c.num_vertices() << " vertices, " << c.num_faces() << " faces, " << c.num_patches
+         << " patches, the same for all " << in.meshes.size() << " meshes\n";
+    nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
+    double metro_seconds = 0;
+    for (size_t i = 0; i < in.meshes.size(); ++i) {
+      const auto& dm = in.meshes[i];
+      const std::string out_name = stem_of_chart(dm.chart_file) + "." + format;
+      const qs::TriMesh mesh = set.mesh(static_cast<int>(i));
+      if (quads) write_quad_obj(fs::path(outdir) / out_name, set.positions[i], c.quads);
+      else qs::io::write_mesh(fs::path(outdir) / out_name, mesh);
+      nlohmann::ordered_json j = {{"file", dm.file}, {"chart", dm.chart_file}, {"output", out_name}};
+      text << "  " << out_name;
+      if (!no_metro) {
+        const auto tm = Clock::now();
+        // A = the original (the chart: the input's surface with cut vertices added), B = the remesh;
+        // percentages of A's bounding-box diagonal.
+        const qs::metro::MetroResult r = qs::metro::metro(dm.dissection.chart.mesh, mesh);
+        metro_seconds += std::chrono::duration<double>(Clock::now() - tm).count();
+        const double diag = r.diagonal;
+        auto pct = [&](double x) { return 100.0 * x / diag; };
+        j["error"] = {{"diagonal", diag},
+                      {"diagonal_of", "original"},
+                      {"mean_percent", pct(r.mean)},
+                      {"rms_percent", pct(r.rms)},
+                      {"max_percent", pct(r.max)},
+                      {"original_to_remesh_mean_percent", pct(r.a_to_b.mean)},
+                      {"remesh_to_original_mean_percent", pct(r.b_to_a.mean)}};
+        text << ": error mean " << pct(r.mean) << "%, rms " << pct(r.rms) << "%, max " << pct(r.max)
+             << "% of the original's diagonal";
+      }
+      text << "\n";
+      meshes.push_back(j);
+    }
+    nlohmann::ordered_json sites_patch = nlohmann::ordered_json::array(), sites_uv = nlohmann::ordered_json::array();
+    for (int v = 0; v < c.num_vertices(); ++v) {
+      sites_patch.push_back(c.vertex_patch[v]);
+      sites_uv.push_back(c.vertex_uv[v].x());
+      sites_uv.push_back(c.vertex_uv[v].y());
+    }
+    nlohmann::ordered_json doc = {{"format", "qs-remesh"},
+                                  {"version", 1},
+                                  {"dissection", fs::path(folder).filename().string()},
+                                  {"mode", level >= 0 ? "uniform" : "adaptive"},
+                                  {"level", c.level},
+                                  {"quads", quads},
+                                  {"vertices", c.num_vertices()},
+                                  {"faces", c.num_faces()},
+                                  {"base_vertices", c.num_base_vertices},
+                                  {"base_edges", c.num_base_edges},
+                                  {"patches", c.num_patches}};
+    if (!adaptive_stats.is_null()) doc["adaptive"] = adaptive_stats;
+    doc["meshes"] = meshes;
+    doc["vertex_patch"] = sites_patch;
+    doc["vertex_uv"] = sites_uv;
+    qs::write_file_atomically(fs::path(outdir) / "remesh.json", doc.dump(1) + "\n");
+    const auto t3 = Clock::now();
+    if (!quiet) {
+      std::cout << text.str() << "  wrote " << in.meshes.size() << " meshes and remesh.json to " << outdir << "\n"
+                << std::fixed << std::setprecision(3) << "  time: load " << std::chrono::duration<double>(t1 - t0).count()
+                << " s, remesh " << std::chrono::duration<double>(t2 - t1).count() << " s, metro " << metro_seconds
+                << " s, write " << std::chrono::duration<double>(t3 - t2).count() - metro_seconds << " s\n";
+    }
+    return 0;
+  });
+}
