@@ -1,0 +1,70 @@
+// qs-remesh as a user runs it: a dissected pair remeshed with one face list; exit codes.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "qs/io/read_mesh.h"
+#include "qs/io/write_mesh.h"
+#include "qs/mesh/validate.h"
+#include "qs/shapes/shapes.h"
+#include "tool_runner.h"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+class RemeshTool : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("qs_remesh_tool_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
+  const qs::TriMesh a = qs::shapes::ellipsoid(1.4, 1, 0.8, 4);
+  const qs::TriMesh b = qs::shapes::bumpy_sphere(0.05, 3, 4);
+  qs::io::write_mesh(dir_ / "a.obj", a);
+  qs::io::write_mesh(dir_ / "b.obj", b);
+  const fs::path d = dir_ / "ab.dissection";
+  const RunResult dr =
+      run_tool("qs-dissect", (dir_ / "a.obj").string() + " " + (dir_ / "b.obj").string() + " -q -o " + d.string());
+  ASSERT_EQ(dr.exit, 0) << dr.out;
+  double last_error = 1e9;
+  for (int level : {2, 4}) {
+    const fs::path out = dir_ / ("L" + std::to_string(level));
+    const RunResult r = run_tool("qs-remesh", d.string() + " --level " + std::to_string(level) + " -o " + out.string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    const auto ra = qs::io::read_mesh(out / "a.obj"), rb = qs::io::read_mesh(out / "b.obj");
+    EXPECT_EQ(ra.mesh.faces, rb.mesh.faces) << "the set must share one face list";
+    const auto v = qs::mesh::validate(ra.mesh);
+    EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report("a", v.report);
+    std::ifstream in(out / "remesh.json");
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["format"], "qs-remesh");
+    EXPECT_EQ(j["faces"].get<size_t>(), ra.mesh.faces.size());
+    EXPECT_EQ(j["vertex_patch"].size(), ra.mesh.positions.size());
+    const double err = j["meshes"][1]["error"]["mean_percent"].get<double>();
+    EXPECT_LT(err, last_error);
+    last_error = err;
+  }
+  const RunResult ad = run_tool("qs-remesh", d.string() + " --adaptive 0.002 -q -o " + (dir_ / "ad").string());
+  ASSERT_EQ(ad.exit, 0) << ad.out;
+  EXPECT_EQ(qs::io::read_mesh(dir_ / "ad" / "a.obj").mesh.faces, qs::io::read_mesh(dir_ / "ad" / "b.obj").mesh.faces);
+}
+
+TEST_F(RemeshTool, ExitCodes) {
+  EXPECT_EQ(run_tool("qs-remesh", (dir_ / "nothing").string() + " --level 2").exit, 3);
+  fs::create_directories(dir_ / "bad");
+  std::ofstream(dir_ / "bad" / "dissection.json") << "{\"format\": \"something else\"}";
+  const RunResult bad = run_tool("qs-remesh", (dir_ / "bad").string() + " --level 2");
+  EXPECT_EQ(bad.exit, 2) << bad.out;
+  EXPECT_THAT(bad.out, HasSubstr("not a qs-dissection file"));
+  EXPECT_EQ(run_tool("qs-remesh", (dir_ / "bad").string()).exit, 1);  // neither --level nor --adaptive
+  EXPECT_EQ(run_tool("qs-remesh", (dir_ / "bad").string() + " --level 2 --adaptive 0.01").exit, 1);
+}
