@@ -147,7 +147,7 @@ void validate(const std::vector<Vec2>& features, const std::vector<Vec2>& target
   if (features.size() != targets.size())
     problems.push_back(std::to_string(features.size()) + " features but " + std::to_string(targets.size()) +
                        " targets (one target per feature)");
-  if (problems.empty()) {
+  if (m > 0 && m < 0.25) {
     check_features(features, "feature", m, problems);
     check_features(targets, "target", m, problems);
   }
@@ -251,7 +251,7 @@ class Warper {
   void move_leg(int k, const Vec2& q);
   void count_event(int k);
   bool illegal(int t, int j) const;
-  int lawson(int v, int k);
+  void lawson(int v, int k);
   void event_flip(int k, const Vec2& p, const Vec2& d, double& time);
   double entering_time(int t, int j, int v, const Vec2& d, double time) const;
   bool flip_if_valid(int t, int j, int k);
@@ -513,7 +513,9 @@ bool Warper::illegal(int t, int j) const {
   return orient(a, pos_[b], d) > kMinArea2 && orient(a, d, pos_[c]) > kMinArea2;
 }
 
-int Warper::lawson(int v, int k) {
+/// Restores the Delaunay property around v at the current positions (Lawson flips of the edges
+/// that are non-Delaunay beyond rounding); the points keep their positions.
+void Warper::lawson(int v, int k) {
   // Only edges whose quadrilateral contains v can have changed; flips propagate to their quads.
   // An edge is kept as (triangle, its two vertices); when that triangle no longer holds both, the
   // edge was flipped away (an edge made again later is pushed by the flip that makes it).
@@ -522,7 +524,6 @@ int Warper::lawson(int v, int k) {
   star(v, around);
   for (const int t : around)
     for (int j = 0; j < 3; ++j) stack.push_back({t, tri_[t][(j + 1) % 3], tri_[t][(j + 2) % 3]});
-  int flips = 0;
   while (!stack.empty()) {
     const auto [t, a, b] = stack.back();
     stack.pop_back();
@@ -533,13 +534,14 @@ int Warper::lawson(int v, int k) {
     const int u = nb_[t][j];
     flip_and_rebind(t, j);
     count_event(k);
-    ++flips;
     for (const int tt : {t, u})
       for (int m = 0; m < 3; ++m) stack.push_back({tt, tri_[tt][(m + 1) % 3], tri_[tt][(m + 2) % 3]});
   }
-  return flips;
 }
 
+/// Flips, just before the earliest degeneration of a triangle around the moving feature, the edge
+/// opposite the middle vertex of the collinear triple (or another edge of that triangle if that
+/// flip is not valid), moving the feature to the flip time; SolverError if no flip is valid.
 void Warper::event_flip(int k, const Vec2& p, const Vec2& d, double& time) {
   const int v = kCorners + k;
   std::vector<int> around;
@@ -581,6 +583,8 @@ void Warper::event_flip(int k, const Vec2& p, const Vec2& d, double& time) {
   throw SolverError(s.str());
 }
 
+/// The first time in [time, 1 + kEndTolerance] at which the edge opposite tri_[t][j] turns
+/// non-Delaunay while v moves with velocity d (the incircle value crosses 0 upwards), or infinity.
 double Warper::entering_time(int t, int j, int v, const Vec2& d, double time) const {
   const int u = nb_[t][j];
   if (u < 0) return std::numeric_limits<double>::infinity();
@@ -821,7 +825,8 @@ WarpResult Warper::finish() {
   r.detours = detours_;
   r.warp_triangles = static_cast<int>(tri_.size());
   r.min_warp_area = std::numeric_limits<double>::infinity();
-  for (const Triple& t : tri_) r.min_warp_area = std::min(r.min_warp_area, 0.5 * orient(pos_[t[0]], pos_[t[1]], pos_[t[2]]));
+  for (const Triple& t : tri_)
+    r.min_warp_area = std::min(r.min_warp_area, 0.5 * orient(pos_[t[0]], pos_[t[1]], pos_[t[2]]));
   if (!(r.min_warp_area > 0))
     throw SolverError("warp_square: the warp mesh is not positive at the end (smallest triangle area " +
                       std::to_string(r.min_warp_area) + ")");
