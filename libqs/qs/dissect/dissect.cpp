@@ -799,7 +799,9 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
     for (size_t g : moving) from.push_back(rep[i][g]);
     warp::WarpResult wr;
     try {
-      wr = warp::warp_square(from, to, p.sp.uv, {}, ctx_);
+      Context quiet = ctx_;  // the warp's own progress would drown the dissection's
+      quiet.progress = nullptr;
+      wr = warp::warp_square(from, to, p.sp.uv, {}, quiet);
     } catch (const Error& e) {
       const std::string m = "aligning the features of patch " + tn.name + " on " + meshes_[i].name() + ": " + e.what();
       if (e.code() == ErrorCode::InvalidInput) throw InvalidInput(m);
