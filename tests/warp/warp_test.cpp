@@ -396,6 +396,43 @@ TEST(WarpSquare, DegenerateLatticeMotionsTerminate) {
   EXPECT_EQ(cases, 324);
 }
 
+TEST(WarpSquare, NearlyCocircularClusterDoesNotFlipBackAndForth) {
+  // Real input (regression): three features ~1e-3 apart move ~0.035 toward the lower right. At one
+  // moment the quad of the three features and the corner (0, 1) is cocircular: the kinetic step
+  // flipped its diagonal, then the Lawson pass saw the new diagonal as non-Delaunay within
+  // rounding and flipped it back, forever (more than max_events flips at one time).
+  const std::vector<Vec2> f = {Vec2(0.7223420261674397, 0.74981545428860086),
+                               Vec2(0.72230802473914923, 0.75283953129023273),
+                               Vec2(0.722419691410494, 0.7515741835248797)};
+  const std::vector<Vec2> g = {Vec2(0.73665837891131025, 0.71567337612736615),
+                               Vec2(0.73681263756554971, 0.71859455726639987),
+                               Vec2(0.73680032520687688, 0.71732953548462397)};
+  std::vector<Vec2> pts = {
+      Vec2(0.24304563349000347, 0.044486290720485301), Vec2(0, 0.27040686775905287),
+      Vec2(0, 0.15599098372515607),                    Vec2(0.31065852493880763, 0.35930276782915294),
+      Vec2(0.24704326132309348, 0.44801854771892463),  Vec2(0.26991378063239296, 0),
+      Vec2(0.28951605471696468, 0.64449581387247012),  Vec2(0.12876821620106627, 1),
+      Vec2(0.18365761533376287, 0.94882554026877075),  Vec2(0.13702743234019898, 1),
+      Vec2(0.12444068953045373, 1),                    Vec2(0.055771335635680375, 1),
+      Vec2(0.181885618007363, 0.93915569076116634),    Vec2(0, 0.47719225505271878),
+      Vec2(0.16472141666804332, 0.5568050096484406),   Vec2(0, 0.48990808715280287),
+      Vec2(0, 0.44422276374490444),                    Vec2(0.45341265428312444, 0.14913866461675004),
+      Vec2(0.32261722999174469, 0),                    Vec2(0, 0.79660696164530476)};
+  const int n = static_cast<int>(pts.size());
+  pts.insert(pts.end(), f.begin(), f.end());
+  WarpResult r;
+  ASSERT_NO_THROW(r = warp_square(f, g, pts));
+  check_common(r, pts, n, f, g);
+  EXPECT_LT(r.events, 1000);
+  for (const int rounds : {1, 16, 64}) {
+    WarpOptions o;
+    o.rounds = rounds;
+    ASSERT_NO_THROW(r = warp_square(f, g, pts, o)) << "rounds " << rounds;
+    check_common(r, pts, n, f, g);
+  }
+  warp_lines(f, g);  // bijective: disjoint lines stay disjoint
+}
+
 TEST(WarpSquare, TargetEqualToStartDoesNotMove) {
   const std::vector<Vec2> f = {Vec2(0.3, 0.6), Vec2(0.6, 0.4)};
   const std::vector<Vec2> g = {Vec2(0.3, 0.6), Vec2(0.65, 0.45)};

@@ -246,6 +246,12 @@ class Warper {
     if (b.tri >= 0 && b.vertex < 0) tri_points_[b.tri].push_back(i);
   }
   void flip_and_rebind(int t, int j);
+  /// The diagonal that flipping the edge opposite tri_[t][j] would make, as a sorted vertex pair.
+  std::array<int, 2> new_diagonal(int t, int j) const;
+  /// True when that flip would make again an edge removed at the current event time (removed_).
+  bool recreates(int t, int j) const {
+    return std::find(removed_.begin(), removed_.end(), new_diagonal(t, j)) != removed_.end();
+  }
 
   // --- motion ---
   void move_leg(int k, const Vec2& q);
@@ -271,6 +277,11 @@ class Warper {
   std::vector<Binding> bind_;  ///< per point
   std::vector<std::vector<int>> tri_points_;  ///< points bound to each triangle (not pinned)
   std::vector<Vec2> scratch_;
+  /// Edges (sorted vertex pairs) flipped away at the current event time of the moving feature. No
+  /// Delaunay flip (kinetic or Lawson) makes one of them again at that time: exact flips never
+  /// would (the lifted surface only goes down), but a nearly cocircular quad can look non-Delaunay
+  /// across both diagonals within rounding, which would flip it back and forth forever.
+  std::vector<std::array<int, 2>> removed_;
   int events_ = 0;
   int detours_ = 0;
 };
@@ -458,6 +469,15 @@ void Warper::flip_and_rebind(int t, int j) {
   }
 }
 
+std::array<int, 2> Warper::new_diagonal(int t, int j) const {
+  const int u = nb_[t][j];
+  if (u < 0) return {-1, -1};
+  const int a = tri_[t][j], b = tri_[t][(j + 1) % 3], c = tri_[t][(j + 2) % 3];
+  int m = 0;
+  while (tri_[u][m] == b || tri_[u][m] == c) ++m;
+  return {std::min(a, tri_[u][m]), std::max(a, tri_[u][m])};
+}
+
 bool Warper::try_flip(int t, int j, int moving, const Vec2& p, const Vec2& d, double& time, double t_event,
                       const std::vector<Lin>& star_lins) {
   const int u = nb_[t][j];
@@ -482,6 +502,7 @@ bool Warper::try_flip(int t, int j, int moving, const Vec2& p, const Vec2& d, do
     time += s;
     pos_[moving] = p + time * d;
   }
+  removed_.push_back({std::min(b, c), std::max(b, c)});
   flip_and_rebind(t, j);
   return true;
 }
@@ -514,7 +535,9 @@ bool Warper::illegal(int t, int j) const {
 }
 
 /// Restores the Delaunay property around v at the current positions (Lawson flips of the edges
-/// that are non-Delaunay beyond rounding); the points keep their positions.
+/// that are non-Delaunay beyond rounding); the points keep their positions. Flips that would make
+/// again an edge of removed_ are not done, and every edge flipped away is added to it (the caller
+/// clears it when the event time changes): at most one flip per vertex pair, so this terminates.
 void Warper::lawson(int v, int k) {
   // Only edges whose quadrilateral contains v can have changed; flips propagate to their quads.
   // An edge is kept as (triangle, its two vertices); when that triangle no longer holds both, the
@@ -530,8 +553,9 @@ void Warper::lawson(int v, int k) {
     const int ia = local(t, a), ib = local(t, b);
     if (ia < 0 || ib < 0) continue;
     const int j = 3 - ia - ib;  // the local vertex opposite the edge
-    if (!illegal(t, j)) continue;
+    if (!illegal(t, j) || recreates(t, j)) continue;
     const int u = nb_[t][j];
+    removed_.push_back({std::min(a, b), std::max(a, b)});
     flip_and_rebind(t, j);
     count_event(k);
     for (const int tt : {t, u})
@@ -626,14 +650,16 @@ void Warper::move_leg(int k, const Vec2& q) {
   const Vec2 p = pos_[v];
   const Vec2 d = q - p;
   if (d.x() == 0 && d.y() == 0) return;
+  removed_.clear();
   lawson(v, k);
   double time = 0;
   std::vector<int> around;
   // Edges not to flip again at the current event time: those just made by a flip there (a mover
   // moving tangentially to a circle would otherwise flip the two diagonals back and forth), and
-  // those whose flip failed there (rounding).
+  // those whose flip failed there (rounding). Flips that would make again an edge removed at that
+  // time (removed_, shared with lawson) are not done either.
   std::vector<std::array<int, 2>> skipped;
-  double skip_time = -1;
+  double skip_time = 0;  // the time of the first Lawson pass above
   auto edge = [](int a, int b) { return std::array<int, 2>{std::min(a, b), std::max(a, b)}; };
   while (true) {
     // Kinetic Delaunay: the next time an edge around v stops being Delaunay, and (a guard that
@@ -649,8 +675,9 @@ void Warper::move_leg(int k, const Vec2& q) {
         const double te = entering_time(t, j, v, d, time);
         if (!(te < t_flip)) continue;
         if (std::min(te, 1.0) <= skip_time + kSameTime &&
-            std::find(skipped.begin(), skipped.end(), edge(tri_[t][(j + 1) % 3], tri_[t][(j + 2) % 3])) !=
-                skipped.end())
+            (std::find(skipped.begin(), skipped.end(), edge(tri_[t][(j + 1) % 3], tri_[t][(j + 2) % 3])) !=
+                 skipped.end() ||
+             recreates(t, j)))
           continue;
         t_flip = te;
         flip_t = t;
@@ -661,8 +688,10 @@ void Warper::move_leg(int k, const Vec2& q) {
     if (t_zero <= t_flip) {
       // Only rounding lets a triangle degenerate before its edge turns non-Delaunay: flip at the
       // exact degeneration event instead.
-      event_flip(k, p, d, time);
       skipped.clear();
+      removed_.clear();
+      event_flip(k, p, d, time);  // records the edge it flips away in removed_
+      skip_time = time;
       continue;
     }
     // At the cocircular moment the quad is convex, so the flip is valid (checked against rounding).
@@ -670,16 +699,21 @@ void Warper::move_leg(int k, const Vec2& q) {
     pos_[v] = p + time * d;
     if (time > skip_time + kSameTime) {
       skipped.clear();
+      removed_.clear();
       skip_time = time;
     }
+    const std::array<int, 2> old_edge =
+        edge(tri_[flip_t][(flip_j + 1) % 3], tri_[flip_t][(flip_j + 2) % 3]);
     if (flip_if_valid(flip_t, flip_j, k)) {
+      removed_.push_back(old_edge);
       skipped.push_back(edge(tri_[flip_t][0], tri_[flip_t][2]));  // the new diagonal
       lawson(v, k);
     } else {
-      skipped.push_back(edge(tri_[flip_t][(flip_j + 1) % 3], tri_[flip_t][(flip_j + 2) % 3]));
+      skipped.push_back(old_edge);
     }
   }
   pos_[v] = q;
+  if (1.0 > skip_time + kSameTime) removed_.clear();
   lawson(v, k);
   star(v, around);
   for (const int t : around)
