@@ -328,6 +328,50 @@ void count_uv_faces(const param::PatchMesh& pm, param::SquareParam& sp) {
 }
 }  // namespace
 
+namespace {
+// Local untangling of a folded map: the free vertices of folded faces and two rings around them
+// move to the average of their neighbours (Gauss-Seidel), the border and `fixed` vertices stay.
+// Repeated while folds remain (at most `rounds` times). Returns the map with fewer folds.
+param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam& in, const std::vector<char>& fixed,
+                            int rounds) {
+  const int nv = static_cast<int>(pm.positions.size());
+  std::vector<std::vector<int>> nb(nv);
+  for (const Tri& t : pm.faces)
+    for (int k = 0; k < 3; ++k) nb[t[k]].push_back(t[(k + 1) % 3]), nb[t[k]].push_back(t[(k + 2) % 3]);
+  for (auto& n : nb) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  std::vector<char> pinned = fixed;
+  pinned.resize(nv, 0);
+  for (int b : pm.boundary) pinned[b] = 1;
+  param::SquareParam best = in, cur = in;
+  for (int r = 0; r < rounds && !best.bijective(); ++r) {
+    std::vector<char> mark(nv, 0);
+    for (const Tri& t : pm.faces)
+      if (signed_area(cur.uv[t[0]], cur.uv[t[1]], cur.uv[t[2]]) <= param::kZeroUvArea)
+        for (int v : t) mark[v] = 1;
+    for (int ring = 0; ring < 2; ++ring) {
+      std::vector<char> grown = mark;
+      for (int v = 0; v < nv; ++v)
+        if (mark[v])
+          for (int w : nb[v]) grown[w] = 1;
+      mark.swap(grown);
+    }
+    for (int sweep = 0; sweep < 10; ++sweep)
+      for (int v = 0; v < nv; ++v) {
+        if (!mark[v] || pinned[v] || nb[v].empty()) continue;
+        Vec2 c = Vec2::Zero();
+        for (int w : nb[v]) c += cur.uv[w];
+        cur.uv[v] = c / static_cast<double>(nb[v].size());
+      }
+    count_uv_faces(pm, cur);
+    if (cur.flipped_faces + cur.zero_area_faces < best.flipped_faces + best.zero_area_faces) best = cur;
+  }
+  return best;
+}
+}  // namespace
+
 Param MeshDissector::parameterize(const Node& node) {
   Param p;
   for (int round = 0;; ++round) {
@@ -826,6 +870,11 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
         warped = pinned;
         ++tn.pinned_solves;
       }
+    }
+    if (!warped.bijective()) {
+      std::vector<char> fixed(p.ex.verts.size(), 0);
+      for (const auto& f : p.features) fixed[f.second] = 1;
+      warped = untangle(p.ex.pm, warped, fixed, 20);
     }
     p.sp = std::move(warped);
     p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
