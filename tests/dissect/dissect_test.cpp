@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -171,4 +173,26 @@ TEST(CutMesh, SplitsKeepTheHalfEdgeStructureConsistent) {
   EXPECT_TRUE(valid.report.accepted);
   EXPECT_FALSE(valid.report.orientation_flipped);
   EXPECT_EQ(valid.report.euler_characteristic, 2);
+}
+
+TEST(DissectionFolder, ReadsBackWhatWasWrittenIncludingAnInfiniteStretch) {
+  const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
+  qs::dissect::DissectedMesh dm;
+  dm.dissection = qs::dissect::dissect(m, std::nullopt);
+  dm.dissection.chart.patches[1].stretch = std::numeric_limits<double>::infinity();  // a folded leaf
+  dm.file = "e.obj";
+  dm.chart_file = "e.chart.ply";
+  dm.seed_source = "automatic";
+  const auto dir = std::filesystem::temp_directory_path() / ("qs_folder_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  qs::dissect::write_chart_ply(dir / dm.chart_file, dm.dissection.chart);
+  std::ofstream(dir / "dissection.json") << qs::dissect::dissection_to_json({dm}, {}, false);
+  const auto back = qs::dissect::read_dissection(dir);
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(back.meshes.size(), 1u);
+  const auto& c = back.meshes[0].dissection.chart;
+  ASSERT_EQ(c.patches.size(), 2u);
+  EXPECT_EQ(c.patches[0].corners, dm.dissection.chart.patches[0].corners);
+  EXPECT_TRUE(std::isinf(c.patches[1].stretch));
+  EXPECT_EQ(back.meshes[0].dissection.base.quads, dm.dissection.base.quads);
 }

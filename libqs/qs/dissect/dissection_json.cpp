@@ -1,6 +1,7 @@
 #include "qs/dissect/dissection_json.h"
 
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "qs/core/error.h"
@@ -194,7 +195,9 @@ LoadedDissection read_dissection(const std::filesystem::path& folder) {
           throw InvalidInput(path.string() + ": " + pw + " has corner vertex " + std::to_string(c) +
                              " outside its chart's " + std::to_string(nv) + " vertices");
       p.faces = r.get<int>(pj, "faces", pw);
-      p.stretch = r.get<double>(pj, "stretch", pw);
+      // A non-bijective map scores infinity, which JSON writes as null.
+      p.stretch = r.at(pj, "stretch", pw).is_null() ? std::numeric_limits<double>::infinity()
+                                                    : r.get<double>(pj, "stretch", pw);
       p.flipped_faces = r.get<int>(pj, "flipped_faces", pw);
       p.zero_area_faces = r.get<int>(pj, "zero_area_faces", pw);
       p.uv_area_sum = r.get<double>(pj, "uv_area_sum", pw);
