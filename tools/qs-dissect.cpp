@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
   app.add_option("--relax", opt.relax_rounds, "Rounds of seed-curve relaxation (paper 3.3; off by default, see README)")
       ->capture_default_str()
       ->check(CLI::Range(0, 16));
+  app.add_flag("--predict-split", opt.predict_split,
+               "Choose each split by the children's stretch predicted from the parent's map (experimental, see README)");
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");

@@ -39,6 +39,9 @@ struct DissectOptions {
   /// Rounds of seed-curve relaxation (relax_seed_loop) before splitting. Off by default: on the
   /// 24 shared meshes it straightens the curves but does not lower the maximum stretch (README).
   int relax_rounds = 0;
+  /// Choose the split among candidate centres and w by the children's stretch predicted from the
+  /// parent's map (see the README); false: the peak and w rule alone.
+  bool predict_split = false;
 };
 
 /// Why a patch over tau was left as it is.

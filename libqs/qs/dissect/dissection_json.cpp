@@ -25,7 +25,8 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"peak_margin", options.peak_margin},
                     {"feature_cut_margin", options.feature_cut_margin},
                     {"feature_group_distance", options.feature_group_distance},
-                    {"relax_rounds", options.relax_rounds}};
+                    {"relax_rounds", options.relax_rounds},
+                    {"predict_split", options.predict_split}};
   if (meshes.empty()) return doc.dump(2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();
