@@ -23,6 +23,13 @@ struct Context {
   void report(const std::string& stage, double fraction) const {
     if (progress) progress(stage, fraction);
   }
+  /// The same context without the progress callback: for inner calls whose own progress would
+  /// drown the caller's.
+  Context without_progress() const {
+    Context c = *this;
+    c.progress = nullptr;
+    return c;
+  }
   /// Throws when the cancel flag is raised.
   void check_cancel() const;
 };

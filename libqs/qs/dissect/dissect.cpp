@@ -97,7 +97,6 @@ class MeshDissector {
   void keep_leaf(const Node& node, const Param& p, PatchInfo info);
   Dissection finish(const std::vector<TreeNode>& tree);
   const std::string& name() const { return name_; }
-  int feature_vertex(int k) const { return feature_vertex_[k]; }
   /// The label of the patch holding feature k (features never lie on a patch border).
   int feature_label(int k) const { return cm_.patch(CutMesh::face_of(cm_.out_halfedge(feature_vertex_[k]))); }
 
@@ -314,18 +313,6 @@ std::array<Node, 2> MeshDissector::seed(const std::array<int, 4>& seeds) {
 
 namespace {
 double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) { return 0.5 * cross2(b - a, c - a); }
-
-// Recounts what parameterize_square counted, for a map changed after the solve (the warp).
-void count_uv_faces(const param::PatchMesh& pm, param::SquareParam& sp) {
-  sp.flipped_faces = sp.zero_area_faces = 0;
-  sp.uv_area_sum = 0;
-  for (const Tri& t : pm.faces) {
-    const double a = signed_area(sp.uv[t[0]], sp.uv[t[1]], sp.uv[t[2]]);
-    sp.uv_area_sum += a;
-    if (std::abs(a) <= param::kZeroUvArea) ++sp.zero_area_faces;
-    else if (a < 0) ++sp.flipped_faces;
-  }
-}
 }  // namespace
 
 namespace {
@@ -365,7 +352,7 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
         for (int w : nb[v]) c += cur.uv[w];
         cur.uv[v] = c / static_cast<double>(nb[v].size());
       }
-    count_uv_faces(pm, cur);
+    param::count_uv_faces(pm.faces, cur);
     if (cur.flipped_faces + cur.zero_area_faces < best.flipped_faces + best.zero_area_faces) best = cur;
   }
   return best;
@@ -383,9 +370,7 @@ Param MeshDissector::parameterize(const Node& node) {
       if (h >= 0 && interior_edge(h, node.label)) split_edge(h, 0.5);
     }
   }
-  Context quiet = ctx_;  // the per-patch solve's own progress would drown the dissection's
-  quiet.progress = nullptr;
-  p.sp = param::parameterize_square(p.ex.pm, {}, quiet);
+  p.sp = param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
   for (size_t i = 0; i < p.ex.verts.size(); ++i) {
     const int v = p.ex.verts[i];
@@ -909,9 +894,7 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
     for (size_t g : moving) from.push_back(rep[i][g]);
     warp::WarpResult wr;
     try {
-      Context quiet = ctx_;  // the warp's own progress would drown the dissection's
-      quiet.progress = nullptr;
-      wr = warp::warp_square(from, to, p.sp.uv, {}, quiet);
+      wr = warp::warp_square(from, to, p.sp.uv, {}, ctx_.without_progress());
     } catch (const Error& e) {
       const std::string m = "aligning the features of patch " + tn.name + " on " + meshes_[i].name() + ": " + e.what();
       if (e.code() == ErrorCode::InvalidInput) throw InvalidInput(m);
@@ -920,7 +903,7 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
     param::SquareParam warped = p.sp;
     warped.uv = std::move(wr.points);
     tn.warp_events += wr.events;
-    count_uv_faces(p.ex.pm, warped);
+    param::count_uv_faces(p.ex.pm.faces, warped);
     if (!warped.bijective()) {
       // The warp is a bijection of the square, but a mesh face whose corners lie in different
       // warp triangles is mapped by its corners only and can fold where a feature moved far.
@@ -928,9 +911,8 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
       // and keep whichever folds less (ties: the warp).
       param::SquareParamOptions po;
       for (size_t k = 0; k < nf; ++k) po.pinned.emplace_back(p.features[k].second, warped.uv[p.features[k].second]);
-      Context quiet = ctx_;
-      quiet.progress = nullptr;
-      quiet.log = nullptr;
+      Context quiet = ctx_.without_progress();
+      quiet.log = nullptr;  // its fold warning is expected here: the folds are compared below
       const param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, quiet);
       if (pinned.flipped_faces + pinned.zero_area_faces < warped.flipped_faces + warped.zero_area_faces) {
         warped = pinned;

@@ -39,7 +39,10 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
     }
     if (n.features > 0) {
       j["features"] = n.features;
+      j["feature_groups"] = n.feature_groups;
+      j["features_held"] = n.features_held;
       j["warp_events"] = n.warp_events;
+      j["pinned_solves"] = n.pinned_solves;
     }
     tree.push_back(j);
   }

@@ -256,8 +256,7 @@ RelaxedLoop relax_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const Rel
   RelaxedLoop out;
   out.loop = loop;
   for (int i = 0; i < 4; ++i) out.length_before[i] = length_of(mesh.positions, loop.paths[i]);
-  Context quiet = context;
-  quiet.progress = nullptr;
+  const Context quiet = context.without_progress();
   const int total = 4 * options.rounds;
   for (int step = 0; step < total; ++step) {
     context.check_cancel();

@@ -753,6 +753,15 @@ std::vector<double> face_areas(const TriMesh& mesh) {
   return area;
 }
 
+// The principal axes of the area-weighted vertices, with `used` marking the vertices faces use.
+// \throws InvalidInput when fewer than 4 vertices are used.
+Axes checked_axes(const TriMesh& mesh, std::vector<char>& used) {
+  const std::vector<double> w = vertex_weights(mesh, used);
+  if (std::count(used.begin(), used.end(), 1) < 4)
+    throw InvalidInput("choose_seeds: the mesh has fewer than 4 vertices used by faces");
+  return principal_axes(mesh, w);
+}
+
 [[noreturn]] void no_routable_seeds(const std::string& why) {
   throw InvalidInput("choose_seeds: no rule gives a routable seed loop: " + why + "; give the four seeds by hand");
 }
@@ -774,10 +783,7 @@ std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
 
 std::array<int, 4> choose_seeds(const TriMesh& mesh) {
   std::vector<char> used;
-  const std::vector<double> w = vertex_weights(mesh, used);
-  if (std::count(used.begin(), used.end(), 1) < 4)
-    throw InvalidInput("choose_seeds: the mesh has fewer than 4 vertices used by faces");
-  const Axes axes = principal_axes(mesh, w);
+  const Axes axes = checked_axes(mesh, used);
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
   const std::vector<double> area = face_areas(mesh);
@@ -824,10 +830,7 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
 
 std::array<int, 4> choose_seeds_farthest(const TriMesh& mesh) {
   std::vector<char> used;
-  const std::vector<double> w = vertex_weights(mesh, used);
-  if (std::count(used.begin(), used.end(), 1) < 4)
-    throw InvalidInput("choose_seeds: the mesh has fewer than 4 vertices used by faces");
-  const Axes axes = principal_axes(mesh, w);
+  const Axes axes = checked_axes(mesh, used);
   const Graph g = build_graph(mesh);
   Dijkstra dijkstra(g);
   return farthest_seeds(mesh, dijkstra, used, axes);

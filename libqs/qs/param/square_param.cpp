@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/problem_list.h"
 
 namespace qs::param {
 namespace {
@@ -29,8 +30,6 @@ constexpr double kRelativeWeightFloor = 1e-8;
 /// SparseLU takes the diagonal as pivot when it is at least this fraction of its column's largest
 /// entry (symmetric-AMD path only).
 constexpr double kDiagonalPivotThreshold = 1e-3;
-/// How many element ids an error message lists per kind of problem.
-constexpr int kMaxListed = 8;
 
 /// tan(a/2) for the angle a between u and v, computed without cancellation on both sides of
 /// pi/2: sin a / (1 + cos a) for acute angles, (1 - cos a) / sin a for obtuse ones. 0 when u or v
@@ -46,29 +45,6 @@ double tan_half_angle(const Vec3& u, const Vec3& v) {
   return num / cr;
 }
 
-/// Collects the problems of one kind and renders "what: id, id, ... (and N more)".
-class ProblemList {
- public:
-  explicit ProblemList(std::string what) : what_(std::move(what)) {}
-  void add(const std::string& item) {
-    if (count_ < kMaxListed) items_.push_back(item);
-    ++count_;
-  }
-  bool empty() const { return count_ == 0; }
-  void append_to(std::vector<std::string>& out) const {
-    if (count_ == 0) return;
-    std::ostringstream s;
-    s << what_ << ": ";
-    for (std::size_t i = 0; i < items_.size(); ++i) s << (i ? ", " : "") << items_[i];
-    if (count_ > static_cast<int>(items_.size())) s << " (and " << count_ - items_.size() << " more)";
-    out.push_back(s.str());
-  }
-
- private:
-  std::string what_;
-  std::vector<std::string> items_;
-  int count_ = 0;
-};
 
 [[noreturn]] void throw_problems(const std::vector<std::string>& problems) {
   std::ostringstream s;
@@ -469,18 +445,26 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
   }
 
-  for (const Tri& t : faces) {
-    const Vec2 &a = result.uv[t[0]], &b = result.uv[t[1]], &c = result.uv[t[2]];
-    const double area = 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
-    result.uv_area_sum += area;
-    if (std::abs(area) <= kZeroUvArea) ++result.zero_area_faces;
-    else if (area < 0) ++result.flipped_faces;
-  }
+  count_uv_faces(faces, result);
   context.report("parameterize: done", 1.0);
   if (!result.bijective())
     context.warn("parameterize_square: " + std::to_string(result.flipped_faces) + " flipped and " +
                  std::to_string(result.zero_area_faces) + " zero-area UV faces of " + std::to_string(nf));
   return result;
+}
+
+void count_uv_faces(const std::vector<Tri>& faces, SquareParam& sp) {
+  sp.flipped_faces = sp.zero_area_faces = 0;
+  sp.uv_area_sum = 0;
+  for (const Tri& t : faces) {
+    if (std::max({t[0], t[1], t[2]}) >= static_cast<int>(sp.uv.size()) || std::min({t[0], t[1], t[2]}) < 0)
+      throw InvalidInput("count_uv_faces: a face refers to a vertex without uv");
+    const Vec2 &a = sp.uv[t[0]], &b = sp.uv[t[1]], &c = sp.uv[t[2]];
+    const double area = 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+    sp.uv_area_sum += area;
+    if (std::abs(area) <= kZeroUvArea) ++sp.zero_area_faces;
+    else if (area < 0) ++sp.flipped_faces;
+  }
 }
 
 }  // namespace qs::param

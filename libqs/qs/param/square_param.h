@@ -69,6 +69,10 @@ struct SquareParam {
 /// \pre the same as parameterize_square (checked: InvalidInput).
 std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch);
 
+/// Counts flipped and zero-area UV faces and sums the signed UV areas of `faces` under sp.uv into
+/// sp (the counts parameterize_square reports), e.g. after the map was changed by a warp.
+void count_uv_faces(const std::vector<Tri>& faces, SquareParam& sp);
+
 /// Border by arc length on each side (3D edge lengths), interior by Floater mean-value weights
 /// w_ij = (tan(a/2) + tan(b/2)) / |p_i - p_j| from the 3D one-ring angles, one sparse LU solve
 /// (Eigen SparseLU, ordering per options.ordering) for u and v together.

@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/problem_list.h"
 
 namespace qs::warp {
 namespace {
@@ -36,8 +37,6 @@ constexpr double kMinArea2 = 1e-15;
 constexpr double kIncircleTolerance = 1e-10;
 /// Delaunay events closer in time than this (in units of one straight leg) count as simultaneous.
 constexpr double kSameTime = 1e-12;
-/// How many items an error message lists per kind of problem.
-constexpr int kMaxListed = 8;
 constexpr int kCorners = 4;
 const std::array<Vec2, kCorners> kCornerPos = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
 
@@ -69,28 +68,6 @@ std::string str(const Vec2& p) {
   return s.str();
 }
 
-/// Collects the problems of one kind and renders "what: item, item, ... (and N more)".
-class ProblemList {
- public:
-  explicit ProblemList(std::string what) : what_(std::move(what)) {}
-  void add(const std::string& item) {
-    if (count_ < kMaxListed) items_.push_back(item);
-    ++count_;
-  }
-  void append_to(std::vector<std::string>& out) const {
-    if (count_ == 0) return;
-    std::ostringstream s;
-    s << what_ << ": ";
-    for (std::size_t i = 0; i < items_.size(); ++i) s << (i ? ", " : "") << items_[i];
-    if (count_ > static_cast<int>(items_.size())) s << " (and " << count_ - items_.size() << " more)";
-    out.push_back(s.str());
-  }
-
- private:
-  std::string what_;
-  std::vector<std::string> items_;
-  int count_ = 0;
-};
 
 /// Pairs (i, j), i < j, of points closer than d to each other (sweep along x), sorted.
 std::vector<std::pair<int, int>> close_pairs(const std::vector<Vec2>& p, double d) {
