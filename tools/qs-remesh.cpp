@@ -138,6 +138,9 @@ int main(int argc, char** argv) {
       text << "\n";
       meshes.push_back(j);
     }
+    // Where the dissection is, seen from the output folder (qs-bake reads the charts through it).
+    const std::string dissection_path =
+        fs::relative(fs::absolute(folder), fs::absolute(outdir)).lexically_normal().generic_string();
     nlohmann::ordered_json sites_patch = nlohmann::ordered_json::array(), sites_uv = nlohmann::ordered_json::array();
     for (int v = 0; v < c.num_vertices(); ++v) {
       sites_patch.push_back(c.vertex_patch[v]);
@@ -147,6 +150,7 @@ int main(int argc, char** argv) {
     nlohmann::ordered_json doc = {{"format", "qs-remesh"},
                                   {"version", 1},
                                   {"dissection", fs::path(folder).filename().string()},
+                                  {"dissection_path", dissection_path},
                                   {"mode", level >= 0 ? "uniform" : "adaptive"},
                                   {"level", c.level},
                                   {"quads", quads},
