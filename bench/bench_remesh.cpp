@@ -1,7 +1,8 @@
 // Benchmark: uniform and adaptive remeshing (paper tables 1 and 2): per mesh and level, the
 // faces, the remesh time after the dissection is loaded, and the Metro error against the
 // original (two-sided mean and max, % of the original's bounding-box diagonal).
-//   usage: qs-bench-remesh [MESH_DIR] [TAU]   (defaults ../shared/meshes, 1.5)
+//   usage: qs-bench-remesh [MESH_DIR] [TAU] [MAX_AREA] [STRETCH_ROUNDS]
+//   (defaults ../shared/meshes, 3, 0.15, 0: qs-dissect --max-area 0.15, the remeshing recipe)
 
 #include <chrono>
 #include <cstdio>
@@ -20,12 +21,15 @@ using Clock = std::chrono::steady_clock;
 
 int main(int argc, char** argv) {
   const fs::path dir = argc > 1 ? argv[1] : QS_SOURCE_DIR "/../shared/meshes";
-  const double tau = argc > 2 ? std::stod(argv[2]) : 1.5;
+  const double tau = argc > 2 ? std::stod(argv[2]) : 3.0;
+  const double max_area = argc > 3 ? std::stod(argv[3]) : 0.15;
+  const int stretch_rounds = argc > 4 ? std::stoi(argv[4]) : 0;
   if (!fs::is_directory(dir)) {
     std::fprintf(stderr, "qs-bench-remesh: %s is not a folder of meshes\n", dir.string().c_str());
     return 2;
   }
-  std::printf("dissection tau %.2f; error = Metro two-sided, %% of the original's bbox diagonal\n\n", tau);
+  std::printf("dissection tau %.2f, max patch area %.3g, stretch rounds %d; error = Metro two-sided, %% of the original's bbox diagonal\n\n", tau, max_area,
+              stretch_rounds);
   std::printf("%-24s %7s %-10s %9s %9s %10s %9s\n", "mesh", "patches", "remesh", "faces", "time_s", "mean_%", "max_%");
   for (const char* name : {"max_planck_11k.obj", "igea_17k.off", "mannequin_head_23k.off", "venus_100k.off",
                            "horse_40k.off", "armadillo_29k.obj"}) {
@@ -33,6 +37,8 @@ int main(int argc, char** argv) {
     const auto v = qs::mesh::validate(r.mesh);
     qs::dissect::DissectOptions o;
     o.tau = tau;
+    o.max_patch_area = max_area;
+    o.stretch_iterations = stretch_rounds;
     const auto d = qs::dissect::dissect(v.mesh, std::nullopt, o);
     auto report = [&](const std::string& what, const qs::TriMesh& m, double sec) {
       const auto e = qs::metro::metro(d.chart.mesh, m);

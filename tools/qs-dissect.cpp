@@ -92,6 +92,16 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 16));
   app.add_flag("--predict-split", opt.predict_split,
                "Choose each split by the children's stretch predicted from the parent's map (experimental, see README)");
+  app.add_option("--optimize-stretch", opt.stretch_iterations,
+                 "Rounds of stretch minimization of each final patch map (better remesh and normal-map sampling; "
+                 "the patches do not change)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 50));
+  app.add_option("--max-area", opt.max_patch_area,
+                 "Also split every patch larger than this fraction of its mesh's area (0: off; evens out remesh "
+                 "sampling, e.g. 0.08)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");

@@ -103,6 +103,20 @@ TEST(DissectSet, DeformedPairGetsOneBaseDomainAndAlignedFeatures) {
       if (p.stretch > o.tau) { EXPECT_NE(p.stop, qs::dissect::StopReason::None) << p.name; }
 }
 
+TEST(DissectSet, StretchMinimizedLeavesKeepFeaturesAligned) {
+  const auto a = qs::shapes::bumpy_sphere(0.08, 3, 4);
+  const auto b = deform(a);
+  const std::vector<qs::Vec3> dirs = {{0.3, 0.2, 1}, {-0.4, 0.5, 0.8}, {0.6, -0.5, 0.7}, {0.2, 0.3, -1}, {-0.5, -0.4, -0.8}};
+  MeshToDissect ma{&a, equator_seeds(a), features_at(a, dirs), "a"};
+  MeshToDissect mb{&b, ma.seeds, features_at(b, dirs), "b"};
+  qs::dissect::DissectOptions o;
+  o.tau = 1.1;
+  o.stretch_iterations = 6;
+  o.max_patch_area = 0.2;
+  const DissectionSet s = qs::dissect::dissect_set({ma, mb}, o);
+  expect_common_structure(s, {a.num_faces(), b.num_faces()});
+}
+
 TEST(DissectSet, UnionTreeHoldsEverySplitOfTheMeshThatNeedsThem) {
   // A smooth ellipsoid needs no split; a star blob needs several. Together, the set's tree must be
   // the star's own tree (its peaks decide every split), and the ellipsoid follows it.

@@ -212,3 +212,43 @@ TEST(Dissect, PredictedSplitKeepsEveryInvariant) {
   for (const auto& n : d.tree)
     if (n.split) { EXPECT_TRUE(n.w >= 0.5 - 1e-12 && n.w <= 0.8 + 1e-12) << n.name; }
 }
+
+TEST(Dissect, AreaCapSplitsLargeSmoothPatches) {
+  const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
+  qs::dissect::DissectOptions o;
+  o.max_patch_area = 0.15;
+  const auto d = qs::dissect::dissect(m, std::nullopt, o);
+  EXPECT_GT(d.chart.patches.size(), 2u) << "the two seed patches are half the surface each";
+  check_dissection(d, m.num_faces());
+  double total = 0;
+  std::vector<double> area(d.chart.patches.size(), 0.0);
+  for (int f = 0; f < d.chart.mesh.num_faces(); ++f) {
+    const auto& t = d.chart.mesh.faces[f];
+    const auto& x = d.chart.mesh.positions;
+    const double a = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
+    area[d.chart.face_patch[f]] += a;
+    total += a;
+  }
+  for (size_t p = 0; p < area.size(); ++p)
+    if (d.chart.patches[p].stop == qs::dissect::StopReason::None) {
+      EXPECT_LE(area[p], 0.15 * total + 1e-12) << d.chart.patches[p].name;
+    }
+}
+
+TEST(Dissect, StretchMinimizedLeavesKeepEveryInvariantAndLowerStretch) {
+  const auto m = qs::shapes::star_blob(4, 1.5, 4);
+  qs::dissect::DissectOptions o;
+  o.tau = 1.4;
+  const auto plain = qs::dissect::dissect(m, std::nullopt, o);
+  o.stretch_iterations = 6;
+  const auto d = qs::dissect::dissect(m, std::nullopt, o);
+  check_dissection(d, m.num_faces());
+  ASSERT_EQ(d.chart.patches.size(), plain.chart.patches.size()) << "the patches do not change";
+  EXPECT_EQ(d.chart.face_patch, plain.chart.face_patch);
+  int lower = 0;
+  for (size_t p = 0; p < d.chart.patches.size(); ++p) {
+    EXPECT_LE(d.chart.patches[p].stretch, plain.chart.patches[p].stretch) << d.chart.patches[p].name;
+    lower += d.chart.patches[p].stretch < plain.chart.patches[p].stretch * 0.999;
+  }
+  EXPECT_GT(lower, 0);
+}

@@ -643,5 +643,24 @@ TEST(SquareParamTest, SolvePerf) {
   }
 }
 
+TEST(SquareParamTest, StretchMinimizationLowersStretchKeepsBorderAndBijectivity) {
+  const PatchMesh p = hemisphere_patch(3);
+  const SquareParam plain = parameterize_square(p);
+  SquareParamOptions o;
+  o.stretch_iterations = 8;
+  const SquareParam opt = parameterize_square(p, o);
+  ASSERT_TRUE(opt.bijective());
+  EXPECT_NEAR(opt.uv_area_sum, 1.0, 1e-9);
+  const double before = l2_stretch(p.positions, p.faces, plain.uv).patch;
+  const double after = l2_stretch(p.positions, p.faces, opt.uv).patch;
+  EXPECT_LT(after, before * 0.99) << "before " << before << ", after " << after;
+  for (int v : p.boundary) EXPECT_EQ(opt.uv[v], plain.uv[v]) << "border vertex " << v << " moved";
+  // A developable patch is already optimal: nothing to gain, the mean-value map is kept.
+  const PatchMesh flat = grid_patch(9, 5, 2, 1);
+  const SquareParam f0 = parameterize_square(flat);
+  const SquareParam f1 = parameterize_square(flat, o);
+  for (size_t v = 0; v < f0.uv.size(); ++v) EXPECT_LT((f0.uv[v] - f1.uv[v]).norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace qs::param

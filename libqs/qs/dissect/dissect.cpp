@@ -422,15 +422,32 @@ void MeshDissector::restore(const Node& node, size_t first_new_label) {
 }
 
 void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) {
+  const param::SquareParam* sp = &p.sp;
+  const param::Stretch* st = &p.st;
+  param::SquareParam min_sp;
+  param::Stretch min_st;
+  if (opt_.stretch_iterations > 0 && p.sp.bijective()) {
+    param::SquareParamOptions po;
+    po.stretch_iterations = opt_.stretch_iterations;
+    for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
+    min_sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+    if (min_sp.bijective()) {
+      min_st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, min_sp.uv);
+      if (min_st.patch < p.st.patch) {
+        sp = &min_sp;
+        st = &min_st;
+      }
+    }
+  }
   info.name = node.name;
   info.corners = node.corners;
   info.faces = static_cast<int>(p.ex.faces.size());
-  info.stretch = p.st.patch;
-  info.flipped_faces = p.sp.flipped_faces;
-  info.zero_area_faces = p.sp.zero_area_faces;
-  info.uv_area_sum = p.sp.uv_area_sum;
+  info.stretch = st->patch;
+  info.flipped_faces = sp->flipped_faces;
+  info.zero_area_faces = sp->zero_area_faces;
+  info.uv_area_sum = sp->uv_area_sum;
   for (size_t lf = 0; lf < p.ex.faces.size(); ++lf)
-    for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = p.sp.uv[p.ex.pm.faces[lf][k]];
+    for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = sp->uv[p.ex.pm.faces[lf][k]];
   leaves_.push_back(node);
   infos_.push_back(std::move(info));
 }
@@ -1004,7 +1021,16 @@ DissectionSet SetDissector::run() {
   DissectionSet out;
   std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
   double total_faces = 0, done_faces = 0;
-  for (const auto& m : in_) total_faces += static_cast<double>(m.mesh->faces.size());
+  std::vector<double> max_area;  // per mesh: opt_.max_patch_area times its surface area
+  for (const auto& m : in_) {
+    total_faces += static_cast<double>(m.mesh->faces.size());
+    double area = 0;
+    for (const Tri& t : m.mesh->faces) {
+      const auto& x = m.mesh->positions;
+      area += 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
+    }
+    max_area.push_back(opt_.max_patch_area > 0 ? opt_.max_patch_area * area : INFINITY);
+  }
   while (!queue.empty()) {
     ctx_.check_cancel();
     const std::vector<Node> nodes = queue.front();
@@ -1021,7 +1047,7 @@ DissectionSet SetDissector::run() {
     bool any_over = false;
     int biggest_over = 0;
     for (size_t i = 0; i < ps.size(); ++i) {
-      over[i] = ps[i].st.patch > opt_.tau || !ps[i].sp.bijective();
+      over[i] = ps[i].st.patch > opt_.tau || !ps[i].sp.bijective() || ps[i].st.area3d > max_area[i];
       if (over[i]) {
         any_over = true;
         biggest_over = std::max(biggest_over, static_cast<int>(ps[i].ex.faces.size()));

@@ -42,6 +42,15 @@ struct DissectOptions {
   /// Choose the split among candidate centres and w by the children's stretch predicted from the
   /// parent's map (see the README); false: the peak and w rule alone.
   bool predict_split = false;
+  /// Rounds of stretch minimization of every leaf's final map (param::SquareParamOptions::
+  /// stretch_iterations; features stay pinned at their aligned (u,v)). It changes no patch,
+  /// only where the samples of a remesh or a normal map land in each patch; a leaf keeps its
+  /// mean-value map when the minimized one is not bijective or not less stretched.
+  int stretch_iterations = 0;
+  /// A patch whose 3D area exceeds this fraction of its mesh's surface area is split too (0: no
+  /// limit). Stretch alone leaves large smooth patches (a skull cap) with as many remesh samples
+  /// as a small one; a cap evens out the sampling density of a remesh.
+  double max_patch_area = 0;
 };
 
 /// Why a patch over tau was left as it is.

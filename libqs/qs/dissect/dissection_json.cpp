@@ -26,7 +26,9 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"feature_cut_margin", options.feature_cut_margin},
                     {"feature_group_distance", options.feature_group_distance},
                     {"relax_rounds", options.relax_rounds},
-                    {"predict_split", options.predict_split}};
+                    {"predict_split", options.predict_split},
+                    {"stretch_iterations", options.stretch_iterations},
+                    {"max_patch_area", options.max_patch_area}};
   if (meshes.empty()) return doc.dump(2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();

@@ -401,48 +401,90 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       }
     }
 
-    std::vector<Eigen::Triplet<double>> triplets;
-    triplets.reserve(he.out.size() + ni);
-    Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
-    for (int i = 0; i < nv; ++i) {
-      const int r = interior_index[i];
-      if (r < 0) continue;
-      const int begin = he.out_offset[i], end = he.out_offset[i + 1];
-      double wmax = 0;
-      bool finite = true;
-      for (int k = begin; k < end; ++k) {
-        const double x = w[he.out[k]];
-        finite = finite && std::isfinite(x);
-        wmax = std::max(wmax, x);
+    // Assembles the system for half-edge weights ww and solves it into result.uv.
+    auto solve_with = [&](const std::vector<double>& ww) {
+      std::vector<Eigen::Triplet<double>> triplets;
+      triplets.reserve(he.out.size() + ni);
+      Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
+      for (int i = 0; i < nv; ++i) {
+        const int r = interior_index[i];
+        if (r < 0) continue;
+        const int begin = he.out_offset[i], end = he.out_offset[i + 1];
+        double wmax = 0;
+        bool finite = true;
+        for (int k = begin; k < end; ++k) {
+          const double x = ww[he.out[k]];
+          finite = finite && std::isfinite(x);
+          wmax = std::max(wmax, x);
+        }
+        // No usable angle at all around i (every face degenerate), or overflow: uniform weights.
+        const bool uniform = !finite || !(wmax > 0);
+        const double floor_w = kRelativeWeightFloor * wmax;
+        double diag = 0;
+        for (int k = begin; k < end; ++k) {
+          const int h = he.out[k];
+          const int j = he_to(faces, h);
+          const double x = uniform ? 1.0 : std::max(ww[h], floor_w);
+          diag += x;
+          if (interior_index[j] >= 0) triplets.emplace_back(r, interior_index[j], -x);
+          else rhs.row(r) += x * result.uv[j].transpose();
+        }
+        triplets.emplace_back(r, r, diag);
       }
-      // No usable angle at all around i (every face degenerate), or overflow: uniform weights.
-      const bool uniform = !finite || !(wmax > 0);
-      const double floor_w = kRelativeWeightFloor * wmax;
-      double diag = 0;
-      for (int k = begin; k < end; ++k) {
-        const int h = he.out[k];
-        const int j = he_to(faces, h);
-        const double x = uniform ? 1.0 : std::max(w[h], floor_w);
-        diag += x;
-        if (interior_index[j] >= 0) triplets.emplace_back(r, interior_index[j], -x);
-        else rhs.row(r) += x * result.uv[j].transpose();
-      }
-      triplets.emplace_back(r, r, diag);
-    }
-    Eigen::SparseMatrix<double> A(ni, ni);
-    A.setFromTriplets(triplets.begin(), triplets.end());
-    triplets = {};
-    context.report("parameterize: factorize", 0.2);
-    context.check_cancel();
+      Eigen::SparseMatrix<double> A(ni, ni);
+      A.setFromTriplets(triplets.begin(), triplets.end());
+      triplets = {};
+      context.report("parameterize: factorize", 0.2);
+      context.check_cancel();
 
-    const Eigen::MatrixX2d x = options.ordering == LuOrdering::SymmetricAmd
-                                   ? solve_symmetric_amd(A, rhs, context)
-                                   : solve_colamd(A, rhs, context);
-    if (!x.allFinite())
-      throw SolverError("parameterize_square: the mean-value solve (" + std::to_string(ni) +
-                        " interior vertices) gave no finite solution");
-    for (int v = 0; v < nv; ++v)
-      if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
+      const Eigen::MatrixX2d x = options.ordering == LuOrdering::SymmetricAmd
+                                     ? solve_symmetric_amd(A, rhs, context)
+                                     : solve_colamd(A, rhs, context);
+      if (!x.allFinite())
+        throw SolverError("parameterize_square: the mean-value solve (" + std::to_string(ni) +
+                          " interior vertices) gave no finite solution");
+      for (int v = 0; v < nv; ++v)
+        if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
+    };
+    solve_with(w);
+
+    // Stretch minimization (Yoshizawa, Belyaev, Seidel 2004): divide every weight w_ij by the
+    // stretch at j (area-weighted RMS of the face stretches around j) and solve again; keep the
+    // lowest-stretch map. Weights stay positive, so with the convex border alone the map stays
+    // bijective (counted all the same); the border never moves.
+    if (options.stretch_iterations > 0) {
+      count_uv_faces(faces, result);
+      std::vector<Vec2> best_uv = result.uv;
+      double best = result.bijective() ? l2_stretch(pos, faces, result.uv).patch : 0;
+      std::vector<double> sum(nv), area(nv);
+      for (int it = 0; it < options.stretch_iterations && std::isfinite(best) && best > 0; ++it) {
+        context.check_cancel();
+        const Stretch st = l2_stretch(pos, faces, result.uv);
+        std::fill(sum.begin(), sum.end(), 0.0);
+        std::fill(area.begin(), area.end(), 0.0);
+        for (int f = 0; f < nf; ++f) {
+          const Tri& t = faces[f];
+          const double a = 0.5 * (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]).norm();
+          for (int v : t) {
+            sum[v] += a * st.face[f] * st.face[f];
+            area[v] += a;
+          }
+        }
+        for (int f = 0; f < nf; ++f)
+          for (int c = 0; c < 3; ++c) {
+            const int j = faces[f][(c + 1) % 3];
+            const double sigma = area[j] > 0 ? std::sqrt(sum[j] / area[j]) : 1.0;
+            if (sigma > 0 && std::isfinite(sigma)) w[3 * f + c] /= sigma;
+          }
+        solve_with(w);
+        count_uv_faces(faces, result);
+        const double now = result.bijective() ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
+        if (!(now < best * (1 - 1e-3))) break;
+        best = now;
+        best_uv = result.uv;
+      }
+      result.uv = std::move(best_uv);
+    }
   }
 
   count_uv_faces(faces, result);
