@@ -102,6 +102,10 @@ int main(int argc, char** argv) {
                  "sampling, e.g. 0.08)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--split-stretch", opt.split_stretch_rounds,
+                 "Stretch-minimization rounds for a patch over tau before it is split (fewer splits on limbs)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 50));
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");

@@ -662,5 +662,42 @@ TEST(SquareParamTest, StretchMinimizationLowersStretchKeepsBorderAndBijectivity)
   for (size_t v = 0; v < f0.uv.size(); ++v) EXPECT_LT((f0.uv[v] - f1.uv[v]).norm(), 1e-12);
 }
 
+TEST(SquareParamTest, StretchMinimizationRepairsAFingerSqueezedToZeroArea) {
+  // A finger (a tube of length 40 radii closed by a cone): the mean-value map shrinks it about
+  // e^(-length / radius), below double precision; stretch minimization spreads it out again.
+  const int around = 16, rings = 80;
+  std::vector<Vec3> pos;
+  std::vector<Tri> faces;
+  for (int k = 0; k <= rings; ++k)
+    for (int a = 0; a < around; ++a) {
+      const double t = 2 * M_PI * (a + 0.5 * (k % 2)) / around;
+      pos.emplace_back(std::cos(t), std::sin(t), 0.5 * k);
+    }
+  auto id = [&](int k, int a) { return k * around + (a % around); };
+  for (int k = 0; k < rings; ++k)
+    for (int a = 0; a < around; ++a) {
+      if (k % 2 == 0) {
+        faces.push_back({id(k, a), id(k, a + 1), id(k + 1, a)});
+        faces.push_back({id(k, a + 1), id(k + 1, a + 1), id(k + 1, a)});
+      } else {
+        faces.push_back({id(k, a), id(k + 1, a + 1), id(k + 1, a)});
+        faces.push_back({id(k, a), id(k, a + 1), id(k + 1, a + 1)});
+      }
+    }
+  const int tip = static_cast<int>(pos.size());
+  pos.emplace_back(0, 0, 0.5 * rings + 1);
+  for (int a = 0; a < around; ++a) faces.push_back({id(rings, a), id(rings, a + 1), tip});
+  const std::vector<int> b = border_loop(faces);
+  const int m = static_cast<int>(b.size());
+  const PatchMesh p = make_patch(std::move(pos), std::move(faces), {b[0], b[m / 4], b[m / 2], b[3 * m / 4]});
+  const SquareParam plain = parameterize_square(p);
+  ASSERT_GT(plain.zero_area_faces + plain.flipped_faces, 0) << "the finger must defeat the plain map";
+  SquareParamOptions o;
+  o.stretch_iterations = 20;
+  const SquareParam opt = parameterize_square(p, o);
+  EXPECT_TRUE(opt.bijective()) << opt.zero_area_faces << " zero-area, " << opt.flipped_faces << " flipped";
+  EXPECT_NEAR(opt.uv_area_sum, 1.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace qs::param

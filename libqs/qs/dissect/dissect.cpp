@@ -69,6 +69,9 @@ struct Extracted {
 enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
 
 // The per-node result of one mesh: its patch extracted and parameterized (after alignment).
+/// Stretch-minimization rounds tried on a leaf that is not bijective.
+constexpr int kRepairRounds = 20;
+
 struct Param {
   Extracted ex;
   param::SquareParam sp;
@@ -372,6 +375,19 @@ Param MeshDissector::parameterize(const Node& node) {
   }
   p.sp = param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
+  if (opt_.split_stretch_rounds > 0 && (p.st.patch > opt_.tau || !p.sp.bijective())) {
+    // Over tau under the mean-value map: judge (and split) the patch by a stretch-minimized map.
+    param::SquareParamOptions po;
+    po.stretch_iterations = opt_.split_stretch_rounds;
+    param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+    if (sp.bijective()) {
+      param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, sp.uv);
+      if (!p.sp.bijective() || st.patch < p.st.patch) {
+        p.sp = std::move(sp);
+        p.st = std::move(st);
+      }
+    }
+  }
   for (size_t i = 0; i < p.ex.verts.size(); ++i) {
     const int v = p.ex.verts[i];
     if (v < static_cast<int>(feature_of_.size()) && feature_of_[v] >= 0)
@@ -426,14 +442,17 @@ void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) 
   const param::Stretch* st = &p.st;
   param::SquareParam min_sp;
   param::Stretch min_st;
-  if (opt_.stretch_iterations > 0 && p.sp.bijective()) {
+  // A leaf left with zero-area UV faces (a protrusion squeezed below double precision at the
+  // depth limit) is repaired the same way, whatever the option says.
+  const int rounds = opt_.stretch_iterations > 0 ? opt_.stretch_iterations : p.sp.bijective() ? 0 : kRepairRounds;
+  if (rounds > 0) {
     param::SquareParamOptions po;
-    po.stretch_iterations = opt_.stretch_iterations;
+    po.stretch_iterations = rounds;
     for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
     min_sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
     if (min_sp.bijective()) {
       min_st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, min_sp.uv);
-      if (min_st.patch < p.st.patch) {
+      if (!p.sp.bijective() || min_st.patch < p.st.patch) {
         sp = &min_sp;
         st = &min_st;
       }

@@ -51,6 +51,9 @@ struct DissectOptions {
   /// limit). Stretch alone leaves large smooth patches (a skull cap) with as many remesh samples
   /// as a small one; a cap evens out the sampling density of a remesh.
   double max_patch_area = 0;
+  /// A patch over tau under its mean-value map gets this many stretch-minimization rounds before
+  /// it is judged: it is split only if still over tau, around the peak of the minimized map.
+  int split_stretch_rounds = 0;
 };
 
 /// Why a patch over tau was left as it is.

@@ -28,7 +28,8 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"relax_rounds", options.relax_rounds},
                     {"predict_split", options.predict_split},
                     {"stretch_iterations", options.stretch_iterations},
-                    {"max_patch_area", options.max_patch_area}};
+                    {"max_patch_area", options.max_patch_area},
+                    {"split_stretch_rounds", options.split_stretch_rounds}};
   if (meshes.empty()) return doc.dump(2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();

@@ -453,20 +453,28 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     // lowest-stretch map. Weights stay positive, so with the convex border alone the map stays
     // bijective (counted all the same); the border never moves.
     if (options.stretch_iterations > 0) {
+      // Faces without UV area have no finite stretch: they count as 10x the largest finite one,
+      // so that a map squeezed to zero area in floating point is pushed apart too.
       count_uv_faces(faces, result);
       std::vector<Vec2> best_uv = result.uv;
-      double best = result.bijective() ? l2_stretch(pos, faces, result.uv).patch : 0;
+      int best_bad = result.flipped_faces + result.zero_area_faces;
+      double best = best_bad == 0 ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
       std::vector<double> sum(nv), area(nv);
-      for (int it = 0; it < options.stretch_iterations && std::isfinite(best) && best > 0; ++it) {
+      for (int it = 0; it < options.stretch_iterations; ++it) {
         context.check_cancel();
         const Stretch st = l2_stretch(pos, faces, result.uv);
+        double cap = 0;
+        for (double x : st.face)
+          if (std::isfinite(x)) cap = std::max(cap, x);
+        cap = cap > 0 ? 10 * cap : 1e6;
         std::fill(sum.begin(), sum.end(), 0.0);
         std::fill(area.begin(), area.end(), 0.0);
         for (int f = 0; f < nf; ++f) {
           const Tri& t = faces[f];
           const double a = 0.5 * (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]).norm();
+          const double x = std::isfinite(st.face[f]) ? st.face[f] : cap;
           for (int v : t) {
-            sum[v] += a * st.face[f] * st.face[f];
+            sum[v] += a * x * x;
             area[v] += a;
           }
         }
@@ -478,10 +486,15 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
           }
         solve_with(w);
         count_uv_faces(faces, result);
-        const double now = result.bijective() ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
-        if (!(now < best * (1 - 1e-3))) break;
-        best = now;
-        best_uv = result.uv;
+        const int bad = result.flipped_faces + result.zero_area_faces;
+        const double now = bad == 0 ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
+        if (bad < best_bad || (bad == 0 && now < best * (1 - 1e-3))) {
+          best_bad = bad;
+          best = now;
+          best_uv = result.uv;
+        } else if (best_bad == 0) {
+          break;  // bijective and no longer improving
+        }
       }
       result.uv = std::move(best_uv);
     }

@@ -36,7 +36,7 @@ struct SquareParamOptions {
   /// Border spacing floor, relative: on each side, every border edge counts as at least this
   /// fraction of the side's mean edge length, so coincident border vertices stay apart in UV.
   /// In [0, 1); 0 gives pure arc length.
-  double min_border_spacing = 1e-6;
+  double min_border_spacing = 1e-4;
   LuOrdering ordering = LuOrdering::SymmetricAmd;  ///< both give the same map (to rounding)
   /// Interior vertices held at given (u,v) like the border (feature alignment): (local id, uv),
   /// ids distinct, not on the boundary loop, uv inside the square. With pins the map may fold
