@@ -69,7 +69,7 @@ struct Extracted {
 enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
 
 // The per-node result of one mesh: its patch extracted and parameterized (after alignment).
-/// Stretch-minimization rounds tried on a leaf that is not bijective.
+/// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
 constexpr int kRepairRounds = 20;
 
 struct Param {
@@ -442,21 +442,45 @@ void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) 
   const param::Stretch* st = &p.st;
   param::SquareParam min_sp;
   param::Stretch min_st;
-  // A leaf left with zero-area UV faces (a protrusion squeezed below double precision at the
-  // depth limit) is repaired the same way, whatever the option says.
-  const int rounds = opt_.stretch_iterations > 0 ? opt_.stretch_iterations : p.sp.bijective() ? 0 : kRepairRounds;
+  // A leaf left over tau or with zero-area UV faces (a protrusion squeezed below double
+  // precision at the depth limit) is repaired the same way, whatever the option says.
+  const bool exception = !p.sp.bijective() || p.st.patch > opt_.tau;
+  const int rounds = exception ? std::max(opt_.stretch_iterations, kRepairRounds) : opt_.stretch_iterations;
   if (rounds > 0) {
+    // Minimize without pins (pins inside a squeezed protrusion defeat it), then warp the
+    // features back onto their aligned (u,v): the spread-out map folds far less under the warp.
     param::SquareParamOptions po;
     po.stretch_iterations = rounds;
-    for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
-    min_sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
-    if (min_sp.bijective()) {
+    try {
+      min_sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+      if (!p.features.empty()) {
+        std::vector<Vec2> from, to;
+        for (const auto& [k, local] : p.features) {
+          from.push_back(min_sp.uv[local]);
+          to.push_back(p.sp.uv[local]);
+        }
+        min_sp.uv = warp::warp_square(from, to, min_sp.uv, {}, ctx_.without_progress()).points;
+        param::count_uv_faces(p.ex.pm.faces, min_sp);
+        if (!min_sp.bijective()) {
+          std::vector<char> fixed(p.ex.verts.size(), 0);
+          for (const auto& f : p.features) fixed[f.second] = 1;
+          min_sp = untangle(p.ex.pm, min_sp, fixed, 20);
+        }
+      }
+    } catch (const Error&) {
+      min_sp = {};  // a singular system or features the warp cannot place: keep the given map
+    }
+    if (!min_sp.uv.empty() && min_sp.bijective()) {
       min_st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, min_sp.uv);
       if (!p.sp.bijective() || min_st.patch < p.st.patch) {
         sp = &min_sp;
         st = &min_st;
       }
     }
+  }
+  if (sp->bijective() && st->patch <= opt_.tau) {  // repaired: no longer an exception
+    info.stop = StopReason::None;
+    info.stop_detail.clear();
   }
   info.name = node.name;
   info.corners = node.corners;

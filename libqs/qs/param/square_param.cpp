@@ -272,27 +272,39 @@ Eigen::MatrixX2d solve_colamd(const Eigen::SparseMatrix<double>& A, const Eigen:
   return x;
 }
 
+/// What a repeated solve with the same pattern (stretch minimization) keeps: the AMD ordering
+/// and the LU's symbolic analysis.
+struct SymbolicCache {
+  bool ready = false;
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::NaturalOrdering<int>> lu;
+};
+
 /// The matrix is structurally symmetric and row diagonally dominant: order rows and columns
 /// together by AMD on its pattern (P^T A P), then factor with SparseLU in symmetric mode and a
 /// low diagonal-pivot threshold so that the diagonal pivots (and the symmetric fill) are kept.
 /// Gaussian elimination needs no pivoting on a row diagonally dominant matrix (growth <= 2).
 Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs,
-                                     const Context& context) {
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm;
-  Eigen::AMDOrdering<int> amd;
-  amd(A, perm);
-  Eigen::SparseMatrix<double> B = perm.transpose() * A * perm;
+                                     const Context& context, SymbolicCache& cache) {
+  if (!cache.ready) {
+    Eigen::AMDOrdering<int> amd;
+    amd(A, cache.perm);
+  }
+  Eigen::SparseMatrix<double> B = cache.perm.transpose() * A * cache.perm;
   B.makeCompressed();
-  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::NaturalOrdering<int>> lu;
-  lu.isSymmetric(true);
-  lu.setPivotThreshold(kDiagonalPivotThreshold);
-  lu.analyzePattern(B);
+  auto& lu = cache.lu;
+  if (!cache.ready) {
+    lu.isSymmetric(true);
+    lu.setPivotThreshold(kDiagonalPivotThreshold);
+    lu.analyzePattern(B);
+    cache.ready = true;
+  }
   lu.factorize(B);
   if (lu.info() != Eigen::Success) throw_factorization(A.rows(), lu.lastErrorMessage());
   context.report("parameterize: solve", 0.9);
-  const Eigen::MatrixX2d y = lu.solve(perm.transpose() * rhs);
+  const Eigen::MatrixX2d y = lu.solve(cache.perm.transpose() * rhs);
   if (lu.info() != Eigen::Success) throw_factorization(A.rows(), "the solve failed");
-  return perm * y;
+  return cache.perm * y;
 }
 
 }  // namespace
@@ -402,6 +414,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     }
 
     // Assembles the system for half-edge weights ww and solves it into result.uv.
+    SymbolicCache symbolic;
     auto solve_with = [&](const std::vector<double>& ww) {
       std::vector<Eigen::Triplet<double>> triplets;
       triplets.reserve(he.out.size() + ni);
@@ -438,7 +451,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       context.check_cancel();
 
       const Eigen::MatrixX2d x = options.ordering == LuOrdering::SymmetricAmd
-                                     ? solve_symmetric_amd(A, rhs, context)
+                                     ? solve_symmetric_amd(A, rhs, context, symbolic)
                                      : solve_colamd(A, rhs, context);
       if (!x.allFinite())
         throw SolverError("parameterize_square: the mean-value solve (" + std::to_string(ni) +
@@ -478,13 +491,26 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
             area[v] += a;
           }
         }
+        std::vector<double> sigma(nv, 1.0);
+        for (int v = 0; v < nv; ++v)
+          if (area[v] > 0 && sum[v] > 0 && std::isfinite(sum[v])) sigma[v] = std::sqrt(sum[v] / area[v]);
+        std::fill(sum.begin(), sum.end(), 0.0);  // reused: the largest weight of each row
         for (int f = 0; f < nf; ++f)
           for (int c = 0; c < 3; ++c) {
-            const int j = faces[f][(c + 1) % 3];
-            const double sigma = area[j] > 0 ? std::sqrt(sum[j] / area[j]) : 1.0;
-            if (sigma > 0 && std::isfinite(sigma)) w[3 * f + c] /= sigma;
+            double& x = w[3 * f + c];
+            x /= sigma[faces[f][(c + 1) % 3]];
+            sum[faces[f][c]] = std::max(sum[faces[f][c]], x);
           }
-        solve_with(w);
+        // Rows rescaled to a largest weight of 1 (the map does not change): repeated divisions
+        // would otherwise underflow.
+        for (int f = 0; f < nf; ++f)
+          for (int c = 0; c < 3; ++c)
+            if (sum[faces[f][c]] > 0) w[3 * f + c] /= sum[faces[f][c]];
+        try {
+          solve_with(w);
+        } catch (const SolverError&) {
+          break;  // keep the best map so far
+        }
         count_uv_faces(faces, result);
         const int bad = result.flipped_faces + result.zero_area_faces;
         const double now = bad == 0 ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
