@@ -68,10 +68,10 @@ struct Extracted {
 
 enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
 
-// The per-node result of one mesh: its patch extracted and parameterized (after alignment).
 /// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
 constexpr int kRepairRounds = 20;
 
+// The per-node result of one mesh: its patch extracted and parameterized (after alignment).
 struct Param {
   Extracted ex;
   param::SquareParam sp;
@@ -141,6 +141,16 @@ class MeshDissector {
   }
   int insert_feature(const Feature& f);
   Extracted extract(const Node& node);
+  /// p.features from p.ex: (feature index, local vertex), sorted.
+  void collect_features(Param& p) const {
+    p.features.clear();
+    for (size_t i = 0; i < p.ex.verts.size(); ++i) {
+      const int v = p.ex.verts[i];
+      if (v < static_cast<int>(feature_of_.size()) && feature_of_[v] >= 0)
+        p.features.emplace_back(feature_of_[v], static_cast<int>(i));
+    }
+    std::sort(p.features.begin(), p.features.end());
+  }
   int insert_point(int label, const Vec2& q, bool snap);
   std::vector<int> trace(int label, int a, int b);
 
@@ -375,25 +385,29 @@ Param MeshDissector::parameterize(const Node& node) {
   }
   p.sp = param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
-  if (opt_.split_stretch_rounds > 0 && (p.st.patch > opt_.tau || !p.sp.bijective())) {
-    // Over tau under the mean-value map: judge (and split) the patch by a stretch-minimized map.
+  collect_features(p);
+  // A map squeezed to zero area (a long protrusion) that holds features is spread out by stretch
+  // minimization, so that the features can be aligned (measured: it changes the tree of a mesh
+  // without features for the worse as often as for the better). With the option, every patch
+  // over tau is judged (and split) by its minimized map.
+  const bool squeezed = !p.sp.bijective() && !p.features.empty();
+  if (squeezed || (opt_.split_stretch_rounds > 0 && p.st.patch > opt_.tau)) {
     param::SquareParamOptions po;
-    po.stretch_iterations = opt_.split_stretch_rounds;
-    param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
-    if (sp.bijective()) {
-      param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, sp.uv);
-      if (!p.sp.bijective() || st.patch < p.st.patch) {
-        p.sp = std::move(sp);
-        p.st = std::move(st);
+    po.stretch_iterations = squeezed ? std::max(opt_.split_stretch_rounds, kRepairRounds) : opt_.split_stretch_rounds;
+    try {
+      param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+      const int bad = sp.flipped_faces + sp.zero_area_faces;
+      if (bad < p.sp.flipped_faces + p.sp.zero_area_faces) {
+        param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, sp.uv);
+        if (squeezed || st.patch < p.st.patch) {
+          p.sp = std::move(sp);
+          p.st = std::move(st);
+        }
       }
+    } catch (const SolverError&) {
+      // keep the mean-value map
     }
   }
-  for (size_t i = 0; i < p.ex.verts.size(); ++i) {
-    const int v = p.ex.verts[i];
-    if (v < static_cast<int>(feature_of_.size()) && feature_of_[v] >= 0)
-      p.features.emplace_back(feature_of_[v], static_cast<int>(i));
-  }
-  std::sort(p.features.begin(), p.features.end());
   for (int b : p.ex.pm.boundary)
     for (const auto& [k, local] : p.features)
       if (local == b)
