@@ -351,7 +351,7 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
     for (const Tri& t : pm.faces)
       if (signed_area(cur.uv[t[0]], cur.uv[t[1]], cur.uv[t[2]]) <= param::kZeroUvArea)
         for (int v : t) mark[v] = 1;
-    for (int ring = 0; ring < 2; ++ring) {
+    for (int ring = 0; ring < 2 + r; ++ring) {  // a wider region every round
       std::vector<char> grown = mark;
       for (int v = 0; v < nv; ++v)
         if (mark[v])
@@ -479,6 +479,12 @@ void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) 
           std::vector<char> fixed(p.ex.verts.size(), 0);
           for (const auto& f : p.features) fixed[f.second] = 1;
           min_sp = untangle(p.ex.pm, min_sp, fixed, 20);
+        }
+        if (!min_sp.bijective()) {  // then try minimizing with the features pinned
+          for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
+          param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+          if (pinned.flipped_faces + pinned.zero_area_faces < min_sp.flipped_faces + min_sp.zero_area_faces)
+            min_sp = std::move(pinned);
         }
       }
     } catch (const Error&) {
