@@ -27,6 +27,7 @@ struct MorphTarget {
   std::string name;                     ///< goes to mesh.extras.targetNames
   std::vector<Vec3> position_deltas;    ///< #V
   std::vector<Vec3> normal_deltas;      ///< #V, or empty when the mesh has no normals
+  std::vector<Vec3> tangent_deltas;     ///< #V xyz deltas, or empty (needs mesh tangents)
 };
 
 /// A weights animation of the mesh's node: at times[k] the target weights are weights[k]
@@ -67,11 +68,24 @@ struct Mesh {
 /// 1e-3, tangent w = +-1, animation shapes). \throws InvalidInput naming the field.
 void check_mesh(const Mesh& mesh);
 
-/// The GLB file's bytes; deterministic (same mesh, same bytes). \throws InvalidInput (check_mesh).
+/// The GLB file's bytes; deterministic (same mesh, same bytes). Floats are float32; normals and
+/// tangent xyz are renormalized and tangent w written as exactly +-1; indices are uint16 when
+/// #V <= 65535, else uint32; every buffer view starts on a 4-byte boundary; mesh.weights is
+/// always written when there are targets (zeros when default_weights is empty).
+/// \throws InvalidInput (check_mesh).
 std::vector<unsigned char> glb_bytes(const Mesh& mesh);
 
 /// Writes the GLB atomically (a temporary beside it, renamed on success).
 /// \throws InvalidInput (check_mesh), IoError.
 void write_glb(const std::filesystem::path& path, const Mesh& mesh);
+
+/// Reads back the first triangle primitive of the first mesh of a GLB (or .gltf) file: positions,
+/// faces, NORMAL, TEXCOORD_0, TANGENT, the material (images as their encoded bytes, never decoded),
+/// morph targets (POSITION / NORMAL / TANGENT deltas, names from mesh.extras.targetNames) and
+/// mesh.weights.
+/// Animations are not read. Float attributes only (no normalized integers, no sparse accessors).
+/// \throws IoError (missing or unreadable file); InvalidInput (not glTF, or a layout named above
+/// as unsupported), naming the file and the element.
+Mesh read_glb(const std::filesystem::path& path);
 
 }  // namespace qs::gltf

@@ -1,0 +1,99 @@
+#include "qs/morph/blend.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "qs/core/error.h"
+
+namespace qs::morph {
+
+std::vector<PathFrame> path_frames(int num_shapes, const std::vector<int>& stops, int frames) {
+  if (frames < 2) throw InvalidInput("a morph path needs at least 2 frames (got " + std::to_string(frames) + ")");
+  if (stops.size() < 2)
+    throw InvalidInput("a morph path needs at least 2 stops (got " + std::to_string(stops.size()) + ")");
+  for (size_t k = 0; k < stops.size(); ++k)
+    if (stops[k] < 0 || stops[k] >= num_shapes)
+      throw InvalidInput("path stop " + std::to_string(k) + " is shape " + std::to_string(stops[k]) + ", not in [0, " +
+                         std::to_string(num_shapes) + ")");
+  const int legs = static_cast<int>(stops.size()) - 1;
+  std::vector<PathFrame> out(frames);
+  for (int f = 0; f < frames; ++f) {
+    PathFrame& fr = out[f];
+    // f * legs is an exact integer, so the first and last frames land exactly on 0 and legs.
+    fr.s = static_cast<double>(f) * legs / (frames - 1);
+    fr.leg = std::min(static_cast<int>(std::floor(fr.s)), legs - 1);
+    fr.t = fr.s - fr.leg;
+    fr.weights.assign(num_shapes, 0.0);
+    fr.weights[stops[fr.leg]] += 1.0 - fr.t;
+    fr.weights[stops[fr.leg + 1]] += fr.t;
+  }
+  return out;
+}
+
+void check_weights(const std::vector<double>& weights, int num_shapes) {
+  if (static_cast<int>(weights.size()) != num_shapes)
+    throw InvalidInput("blend weights: " + std::to_string(weights.size()) + " given, expected one per shape (" +
+                       std::to_string(num_shapes) + ")");
+  double sum = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    if (!std::isfinite(weights[i]) || weights[i] < 0) {
+      std::ostringstream s;
+      s << "blend weights: weight " << i + 1 << " is " << weights[i] << "; every weight must be >= 0 (no extrapolation)";
+      throw InvalidInput(s.str());
+    }
+    sum += weights[i];
+  }
+  if (std::abs(sum - 1) > 1e-6) {
+    std::ostringstream s;
+    s.precision(17);
+    s << "blend weights: they sum to " << sum << ", expected 1 (within 1e-6)";
+    throw InvalidInput(s.str());
+  }
+}
+
+std::vector<Vec3> blend(const std::vector<std::vector<Vec3>>& positions, const std::vector<double>& weights) {
+  check_weights(weights, static_cast<int>(positions.size()));
+  const size_t nv = positions.empty() ? 0 : positions[0].size();
+  for (size_t i = 1; i < positions.size(); ++i)
+    if (positions[i].size() != nv)
+      throw InvalidInput("blend: shape " + std::to_string(i) + " has " + std::to_string(positions[i].size()) +
+                         " vertices, shape 0 has " + std::to_string(nv));
+  std::vector<Vec3> out(nv, Vec3::Zero());
+  bool first = true;
+  for (size_t i = 0; i < positions.size(); ++i) {
+    const double w = weights[i];
+    if (w == 0) continue;
+    const auto& p = positions[i];
+    if (first) {
+      for (size_t v = 0; v < nv; ++v) out[v] = w * p[v];  // w == 1: an exact copy
+      first = false;
+    } else {
+      for (size_t v = 0; v < nv; ++v) out[v] += w * p[v];
+    }
+  }
+  return out;
+}
+
+std::vector<Vec3> vertex_normals(const std::vector<Vec3>& positions, const std::vector<Tri>& faces) {
+  std::vector<Vec3> n(positions.size(), Vec3::Zero());
+  for (const Tri& t : faces) {
+    // |cross| = twice the area: the sum is area-weighted.
+    const Vec3 c = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
+    for (int v : t) n[v] += c;
+  }
+  for (Vec3& v : n) {
+    const double len = v.norm();
+    v = len > 0 && std::isfinite(len) ? Vec3(v / len) : Vec3(0, 0, 1);
+  }
+  return n;
+}
+
+int shape_index(const std::vector<std::string>& names, const std::string& name) {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<int>(i);
+  std::string known;
+  for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+  throw InvalidInput("unknown shape '" + name + "'; the shapes are: " + known);
+}
+
+}  // namespace qs::morph

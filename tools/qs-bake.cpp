@@ -1,0 +1,256 @@
+// qs-bake: normal-map atlases for the meshes of a qs-remesh output, and a GLB per mesh (the coarse
+// remesh with texture coordinates, normals, tangents and the map). Reads REMESH_DIR/remesh.json,
+// its meshes and the dissection they were made from; writes into OUTDIR per mesh
+// <stem>_normal.png (+ <stem>_normal16.png / <stem>_normal.exr on request) and <stem>.glb, and
+// bake.json (options, atlas layout, files, measured shading angles).
+//
+// Exit codes: 0 done, 1 usage, 2 invalid input (a folder that is not a consistent remesh +
+// dissection), 3 i/o (missing folder or file, unwritable output), 70 internal error.
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "qs/bake/bake.h"
+#include "qs/bake/export_glb.h"
+#include "qs/bake/image_io.h"
+#include "qs/core/atomic_file.h"
+#include "qs/core/error.h"
+#include "qs/dissect/dissection_json.h"
+#include "qs/gltf/glb.h"
+#include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/remesh_io.h"
+#include "tool_main.h"
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+void write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes) {
+  qs::AtomicFile file(path);
+  file.stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  file.commit();
+}
+
+// Throws InvalidInput unless the remesh positions are the chart's points at their (patch, u, v):
+// the remesh was made from this dissection.
+void check_positions(const qs::remesh::ChartSampler& sampler, const qs::remesh::SemiRegularConnectivity& c,
+                     const std::vector<qs::Vec3>& positions, const std::string& file) {
+  const std::vector<qs::Vec3> expected = qs::remesh::sample_positions(sampler, c);
+  const double tol = 1e-6 * sampler.bbox_diagonal();
+  for (size_t v = 0; v < expected.size(); ++v)
+    if (!((expected[v] - positions[v]).norm() <= tol)) {
+      std::ostringstream m;
+      m << file << ": vertex " << v << " is " << (expected[v] - positions[v]).norm()
+        << " away from its (patch, u, v) point on the chart: the remesh was not made from this dissection (or its "
+           "file was edited)";
+      throw qs::InvalidInput(m.str());
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Bake tangent-space (or object-space) normal maps of the original meshes onto their semi-regular remeshes:\n"
+               "one atlas per mesh (a tile per patch), and a GLB with the coarse mesh, its tangents and the map.\n"
+               "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 70 internal.",
+               "qs-bake"};
+  std::string folder, outdir, dissection, space = "tangent", green = "opengl";
+  std::vector<std::string> formats;
+  int size = 256, gutter = 4, samples = 100000;
+  bool quiet = false;
+  app.add_option("remesh", folder, "A qs-remesh output folder (remesh.json + meshes)")->required();
+  app.add_option("--size", size, "Tile size S: texels per patch side")->capture_default_str()->check(CLI::Range(2, 16384));
+  app.add_option("--space", space, "Normal space")->capture_default_str()->check(CLI::IsMember({"tangent", "object"}));
+  app.add_option("--green", green, "Green channel convention of tangent-space maps: opengl (+Y up) or directx (-Y)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"opengl", "directx"}));
+  app.add_option("--gutter", gutter, "Texels around each tile, filled from the tile's edge texels")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1024));
+  app.add_option("--format", formats, "Extra map files: png16, exr (png8 is always written)")
+      ->check(CLI::IsMember({"png8", "png16", "exr"}));
+  app.add_option("--dissection", dissection,
+                 "The dissection folder the remesh was made from (default: remesh.json's dissection_path)");
+  app.add_option("--samples", samples, "Surface points for the shading check (0: skip it)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100000000));
+  app.add_option("-o,--output", outdir, "Output folder (default: <remesh>/bake-<size>)");
+  app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
+
+  return qs::tools::run_tool(app, argc, argv, [&] {
+    if (space == "object" && green == "directx")
+      throw qs::UsageError("--green applies to tangent-space maps only; drop it with --space object");
+    qs::bake::BakeOptions opt;
+    opt.tile_size = size;
+    opt.gutter = gutter;
+    opt.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
+    opt.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
+    std::vector<qs::bake::ImageFormat> extra;
+    for (const auto& f : std::set<std::string>(formats.begin(), formats.end())) {
+      if (f == "png16") extra.push_back(qs::bake::ImageFormat::Png16);
+      if (f == "exr") extra.push_back(qs::bake::ImageFormat::Exr);
+    }
+
+    // Load and check everything before writing anything.
+    const auto t0 = Clock::now();
+    if (!fs::exists(folder)) throw qs::IoError(folder + ": no such folder (expected a qs-remesh output folder)");
+    if (!fs::is_directory(folder)) throw qs::IoError(folder + ": not a folder (expected a qs-remesh output folder)");
+    const qs::remesh::LoadedRemesh rm = qs::remesh::read_remesh(folder);
+    const fs::path dfolder = dissection.empty() ? rm.dissection_folder : fs::path(dissection);
+    if (!fs::exists(dfolder / "dissection.json"))
+      throw qs::IoError((fs::path(folder) / "remesh.json").string() + " was made from the dissection " + dfolder.lexically_normal().string() +
+                        ", which has no dissection.json (moved or deleted?); qs-bake needs the dissection's charts: "
+                        "pass --dissection DIR");
+    const qs::dissect::LoadedDissection ds = qs::dissect::read_dissection(dfolder);
+    if (ds.meshes.size() != rm.outputs.size())
+      throw qs::InvalidInput(dfolder.string() + ": " + std::to_string(ds.meshes.size()) + " meshes, the remesh " +
+                             std::to_string(rm.outputs.size()) + ": not the dissection it was made from");
+    const auto& c = rm.set.connectivity;
+    std::vector<std::unique_ptr<qs::remesh::ChartSampler>> samplers;
+    for (size_t i = 0; i < ds.meshes.size(); ++i) {
+      const auto& dm = ds.meshes[i];
+      if (!rm.sources[i].empty() && rm.sources[i] != dm.file)
+        throw qs::InvalidInput((fs::path(folder) / "remesh.json").string() + ": mesh " + std::to_string(i) + " is " +
+                               rm.sources[i] + ", the dissection's is " + dm.file + ": not the dissection it was made from");
+      if (static_cast<int>(dm.dissection.chart.patches.size()) != c.num_patches)
+        throw qs::InvalidInput(dfolder.string() + ": " + std::to_string(dm.dissection.chart.patches.size()) +
+                               " patches, the remesh " + std::to_string(c.num_patches) +
+                               ": not the dissection it was made from");
+      samplers.push_back(std::make_unique<qs::remesh::ChartSampler>(dm.dissection.chart));
+      check_positions(*samplers.back(), c, rm.set.positions[i], (fs::path(folder) / rm.outputs[i]).string());
+    }
+    const qs::bake::AtlasLayout layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
+    const double load_seconds = seconds_since(t0);
+
+    if (outdir.empty()) outdir = (fs::path(folder) / ("bake-" + std::to_string(size))).string();
+    std::error_code ec;
+    fs::create_directories(outdir, ec);
+    if (!fs::is_directory(outdir))
+      throw qs::IoError(outdir + ": cannot create the output folder" + (ec ? " (" + ec.message() + ")" : std::string()));
+
+    if (!quiet)
+      std::cout << "bake " << rm.outputs.size() << " meshes, " << c.num_patches << " patches, " << size << " x " << size
+                << " tiles, gutter " << gutter << ": atlas " << layout.width() << " x " << layout.height() << " ("
+                << layout.columns << " x " << layout.rows << " tiles), " << space << " space"
+                << (opt.space == qs::bake::NormalSpace::Tangent ? ", " + green + " green" : std::string()) << "\n"
+                << std::fixed << std::setprecision(3);
+    nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
+    double bake_seconds = 0, write_seconds = 0, check_seconds = 0;
+    for (size_t i = 0; i < rm.outputs.size(); ++i) {
+      const std::string& stem = rm.stems[i];
+      auto t = Clock::now();
+      qs::bake::BakeOptions mesh_opt = opt;
+      mesh_opt.original_vertices = ds.meshes[i].input_vertices;  // the chart keeps the input's vertices first
+      qs::Context ctx;  // progress on a terminal only
+      if (!quiet && ::isatty(2))
+        ctx.progress = [&](const std::string&, double f) {
+          std::cerr << "\r  " << stem << ": baking " << static_cast<int>(100 * f) << "%" << (f >= 1 ? "\r\033[K" : "")
+                    << std::flush;
+        };
+      const qs::bake::BakeResult r = qs::bake::bake_normal_map(*samplers[i], c, rm.set.positions[i], mesh_opt, ctx);
+      const double bs = seconds_since(t);
+      bake_seconds += bs;
+      t = Clock::now();
+      const qs::bake::Rgb8Image img8 = qs::bake::quantize8(r.atlas);
+      const std::vector<unsigned char> png8 = qs::bake::encode_png8(img8);
+      nlohmann::ordered_json files = {{"png8", stem + qs::bake::file_suffix(qs::bake::ImageFormat::Png8)}};
+      write_bytes(fs::path(outdir) / files["png8"].get<std::string>(), png8);
+      for (auto f : extra) {
+        const std::string name = stem + qs::bake::file_suffix(f);
+        write_bytes(fs::path(outdir) / name, qs::bake::encode_image(r.atlas, f));
+        files[qs::bake::to_string(f)] = name;
+      }
+      const qs::gltf::Mesh g = qs::bake::to_gltf_mesh(r, png8, stem);
+      qs::gltf::write_glb(fs::path(outdir) / (stem + ".glb"), g);
+      write_seconds += seconds_since(t);
+      t = Clock::now();
+      nlohmann::ordered_json j = {{"remesh", rm.outputs[i]},
+                                  {"source", ds.meshes[i].file},
+                                  {"chart", ds.meshes[i].chart_file},
+                                  {"maps", files},
+                                  {"glb", stem + ".glb"},
+                                  {"glb_vertices", r.mesh.num_vertices()},
+                                  {"glb_faces", r.mesh.num_faces()},
+                                  {"glb_normal_texture", opt.space == qs::bake::NormalSpace::Tangent}};
+      std::ostringstream line;
+      line << std::fixed << std::setprecision(3) << "  " << stem << ": bake " << bs << " s, GLB " << r.mesh.num_vertices()
+           << " vertices (" << c.num_vertices() << " before the per-patch split)";
+      if (samples > 0) {
+        qs::bake::ShadingCheckOptions co;
+        co.samples = samples;
+        const qs::bake::ShadingCheck s = qs::bake::check_shading(*samplers[i], r, img8, co);
+        j["shading"] = {{"samples", s.samples},
+                        {"seed", co.seed},
+                        {"mean_deg_with_map", s.mean_with_map},
+                        {"p95_deg_with_map", s.p95_with_map},
+                        {"max_deg_with_map", s.max_with_map},
+                        {"mean_deg_without_map", s.mean_without_map},
+                        {"p95_deg_without_map", s.p95_without_map},
+                        {"max_deg_without_map", s.max_without_map}};
+        line << std::setprecision(2) << "; shaded vs original normal: mean " << s.mean_with_map << " deg with the map, "
+             << s.mean_without_map << " deg without";
+      }
+      check_seconds += seconds_since(t);
+      meshes.push_back(j);
+      if (!quiet) std::cout << line.str() << "\n" << std::flush;
+    }
+
+    nlohmann::ordered_json patches = nlohmann::ordered_json::array();
+    const auto& names = ds.meshes[0].dissection.chart.patches;
+    for (int p = 0; p < layout.num_patches; ++p)
+      patches.push_back({{"patch", p},
+                         {"name", names[p].name},
+                         {"x", layout.tile_x(p)},
+                         {"y", layout.tile_y(p)},
+                         {"width", size},
+                         {"height", size}});
+    nlohmann::ordered_json doc = {
+        {"format", "qs-bake"},
+        {"version", 1},
+        {"remesh", fs::relative(fs::absolute(folder), fs::absolute(outdir)).lexically_normal().generic_string()},
+        {"dissection", fs::relative(fs::absolute(dfolder), fs::absolute(outdir)).lexically_normal().generic_string()},
+        {"options",
+         {{"size", size},
+          {"gutter", gutter},
+          {"space", space},
+          {"green", opt.space == qs::bake::NormalSpace::Tangent ? green : std::string("none")},
+          {"formats", [&] {
+             nlohmann::ordered_json f = {"png8"};
+             for (auto e : extra) f.push_back(qs::bake::to_string(e));
+             return f;
+           }()},
+          {"samples", samples},
+          {"original_normals", "angle-weighted at the input's vertices, interpolated along the input's edges and "
+                               "faces at vertices inserted by the cuts"}}},
+        {"atlas",
+         {{"columns", layout.columns},
+          {"rows", layout.rows},
+          {"tile_size", size},
+          {"gutter", gutter},
+          {"width", layout.width()},
+          {"height", layout.height()},
+          {"encoding", "x*0.5+0.5 per channel, linear"},
+          {"texel_centres", "texel (i,j) of a tile, j from the top, is (u,v) = (i/(S-1), 1-j/(S-1))"},
+          {"texcoord", "s = (x + 0.5 + u*(S-1)) / width, t = (y + 0.5 + (1-v)*(S-1)) / height"},
+          {"patches", patches}}},
+        {"meshes", meshes}};
+    qs::write_file_atomically(fs::path(outdir) / "bake.json", doc.dump(1) + "\n");
+    if (!quiet)
+      std::cout << "  wrote " << rm.outputs.size() << " maps + GLBs and bake.json to " << outdir << "\n  time: load "
+                << load_seconds << " s, bake " << bake_seconds << " s, encode + write " << write_seconds << " s, check "
+                << check_seconds << " s\n";
+    return 0;
+  });
+}
