@@ -1,33 +1,48 @@
 #!/usr/bin/env bash
 # The main job on the bundled examples: installs dependencies if missing, builds, and runs the
-# pipeline on examples/. Today the pipeline is: read and validate every example mesh, dissect
-# each into quad patches, render the patch layouts to a PNG, then dissect the cat and the koala
-# together (one set of common patches) and remesh the pair at uniform level 4 and adaptively.
+# whole pipeline on the three quadrupeds of examples/ (spot_2k, cat_16k, koala_7k, with their
+# landmark files): one common dissection -> uniform remesh -> normal-map bake -> morph, ending in
+# a GLB with one morph target per shape that a viewer plays. Every GLB is checked with the
+# Khronos glTF validator when it is installed.
+#   usage: scripts/run-example.sh [OUTDIR]   (default out/example)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
 out=${1:-out/example}
+tools=build/tools
+meshes=(examples/spot_2k.obj examples/cat_16k.obj examples/koala_7k.obj)
 mkdir -p "$out"
-echo "== qs-inspect examples/*.obj"
-build/tools/qs-inspect examples/*.obj
-build/tools/qs-inspect --json examples/*.obj > "$out/inspect.json"
-echo "== wrote $out/inspect.json"
-charts=()
-for mesh in examples/*.obj; do
-  stem=$(basename "$mesh" .obj)
-  echo "== qs-dissect $mesh"
-  build/tools/qs-dissect "$mesh" -o "$out/$stem.dissection"
-  charts+=("$out/$stem.dissection/$stem.chart.ply")
-done
-build/tools/qs-render "${charts[@]}" -o "$out/charts.png" --patch-edges --size 400
-echo "== wrote $out/charts.png (the patch layouts, side by side)"
-echo "== qs-dissect examples/cat_16k.obj examples/koala_7k.obj (one common dissection)"
-build/tools/qs-dissect examples/cat_16k.obj examples/koala_7k.obj -o "$out/cat_koala.dissection"
-echo "== qs-remesh (uniform level 4, then adaptive 0.0025)"
-build/tools/qs-remesh "$out/cat_koala.dissection" --level 4 -o "$out/cat_koala.remesh-L4"
-build/tools/qs-remesh "$out/cat_koala.dissection" --adaptive 0.0025 -o "$out/cat_koala.remesh-adaptive"
-build/tools/qs-render "$out/cat_koala.dissection/cat_16k.chart.ply" "$out/cat_koala.dissection/koala_7k.chart.ply" \
-  "$out/cat_koala.remesh-L4/cat_16k.obj" "$out/cat_koala.remesh-L4/koala_7k.obj" \
-  -o "$out/cat_koala.png" --patch-edges --wireframe --size 400
-echo "== wrote $out/cat_koala.png (common patches and the level-4 remeshes with one connectivity)"
+
+echo "== qs-inspect: read and validate the examples"
+"$tools/qs-inspect" "${meshes[@]}"
+
+echo "== qs-dissect: one common dissection (landmarks from examples/<stem>.landmarks.json)"
+"$tools/qs-dissect" "${meshes[@]}" -o "$out/dissection" --report "$out/dissection-report.txt"
+
+echo "== qs-remesh: uniform level 4, one connectivity for the three shapes"
+"$tools/qs-remesh" "$out/dissection" --level 4 -o "$out/remesh-L4"
+
+echo "== qs-bake: 128x128 normal-map tiles per patch, tangent space, OpenGL green"
+"$tools/qs-bake" "$out/remesh-L4" --size 128 -o "$out/bake"
+
+echo "== qs-morph: spot -> cat -> koala -> spot, 60 frames and a GLB with morph targets"
+"$tools/qs-morph" "$out/remesh-L4" --path spot_2k,cat_16k,koala_7k,spot_2k --frames 60 \
+  --bake "$out/bake" --glb "$out/quadrupeds-morph.glb" -o "$out/morph"
+
+echo "== glTF validator"
+status=0
+bash scripts/validate-gltf.sh "$out"/bake/*.glb "$out/quadrupeds-morph.glb" || status=$?
+if [ "$status" -eq 3 ]; then
+  echo "(validator not installed: GLBs not validated)"
+elif [ "$status" -ne 0 ]; then
+  exit "$status"
+fi
+
+echo "== qs-render: patches and remeshes"
+"$tools/qs-render" "$out"/dissection/*.chart.ply --patch-edges --size 400 -o "$out/patches.png"
+"$tools/qs-render" "$out"/remesh-L4/*.obj --wireframe --size 400 -o "$out/remesh-L4.png"
+
+echo
+echo "Done. Open $out/quadrupeds-morph.glb in a glTF viewer (Blender, three.js editor, Godot):"
+echo "its shape keys / morph targets are the three animals, and its animation plays the path."

@@ -69,7 +69,7 @@ struct Extracted {
 enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
 
 /// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
-constexpr int kRepairRounds = 20;
+constexpr int kRepairRounds = 12;
 
 // The per-node result of one mesh: its patch extracted and parameterized (after alignment).
 struct Param {

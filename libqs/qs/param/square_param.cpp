@@ -30,6 +30,8 @@ constexpr double kRelativeWeightFloor = 1e-8;
 /// SparseLU takes the diagonal as pivot when it is at least this fraction of its column's largest
 /// entry (symmetric-AMD path only).
 constexpr double kDiagonalPivotThreshold = 1e-3;
+/// Stretch minimization stops when a round lowers the patch stretch by less than this fraction.
+constexpr double kMinGain = 0.01;
 
 /// tan(a/2) for the angle a between u and v, computed without cancellation on both sides of
 /// pi/2: sin a / (1 + cos a) for acute angles, (1 - cos a) / sin a for obtuse ones. 0 when u or v
@@ -514,7 +516,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
         count_uv_faces(faces, result);
         const int bad = result.flipped_faces + result.zero_area_faces;
         const double now = bad == 0 ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
-        if (bad < best_bad || (bad == 0 && now < best * (1 - 1e-3))) {
+        if (bad < best_bad || (bad == 0 && now < best * (1 - kMinGain))) {
           best_bad = bad;
           best = now;
           best_uv = result.uv;

@@ -44,7 +44,7 @@ struct SquareParamOptions {
   std::vector<std::pair<int, Vec2>> pinned;
   /// Rounds of stretch minimization after the mean-value solve (Yoshizawa, Belyaev, Seidel
   /// 2004): each round divides every weight w_ij by the L2 stretch around j and solves again;
-  /// it stops early when the patch stretch falls by less than 0.1%, and the lowest-stretch
+  /// it stops early when the patch stretch falls by less than 1%, and the lowest-stretch
   /// bijective map is kept. 0: the plain mean-value map.
   int stretch_iterations = 0;
 };
