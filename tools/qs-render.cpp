@@ -92,7 +92,9 @@ int main(int argc, char** argv) {
       ->required();
   app.add_option("-o,--output", output, "Output PNG file")->required();
   app.add_option("--size", size, "Size of each view in pixels: W or WxH")->capture_default_str();
-  app.add_option("--view", view_v, "Direction from the object towards the camera: x,y,z (default 0.3,0.4,1)")
+  app.add_option("--view", view_v,
+                 "Direction from the object towards the camera: x,y,z (default 0.3,0.4,1); or one x,y,z per "
+                 "input, all in one list, for shapes that face different ways")
       ->delimiter(',');
   app.add_option("--up", up_v, "Up direction in the image: x,y,z (default 0,1,0)")->delimiter(',');
   app.add_flag("--wireframe", opt.wireframe, "Draw every triangle edge");
@@ -110,7 +112,16 @@ int main(int argc, char** argv) {
     opt.height = m[2].matched ? std::stoi(m[2].str()) : opt.width;
     if (opt.width < 16 || opt.height < 16 || opt.width > 8192 || opt.height > 8192)
       throw qs::UsageError("--size " + size + " is out of range; width and height must be 16..8192");
-    if (!view_v.empty()) opt.view_dir = to_vec3(view_v, "--view");
+    std::vector<qs::Vec3> views_dir;  // one per input when several were given
+    if (view_v.size() == 3 * inputs.size() && inputs.size() > 1) {
+      for (size_t k = 0; k < inputs.size(); ++k)
+        views_dir.push_back(to_vec3({view_v.begin() + 3 * k, view_v.begin() + 3 * k + 3}, "--view"));
+    } else if (!view_v.empty()) {
+      if (view_v.size() != 3)
+        throw qs::UsageError("--view takes x,y,z or one x,y,z per input (" + std::to_string(3 * inputs.size()) +
+                             " numbers), not " + std::to_string(view_v.size()) + " numbers");
+      opt.view_dir = to_vec3(view_v, "--view");
+    }
     if (!up_v.empty()) opt.up = to_vec3(up_v, "--up");
     if (lower(fs::path(output).extension().string()) != ".png")
       throw qs::UsageError("output '" + output + "' must end in .png (qs-render writes PNG only)");
@@ -123,7 +134,9 @@ int main(int argc, char** argv) {
       return std::chrono::duration<double, std::milli>(b - a).count();
     };
     std::vector<qs::render::Image> views;
-    for (const std::string& file : inputs) {
+    for (size_t k = 0; k < inputs.size(); ++k) {
+      const std::string& file = inputs[k];
+      if (!views_dir.empty()) opt.view_dir = views_dir[k];
       const auto t0 = clock::now();
       qs::render::Image img;
       auto t1 = t0;

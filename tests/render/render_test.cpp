@@ -387,6 +387,20 @@ TEST_F(RenderTool, RendersSideBySide) {
   EXPECT_EQ(be32(20), 100);
 }
 
+TEST_F(RenderTool, OneViewPerInput) {
+  const std::string s = sphere(), a = (dir_ / "a.png").string(), b = (dir_ / "b.png").string();
+  // Both inputs seen from +x, written once with one view and once with a view per input: the same
+  // image; a different second view changes it.
+  ASSERT_EQ(run_tool(s + " " + s + " -o " + a + " --size 64 --view 1,0,0").exit, 0);
+  ASSERT_EQ(run_tool(s + " " + s + " -o " + b + " --size 64 --view 1,0,0,1,0,0").exit, 0);
+  EXPECT_EQ(read_bytes(a), read_bytes(b));
+  ASSERT_EQ(run_tool(s + " " + s + " -o " + b + " --size 64 --view 1,0,0,0,1,0.2").exit, 0);
+  EXPECT_NE(read_bytes(a), read_bytes(b));
+  const RunResult r = run_tool(s + " " + s + " -o " + b + " --view 1,0,0,1");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("one x,y,z per input"));
+}
+
 TEST_F(RenderTool, ErrorsGiveDocumentedExitCodesAndNoOutput) {
   const std::string s = sphere(), out = (dir_ / "out.png").string();
   RunResult r = run_tool((dir_ / "missing.obj").string() + " -o " + out);
