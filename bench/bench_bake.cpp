@@ -6,7 +6,8 @@
 //  2. Mean angle between the shaded normal (coarse level-3 mesh + 8-bit map, decoded as a viewer
 //     does) and the original smooth normal, with and without the map, for the shared heads.
 //     Targets: <= 3 degrees with the map, >= 10 without.
-//   usage: qs-bench-bake [MESH_DIR] [HEAD_TAU] [HEAD_TILE]   (defaults ../shared/meshes, 1.5, 256)
+//   usage: qs-bench-bake [MESH_DIR] [HEAD_TAU] [HEAD_TILE]   (defaults ../shared/meshes, 3 = the default
+//   dissection, 256)
 
 #include <algorithm>
 #include <chrono>
@@ -51,7 +52,7 @@ std::pair<qs::dissect::Dissection, int> dissect_file(const fs::path& path, doubl
 
 int main(int argc, char** argv) {
   const fs::path dir = argc > 1 ? argv[1] : QS_SOURCE_DIR "/../shared/meshes";
-  const double head_tau = argc > 2 ? std::stod(argv[2]) : 1.5;
+  const double head_tau = argc > 2 ? std::stod(argv[2]) : 3.0;
   const int head_tile = argc > 3 ? std::stoi(argv[3]) : 256;
   if (!fs::is_directory(dir)) {
     std::fprintf(stderr, "qs-bench-bake: %s is not a folder of meshes\n", dir.string().c_str());

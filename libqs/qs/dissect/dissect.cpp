@@ -351,7 +351,7 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
     for (const Tri& t : pm.faces)
       if (signed_area(cur.uv[t[0]], cur.uv[t[1]], cur.uv[t[2]]) <= param::kZeroUvArea)
         for (int v : t) mark[v] = 1;
-    for (int ring = 0; ring < 2 + r; ++ring) {  // a wider region every round
+    for (int ring = 0; ring < 2 + std::min(r, 6); ++ring) {  // a wider region every round
       std::vector<char> grown = mark;
       for (int v = 0; v < nv; ++v)
         if (mark[v])
