@@ -26,9 +26,9 @@ echo "== qs-remesh: uniform level 4, one connectivity for the three shapes"
 echo "== qs-bake: 128x128 normal-map tiles per patch, tangent space, OpenGL green"
 "$tools/qs-bake" "$out/remesh-L4" --size 128 -o "$out/bake"
 
-echo "== qs-morph: spot -> cat -> koala -> spot, 60 frames and a GLB with morph targets"
+echo "== qs-morph: spot -> cat -> koala -> spot (cat and koala placed on spot by a similarity), 60 frames + GLB"
 "$tools/qs-morph" "$out/remesh-L4" --path spot_2k,cat_16k,koala_7k,spot_2k --frames 60 \
-  --bake "$out/bake" --glb "$out/quadrupeds-morph.glb" -o "$out/morph"
+  --align similarity --bake "$out/bake" --glb "$out/quadrupeds-morph.glb" -o "$out/morph"
 
 echo "== glTF validator"
 status=0

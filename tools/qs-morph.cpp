@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
                "path, one blend of given weights, and/or a GLB with morph targets and a weights animation.\n"
                "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 70 internal.",
                "qs-morph"};
-  std::string folder, outdir, format = "obj", path_list, glb, bake;
+  std::string folder, outdir, format = "obj", path_list, glb, bake, align = "none";
   int frames = 0;
   std::vector<double> weights;
   bool quiet = false, frame_maps = false;
@@ -110,6 +110,11 @@ int main(int argc, char** argv) {
                                       "for any count")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
+  app.add_option("--align", align,
+                 "Place every shape on the path's first by the least-squares rotation (rigid) or rotation and "
+                 "uniform scale (similarity) over corresponding vertices, before blending")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"none", "rigid", "similarity"}));
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
@@ -123,7 +128,7 @@ int main(int argc, char** argv) {
         std::cerr << "\r  " << stage << " " << static_cast<int>(100 * done) << "%" << (done >= 1 ? "\n" : "") << std::flush;
       };
     const auto t0 = Clock::now();
-    const qs::remesh::LoadedRemesh in = qs::remesh::read_remesh(folder);
+    qs::remesh::LoadedRemesh in = qs::remesh::read_remesh(folder);
     const auto& set = in.set;
     const int n = static_cast<int>(set.positions.size());
     if (n < 2) throw qs::InvalidInput(folder + ": holds " + std::to_string(n) + " shape; a morph needs at least 2");
@@ -146,6 +151,10 @@ int main(int argc, char** argv) {
         throw qs::InvalidInput(std::string(e.what()) + " (--weights gives one weight per shape, in order: " + known + ")");
       }
     }
+    // Alignment onto the path's first shape (the GLB's base, left as it is).
+    const qs::morph::Align how = qs::morph::align_from_name(align);
+    for (int i = 0; i < n; ++i)
+      if (i != stops[0]) in.set.positions[i] = qs::morph::align_to(in.set.positions[i], in.set.positions[stops[0]], how);
     if (frames == 0 && !have_weights && glb.empty()) frames = 10 * (static_cast<int>(stops.size()) - 1) + 1;
     const qs::morph::FrameFormat ff = qs::morph::frame_format(format);
     const char* ext = qs::morph::extension(ff);
@@ -176,7 +185,8 @@ int main(int argc, char** argv) {
                       {"format", format},
                       {"glb", glb.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(glb)},
                       {"bake", bake.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(bake)},
-                      {"frame_maps", frame_maps}};
+                      {"frame_maps", frame_maps},
+                      {"align", align}};
 
     const bool write_folder = frames > 0 || have_weights;
     if (write_folder) make_folder(outdir);

@@ -223,6 +223,24 @@ TEST(PathFrames, BadArgumentsAreRefused) {
   EXPECT_THROW(qs::morph::path_frames(2, {-1, 0}, 5), qs::InvalidInput);
 }
 
+TEST(Align, SimilarityUndoesARotationScaleAndShift) {
+  const qs::TriMesh m = qs::shapes::bumpy_sphere(0.1, 3, 3);
+  const Eigen::AngleAxisd r(1.1, qs::Vec3(0.3, -0.5, 0.8).normalized());
+  std::vector<qs::Vec3> moved;
+  for (const auto& p : m.positions) moved.push_back(2.5 * (r * p) + qs::Vec3(3, -1, 7));
+  const auto back = qs::morph::align_to(moved, m.positions, qs::morph::Align::Similarity);
+  for (size_t i = 0; i < back.size(); ++i) EXPECT_LT((back[i] - m.positions[i]).norm(), 1e-9) << i;
+  // Rigid keeps the size: the aligned copy is still 2.5 times larger, turned back and centred on
+  // the base's centroid c: c + 2.5 (p - c).
+  qs::Vec3 c = qs::Vec3::Zero();
+  for (const auto& p : m.positions) c += p / static_cast<double>(m.positions.size());
+  const auto rigid = qs::morph::align_to(moved, m.positions, qs::morph::Align::Rigid);
+  for (size_t i = 0; i < rigid.size(); ++i) EXPECT_LT((rigid[i] - (c + 2.5 * (m.positions[i] - c))).norm(), 1e-9) << i;
+  EXPECT_EQ(qs::morph::align_to(moved, m.positions, qs::morph::Align::None), moved);
+  EXPECT_THROW(qs::morph::align_to(moved, {}, qs::morph::Align::Rigid), qs::InvalidInput);
+  EXPECT_THROW(qs::morph::align_from_name("affine"), qs::InvalidInput);
+}
+
 TEST(Blend, WeightsAreChecked) {
   const auto set = make_set(3, 1);
   EXPECT_THAT(message_of([&] { qs::morph::blend(set, {0.5, 0.5}); }), HasSubstr("2 given, expected one per shape (3)"));

@@ -268,6 +268,21 @@ TEST_F(MorphTool, RepeatedPathReturnsToTheStart) {
   EXPECT_EQ(qs::io::read_mesh(dir_ / "frame_0000.obj").mesh.positions, shape("b"));
 }
 
+TEST_F(MorphTool, AlignPlacesEveryShapeOnTheFirstOfThePath) {
+  const RunResult r = morph("--path a,c --frames 2 --align similarity -q -o " + dir_.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  const auto a = shape("a"), c = shape("c");
+  EXPECT_EQ(qs::io::read_mesh(dir_ / "frame_0000.obj").mesh.positions, a) << "the base does not move";
+  const auto last = qs::io::read_mesh(dir_ / "frame_0001.obj").mesh.positions;
+  ASSERT_EQ(last.size(), c.size());
+  // The aligned shape is c moved by a similarity: pairwise distances scale by one factor.
+  const double k = (last[1] - last[0]).norm() / (c[1] - c[0]).norm();
+  for (size_t v = 2; v < c.size(); v += 7) EXPECT_NEAR((last[v] - last[0]).norm(), k * (c[v] - c[0]).norm(), 1e-9);
+  std::ifstream in(dir_ / "morph.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["options"]["align"], "similarity");
+  EXPECT_EQ(morph("--align affine -o " + (dir_ / "x").string()).exit, 1);
+}
+
 TEST_F(MorphTool, WeightsWriteOneBlend) {
   const RunResult r = morph("--weights 0.2,0.3,0.5 -q -o " + dir_.string());
   ASSERT_EQ(r.exit, 0) << r.out;

@@ -33,6 +33,7 @@ const char* stop_reason_name(StopReason r) {
     case StopReason::MaxDepth: return "max_depth";
     case StopReason::TooFewFaces: return "too_few_faces";
     case StopReason::SplitFailed: return "split_failed";
+    case StopReason::NoProgress: return "no_progress";
   }
   return "none";
 }
@@ -57,6 +58,8 @@ struct Node {
   int depth = 0;
   int label = 0;
   std::array<int, 4> corners{};
+  double parent_stretch = std::numeric_limits<double>::infinity();  ///< this mesh's, at the parent
+  double grandparent_stretch = std::numeric_limits<double>::infinity();
 };
 
 // A patch as a PatchMesh, with its local -> global maps.
@@ -1116,9 +1119,23 @@ DissectionSet SetDissector::run() {
         biggest_over = std::max(biggest_over, static_cast<int>(ps[i].ex.faces.size()));
       }
     }
+    // No progress: a bijective patch at least as stretched as its parent in every mesh that is
+    // over (a corner whose 3D angle the square cannot take: every split hands it to a smaller
+    // child, whose stretch only grows). Splitting again would not help; the leaf is repaired
+    // instead. A strongly stretched parent (over 2 tau: a protrusion) gets one more generation
+    // when it had improved on its own parent, since the first split of a protrusion can raise
+    // the stretch of the child that holds its tip.
+    bool progress = false;
+    for (size_t i = 0; i < ps.size() && !progress; ++i) {
+      const double parent = nodes[i].parent_stretch, grandparent = nodes[i].grandparent_stretch;
+      progress = over[i] && (!ps[i].sp.bijective() || ps[i].st.area3d > max_area[i] || ps[i].st.patch < parent ||
+                             (parent > 2 * opt_.tau && parent < grandparent));
+    }
     StopReason stop = StopReason::None;
     std::string detail;
-    if (any_over && node.depth < opt_.max_depth && biggest_over >= opt_.min_faces_to_split) {
+    if (any_over && !progress) {
+      stop = StopReason::NoProgress;
+    } else if (any_over && node.depth < opt_.max_depth && biggest_over >= opt_.min_faces_to_split) {
       const size_t first_new_label = meshes_[0].labels();
       const auto [peak, w] = choose_split(node, ps, tn, over);
       std::vector<std::array<Node, 5>> kids;
@@ -1155,7 +1172,11 @@ DissectionSet SetDissector::run() {
         out.tree.push_back(tn);
         for (int k = 0; k < 5; ++k) {
           std::vector<Node> child;
-          for (const auto& kk : kids) child.push_back(kk[k]);
+          for (size_t i = 0; i < kids.size(); ++i) {
+            child.push_back(kids[i][k]);
+            child.back().parent_stretch = ps[i].st.patch;
+            child.back().grandparent_stretch = nodes[i].parent_stretch;
+          }
           queue.push_back(std::move(child));
         }
         continue;

@@ -57,7 +57,7 @@ struct DissectOptions {
 };
 
 /// Why a patch over tau was left as it is.
-enum class StopReason { None, MaxDepth, TooFewFaces, SplitFailed };
+enum class StopReason { None, MaxDepth, TooFewFaces, SplitFailed, NoProgress };
 const char* stop_reason_name(StopReason r);
 
 /// A leaf patch of the final dissection.

@@ -1,11 +1,36 @@
 #include "qs/morph/blend.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <sstream>
 
 #include "qs/core/error.h"
 
 namespace qs::morph {
+
+Align align_from_name(const std::string& name) {
+  if (name == "none") return Align::None;
+  if (name == "rigid") return Align::Rigid;
+  if (name == "similarity") return Align::Similarity;
+  throw InvalidInput("unknown alignment '" + name + "' (expected none, rigid or similarity)");
+}
+
+std::vector<Vec3> align_to(const std::vector<Vec3>& shape, const std::vector<Vec3>& base, Align how) {
+  if (shape.size() != base.size() || shape.empty())
+    throw InvalidInput("align_to: " + std::to_string(shape.size()) + " and " + std::to_string(base.size()) +
+                       " vertices; alignment needs two non-empty shapes with one vertex numbering");
+  if (how == Align::None) return shape;
+  const Eigen::Index n = static_cast<Eigen::Index>(shape.size());
+  Eigen::Matrix3Xd from(3, n), to(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    from.col(i) = shape[i];
+    to.col(i) = base[i];
+  }
+  const Eigen::Matrix4d t = Eigen::umeyama(from, to, how == Align::Similarity);
+  std::vector<Vec3> out(shape.size());
+  for (Eigen::Index i = 0; i < n; ++i) out[i] = t.topLeftCorner<3, 3>() * shape[i] + t.topRightCorner<3, 1>();
+  return out;
+}
 
 std::vector<PathFrame> path_frames(int num_shapes, const std::vector<int>& stops, int frames) {
   if (frames < 2) throw InvalidInput("a morph path needs at least 2 frames (got " + std::to_string(frames) + ")");

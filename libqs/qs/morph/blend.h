@@ -45,6 +45,18 @@ inline std::vector<Vec3> blend(const remesh::SemiRegularSet& set, const std::vec
 /// \pre faces index into positions.
 std::vector<Vec3> vertex_normals(const std::vector<Vec3>& positions, const std::vector<Tri>& faces);
 
+/// How a shape is placed onto the base before blending (the files of different characters rarely
+/// share a pose, a facing or a scale).
+enum class Align { None, Rigid, Similarity };
+/// "none", "rigid", "similarity". \throws InvalidInput for another name.
+Align align_from_name(const std::string& name);
+
+/// `shape` moved by the rotation (and, for Similarity, the uniform scale) and translation that
+/// best map it onto `base` in the least-squares sense over corresponding vertices (Umeyama 1991;
+/// the remeshes share one vertex numbering). None returns shape unchanged.
+/// \throws InvalidInput when the arrays differ in size or are empty.
+std::vector<Vec3> align_to(const std::vector<Vec3>& shape, const std::vector<Vec3>& base, Align how);
+
 /// Index of `name` in `names`. \throws InvalidInput listing the known names.
 int shape_index(const std::vector<std::string>& names, const std::string& name);
 
