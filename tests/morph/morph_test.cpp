@@ -14,6 +14,7 @@
 #include "qs/gltf/glb.h"
 #include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
+#include "../common/gltf_test_support.h"
 #include "qs/morph/blend.h"
 #include "qs/morph/frame_maps.h"
 #include "qs/morph/frames.h"
@@ -57,62 +58,12 @@ std::string message_of(F&& f) {
   return "(nothing thrown)";
 }
 
-// ---- minimal PNG (stored deflate) -------------------------------------------------------------
-uint32_t crc32(const unsigned char* p, size_t n) {
-  uint32_t c = 0xFFFFFFFFu;
-  for (size_t i = 0; i < n; ++i) {
-    c ^= p[i];
-    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
-  }
-  return c ^ 0xFFFFFFFFu;
-}
-void put32(std::vector<unsigned char>& v, uint32_t x) {
-  for (int s = 24; s >= 0; s -= 8) v.push_back(static_cast<unsigned char>(x >> s));
-}
-void chunk(std::vector<unsigned char>& png, const char* type, const std::vector<unsigned char>& data) {
-  put32(png, static_cast<uint32_t>(data.size()));
-  std::vector<unsigned char> td(type, type + 4);
-  td.insert(td.end(), data.begin(), data.end());
-  png.insert(png.end(), td.begin(), td.end());
-  put32(png, crc32(td.data(), td.size()));
-}
-// A w x h flat normal map (128, 128, 255), w * h * 3 + h < 65536.
+// A w x h flat normal map (128, 128, 255).
 std::vector<unsigned char> flat_normal_png(int w, int h) {
-  std::vector<unsigned char> raw;
-  for (int y = 0; y < h; ++y) {
-    raw.push_back(0);
-    for (int x = 0; x < w; ++x) raw.insert(raw.end(), {128, 128, 255});
-  }
-  std::vector<unsigned char> z{0x78, 0x01, 1, static_cast<unsigned char>(raw.size() & 0xFF),
-                               static_cast<unsigned char>(raw.size() >> 8), static_cast<unsigned char>(~raw.size() & 0xFF),
-                               static_cast<unsigned char>((~raw.size() >> 8) & 0xFF)};
-  z.insert(z.end(), raw.begin(), raw.end());
-  uint32_t a = 1, b = 0;
-  for (unsigned char c : raw) {
-    a = (a + c) % 65521;
-    b = (b + a) % 65521;
-  }
-  put32(z, (b << 16) | a);
-  std::vector<unsigned char> png{0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-  std::vector<unsigned char> ihdr;
-  put32(ihdr, w);
-  put32(ihdr, h);
-  ihdr.insert(ihdr.end(), {8, 2, 0, 0, 0});
-  chunk(png, "IHDR", ihdr);
-  chunk(png, "IDAT", z);
-  chunk(png, "IEND", {});
-  return png;
+  return qs::testing::make_png(w, h, [](int, int, int c) -> unsigned char { return c == 2 ? 255 : 128; });
 }
 
-int run_validator(const fs::path& file, std::string* out) {
-  const std::string cmd = std::string(QS_SOURCE_DIR) + "/scripts/validate-gltf.sh " + file.string() + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
-  const int status = pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+int run_validator(const fs::path& file, std::string* out) { return qs::testing::run_gltf_validator(file, out); }
 
 class MorphFiles : public ::testing::Test {
  protected:

@@ -16,6 +16,7 @@
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
 #include "tool_runner.h"
+#include "../common/gltf_test_support.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
@@ -44,15 +45,7 @@ nlohmann::json glb_json(const fs::path& p) {
   return nlohmann::json::parse(b.substr(20, len));
 }
 
-int validate(const fs::path& file, std::string* out) {
-  const std::string cmd = std::string(QS_SOURCE_DIR) + "/scripts/validate-gltf.sh " + file.string() + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
-  const int status = pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+int validate(const fs::path& file, std::string* out) { return qs::testing::run_gltf_validator(file, out); }
 
 // ---- a bake folder written by hand (independent of qs's own GLB writer) ----------------------
 uint32_t crc32(const std::string& s) {
