@@ -7,6 +7,10 @@
 // construction, and checked anyway.
 
 #include <algorithm>
+#include <exception>
+#include <thread>
+#include <mutex>
+#include <atomic>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -172,6 +176,14 @@ class MeshDissector {
   std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
   std::vector<Node> leaves_;
   std::vector<PatchInfo> infos_;
+  struct Repair {
+    size_t leaf;  // index into leaves_ / infos_
+    Param param;  // the leaf as kept
+    int rounds;
+  };
+  std::vector<Repair> repairs_;  // leaves to minimize in finish()
+  void set_leaf_map(size_t leaf, const Param& p, const param::SquareParam& sp, const param::Stretch& st);
+  void run_repairs();
   std::array<int, 4> seeds_{};
 };
 
@@ -454,71 +466,110 @@ void MeshDissector::restore(const Node& node, size_t first_new_label) {
   if (patch_faces_.size() > first_new_label) patch_faces_.resize(first_new_label);
 }
 
-void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) {
-  const param::SquareParam* sp = &p.sp;
-  const param::Stretch* st = &p.st;
+namespace {
+// A stretch-minimized map of a leaf (see keep_leaf), or an empty map when none is better.
+// Pure: it reads the leaf only, so leaves are repaired in parallel.
+param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& context) {
+  // Minimize without pins (pins inside a squeezed protrusion defeat it), then warp the features
+  // back onto their aligned (u,v): the spread-out map folds far less under the warp.
+  param::SquareParamOptions po;
+  po.stretch_iterations = rounds;
   param::SquareParam min_sp;
-  param::Stretch min_st;
-  // A leaf left over tau or with zero-area UV faces (a protrusion squeezed below double
-  // precision at the depth limit) is repaired the same way, whatever the option says.
-  const bool exception = !p.sp.bijective() || p.st.patch > opt_.tau;
-  const int rounds = exception ? std::max(opt_.stretch_iterations, kRepairRounds) : opt_.stretch_iterations;
-  if (rounds > 0) {
-    // Minimize without pins (pins inside a squeezed protrusion defeat it), then warp the
-    // features back onto their aligned (u,v): the spread-out map folds far less under the warp.
-    param::SquareParamOptions po;
-    po.stretch_iterations = rounds;
-    try {
-      min_sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
-      if (!p.features.empty()) {
-        std::vector<Vec2> from, to;
-        for (const auto& [k, local] : p.features) {
-          from.push_back(min_sp.uv[local]);
-          to.push_back(p.sp.uv[local]);
-        }
-        min_sp.uv = warp::warp_square(from, to, min_sp.uv, {}, ctx_.without_progress()).points;
-        param::count_uv_faces(p.ex.pm.faces, min_sp);
-        if (!min_sp.bijective()) {
-          std::vector<char> fixed(p.ex.verts.size(), 0);
-          for (const auto& f : p.features) fixed[f.second] = 1;
-          min_sp = untangle(p.ex.pm, min_sp, fixed, 20);
-        }
-        if (!min_sp.bijective()) {  // then try minimizing with the features pinned
-          for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
-          param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
-          if (pinned.flipped_faces + pinned.zero_area_faces < min_sp.flipped_faces + min_sp.zero_area_faces)
-            min_sp = std::move(pinned);
-        }
+  try {
+    min_sp = param::parameterize_square(p.ex.pm, po, context);
+    if (!p.features.empty()) {
+      std::vector<Vec2> from, to;
+      for (const auto& [k, local] : p.features) {
+        from.push_back(min_sp.uv[local]);
+        to.push_back(p.sp.uv[local]);
       }
-    } catch (const Error&) {
-      min_sp = {};  // a singular system or features the warp cannot place: keep the given map
-    }
-    if (!min_sp.uv.empty() && min_sp.bijective()) {
-      min_st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, min_sp.uv);
-      if (!p.sp.bijective() || min_st.patch < p.st.patch) {
-        sp = &min_sp;
-        st = &min_st;
+      min_sp.uv = warp::warp_square(from, to, min_sp.uv, {}, context).points;
+      param::count_uv_faces(p.ex.pm.faces, min_sp);
+      if (!min_sp.bijective()) {
+        std::vector<char> fixed(p.ex.verts.size(), 0);
+        for (const auto& f : p.features) fixed[f.second] = 1;
+        min_sp = untangle(p.ex.pm, min_sp, fixed, 20);
+      }
+      if (!min_sp.bijective()) {  // then try minimizing with the features pinned
+        for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
+        param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, context);
+        if (pinned.flipped_faces + pinned.zero_area_faces < min_sp.flipped_faces + min_sp.zero_area_faces)
+          min_sp = std::move(pinned);
       }
     }
+  } catch (const Error& e) {
+    if (e.code() == ErrorCode::Internal) throw;  // cancelled, or a bug
+    return {};  // a singular system or features the warp cannot place: keep the given map
   }
-  if (sp->bijective() && st->patch <= opt_.tau) {  // repaired: no longer an exception
-    info.stop = StopReason::None;
-    info.stop_detail.clear();
-  }
+  if (!min_sp.bijective()) return {};
+  return min_sp;
+}
+}  // namespace
+
+void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) {
   info.name = node.name;
   info.corners = node.corners;
   info.faces = static_cast<int>(p.ex.faces.size());
-  info.stretch = st->patch;
-  info.flipped_faces = sp->flipped_faces;
-  info.zero_area_faces = sp->zero_area_faces;
-  info.uv_area_sum = sp->uv_area_sum;
-  for (size_t lf = 0; lf < p.ex.faces.size(); ++lf)
-    for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = sp->uv[p.ex.pm.faces[lf][k]];
   leaves_.push_back(node);
   infos_.push_back(std::move(info));
+  // A leaf left over tau or with zero-area UV faces (a protrusion squeezed below double
+  // precision at the depth limit) is repaired by stretch minimization, whatever the option says;
+  // the repairs run in finish(), in parallel.
+  const bool exception = !p.sp.bijective() || p.st.patch > opt_.tau;
+  const int rounds = exception ? std::max(opt_.stretch_iterations, kRepairRounds) : opt_.stretch_iterations;
+  if (rounds > 0) repairs_.push_back({infos_.size() - 1, p, rounds});
+  set_leaf_map(infos_.size() - 1, p, p.sp, p.st);
+}
+
+void MeshDissector::set_leaf_map(size_t leaf, const Param& p, const param::SquareParam& sp, const param::Stretch& st) {
+  PatchInfo& info = infos_[leaf];
+  if (sp.bijective() && st.patch <= opt_.tau) {  // within tau (perhaps repaired): no exception
+    info.stop = StopReason::None;
+    info.stop_detail.clear();
+  }
+  info.stretch = st.patch;
+  info.flipped_faces = sp.flipped_faces;
+  info.zero_area_faces = sp.zero_area_faces;
+  info.uv_area_sum = sp.uv_area_sum;
+  for (size_t lf = 0; lf < p.ex.faces.size(); ++lf)
+    for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = sp.uv[p.ex.pm.faces[lf][k]];
+}
+
+void MeshDissector::run_repairs() {
+  // Independent leaves, one result slot each: the outcome does not depend on the thread count.
+  Context quiet = ctx_.without_progress();
+  quiet.log = nullptr;  // the minimization's fold warnings are expected; the result is counted
+  std::vector<param::SquareParam> result(repairs_.size());
+  std::atomic<size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto work = [&] {
+    for (size_t r; (r = next++) < repairs_.size();) {
+      try {
+        result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  };
+  const size_t threads = std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), repairs_.size());
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  for (size_t r = 0; r < repairs_.size(); ++r) {
+    const Param& p = repairs_[r].param;
+    if (result[r].uv.empty()) continue;
+    const param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, result[r].uv);
+    if (!p.sp.bijective() || st.patch < p.st.patch) set_leaf_map(repairs_[r].leaf, p, result[r], st);
+  }
+  repairs_.clear();
 }
 
 Dissection MeshDissector::finish(const std::vector<TreeNode>& tree) {
+  run_repairs();
   Dissection out;
   out.seeds = seeds_;
   out.tree = tree;
