@@ -75,8 +75,35 @@ struct Extracted {
 
 enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
 
+/// Per-mesh work on a node of a set runs on several threads from this many faces (all meshes).
+constexpr size_t kParallelFaces = 8000;
 /// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
 constexpr int kRepairRounds = 12;
+
+/// Runs f(i) for i in [0, n) on up to hardware_concurrency() threads (one thread when !parallel:
+/// starting threads costs more than small work). Every i runs; then the exception of the lowest i
+/// that threw is rethrown, so errors do not depend on timing.
+template <class F>
+void parallel_for(size_t n, F&& f, bool parallel = true) {
+  std::vector<std::exception_ptr> errors(n);
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t i; (i = next++) < n;) {
+      try {
+        f(i);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+  };
+  const size_t threads = parallel ? std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), n) : 1;
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
 
 // The per-node result of one mesh: its patch extracted and parameterized (after alignment).
 struct Param {
@@ -101,6 +128,7 @@ class MeshDissector {
   /// Puts a node's faces back after a failed split (in any mesh of the set).
   void restore(const Node& node, size_t first_new_label);
   size_t labels() const { return patch_faces_.size(); }
+  size_t node_faces(const Node& node) const { return patch_faces_[node.label].size(); }
   /// Drops the parent's face list once every mesh of the set has split it.
   void commit_split(const Node& node) { patch_faces_[node.label].clear(); }
   /// Records a node as a leaf with its (aligned) parameterization.
@@ -540,25 +568,11 @@ void MeshDissector::run_repairs() {
   Context quiet = ctx_.without_progress();
   quiet.log = nullptr;  // the minimization's fold warnings are expected; the result is counted
   std::vector<param::SquareParam> result(repairs_.size());
-  std::atomic<size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  auto work = [&] {
-    for (size_t r; (r = next++) < repairs_.size();) {
-      try {
-        result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  };
-  const size_t threads = std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), repairs_.size());
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  size_t faces = 0;
+  for (const auto& r : repairs_) faces += r.param.ex.faces.size();
+  parallel_for(
+      repairs_.size(), [&](size_t r) { result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet); },
+      faces >= kParallelFaces / 8);
   for (size_t r = 0; r < repairs_.size(); ++r) {
     const Param& p = repairs_[r].param;
     if (result[r].uv.empty()) continue;
@@ -926,9 +940,12 @@ SetDissector::SetDissector(const std::vector<MeshToDissect>& in, const DissectOp
 
 std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNode& tn) {
   const Node& node = nodes[0];
-  std::vector<Param> ps;
-  ps.reserve(meshes_.size());
-  for (size_t i = 0; i < meshes_.size(); ++i) ps.push_back(meshes_[i].parameterize(nodes[i]));
+  // The meshes of a set are independent here: one thread each for large nodes (the results do
+  // not depend on it).
+  std::vector<Param> ps(meshes_.size());
+  size_t faces = 0;
+  for (size_t i = 0; i < meshes_.size(); ++i) faces += meshes_[i].node_faces(nodes[i]);
+  parallel_for(meshes_.size(), [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i]); }, faces >= kParallelFaces);
   // The same features must lie inside the node in every mesh: they are aligned before every split,
   // so only the seed loops (traced on each mesh independently) can separate them.
   for (size_t i = 1; i < ps.size(); ++i) {
@@ -1022,7 +1039,10 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
   tn.features_held = static_cast<int>(roots.size() - moving.size());
   std::vector<Vec2> to;
   for (size_t g : moving) to.push_back(rep_target[g]);
-  for (size_t i = 0; i < nm; ++i) {
+  std::vector<int> events(nm, 0), pinned_solves(nm, 0);
+  size_t faces = 0;
+  for (const auto& p : ps) faces += p.ex.faces.size();
+  parallel_for(nm, [&](size_t i) {
     Param& p = ps[i];
     std::vector<Vec2> from;
     for (size_t g : moving) from.push_back(rep[i][g]);
@@ -1036,7 +1056,7 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
     }
     param::SquareParam warped = p.sp;
     warped.uv = std::move(wr.points);
-    tn.warp_events += wr.events;
+    events[i] = wr.events;
     param::count_uv_faces(p.ex.pm.faces, warped);
     if (!warped.bijective()) {
       // The warp is a bijection of the square, but a mesh face whose corners lie in different
@@ -1050,7 +1070,7 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
       const param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, quiet);
       if (pinned.flipped_faces + pinned.zero_area_faces < warped.flipped_faces + warped.zero_area_faces) {
         warped = pinned;
-        ++tn.pinned_solves;
+        pinned_solves[i] = 1;
       }
     }
     if (!warped.bijective()) {
@@ -1060,6 +1080,10 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
     }
     p.sp = std::move(warped);
     p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
+  }, faces >= kParallelFaces);
+  for (size_t i = 0; i < nm; ++i) {
+    tn.warp_events += events[i];
+    tn.pinned_solves += pinned_solves[i];
   }
 }
 
@@ -1189,15 +1213,17 @@ DissectionSet SetDissector::run() {
     } else if (any_over && node.depth < opt_.max_depth && biggest_over >= opt_.min_faces_to_split) {
       const size_t first_new_label = meshes_[0].labels();
       const auto [peak, w] = choose_split(node, ps, tn, over);
-      std::vector<std::array<Node, 5>> kids;
+      std::vector<std::array<Node, 5>> kids(meshes_.size());
+      size_t node_faces = 0;
+      for (const auto& p : ps) node_faces += p.ex.faces.size();
       try {
-        for (size_t i = 0; i < meshes_.size(); ++i) {
+        parallel_for(meshes_.size(), [&](size_t i) {
           try {
-            kids.push_back(meshes_[i].split(nodes[i], ps[i], peak, w));
+            kids[i] = meshes_[i].split(nodes[i], ps[i], peak, w);
           } catch (const SplitFailure& e) {
             throw SplitFailure(meshes_.size() > 1 ? meshes_[i].name() + ": " + e.what() : std::string(e.what()));
           }
-        }
+        }, node_faces >= kParallelFaces);
         // Counterparts must land in the same child. They do when every mesh's map is bijective
         // (the cuts are the same segments of the aligned domain); a folded map can break that.
         for (const auto& [k, local] : ps[0].features)
