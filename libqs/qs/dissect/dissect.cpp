@@ -1166,10 +1166,7 @@ DissectionSet SetDissector::run() {
   for (const auto& m : in_) {
     total_faces += static_cast<double>(m.mesh->faces.size());
     double area = 0;
-    for (const Tri& t : m.mesh->faces) {
-      const auto& x = m.mesh->positions;
-      area += 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
-    }
+    for (int f = 0; f < m.mesh->num_faces(); ++f) area += face_area(*m.mesh, f);
     max_area.push_back(opt_.max_patch_area > 0 ? opt_.max_patch_area * area : INFINITY);
   }
   while (!queue.empty()) {

@@ -470,14 +470,19 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     if (options.stretch_iterations > 0) {
       // Faces without UV area have no finite stretch: they count as 10x the largest finite one,
       // so that a map squeezed to zero area in floating point is pushed apart too.
+      std::vector<double> area3(nf);
+      for (int f = 0; f < nf; ++f) {
+        const Tri& t = faces[f];
+        area3[f] = 0.5 * (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]).norm();
+      }
       count_uv_faces(faces, result);
+      Stretch st = l2_stretch(pos, faces, result.uv);  // of the current map
       std::vector<Vec2> best_uv = result.uv;
       int best_bad = result.flipped_faces + result.zero_area_faces;
-      double best = best_bad == 0 ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
-      std::vector<double> sum(nv), area(nv);
+      double best = best_bad == 0 ? st.patch : INFINITY;
+      std::vector<double> sum(nv), area(nv), sigma(nv), row_max(nv);
       for (int it = 0; it < options.stretch_iterations; ++it) {
         context.check_cancel();
-        const Stretch st = l2_stretch(pos, faces, result.uv);
         double cap = 0;
         for (double x : st.face)
           if (std::isfinite(x)) cap = std::max(cap, x);
@@ -485,37 +490,35 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
         std::fill(sum.begin(), sum.end(), 0.0);
         std::fill(area.begin(), area.end(), 0.0);
         for (int f = 0; f < nf; ++f) {
-          const Tri& t = faces[f];
-          const double a = 0.5 * (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]).norm();
           const double x = std::isfinite(st.face[f]) ? st.face[f] : cap;
-          for (int v : t) {
-            sum[v] += a * x * x;
-            area[v] += a;
+          for (int v : faces[f]) {
+            sum[v] += area3[f] * x * x;
+            area[v] += area3[f];
           }
         }
-        std::vector<double> sigma(nv, 1.0);
         for (int v = 0; v < nv; ++v)
-          if (area[v] > 0 && sum[v] > 0 && std::isfinite(sum[v])) sigma[v] = std::sqrt(sum[v] / area[v]);
-        std::fill(sum.begin(), sum.end(), 0.0);  // reused: the largest weight of each row
+          sigma[v] = area[v] > 0 && sum[v] > 0 && std::isfinite(sum[v]) ? std::sqrt(sum[v] / area[v]) : 1.0;
+        std::fill(row_max.begin(), row_max.end(), 0.0);
         for (int f = 0; f < nf; ++f)
           for (int c = 0; c < 3; ++c) {
             double& x = w[3 * f + c];
             x /= sigma[faces[f][(c + 1) % 3]];
-            sum[faces[f][c]] = std::max(sum[faces[f][c]], x);
+            row_max[faces[f][c]] = std::max(row_max[faces[f][c]], x);
           }
         // Rows rescaled to a largest weight of 1 (the map does not change): repeated divisions
         // would otherwise underflow.
         for (int f = 0; f < nf; ++f)
           for (int c = 0; c < 3; ++c)
-            if (sum[faces[f][c]] > 0) w[3 * f + c] /= sum[faces[f][c]];
+            if (row_max[faces[f][c]] > 0) w[3 * f + c] /= row_max[faces[f][c]];
         try {
           solve_with(w);
         } catch (const SolverError&) {
           break;  // keep the best map so far
         }
         count_uv_faces(faces, result);
+        st = l2_stretch(pos, faces, result.uv);
         const int bad = result.flipped_faces + result.zero_area_faces;
-        const double now = bad == 0 ? l2_stretch(pos, faces, result.uv).patch : INFINITY;
+        const double now = bad == 0 ? st.patch : INFINITY;
         if (bad < best_bad || (bad == 0 && now < best * (1 - kMinGain))) {
           best_bad = bad;
           best = now;
