@@ -397,16 +397,8 @@ AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts,
   if (options.min_level < 0 || options.min_level > options.max_level)
     throw InvalidInput("remesh: min level " + std::to_string(options.min_level) + " is out of range; expected 0.." +
                        std::to_string(options.max_level) + " (the max level)");
-  if (charts.empty()) throw InvalidInput("remesh: no charts given");
 
-  std::vector<ChartSampler> samplers;
-  samplers.reserve(charts.size());
-  std::vector<const ChartSampler*> ptrs;
-  for (const auto* c : charts) {
-    samplers.emplace_back(*c, context);
-    ptrs.push_back(&samplers.back());
-  }
-  check_same_structure(ptrs);
+  const std::vector<ChartSampler> samplers = set_samplers(charts, context);
   const BaseTopology& topology = samplers[0].topology();
   std::vector<MeshData> meshes;
   for (const auto& s : samplers) meshes.push_back(gather_samples(s));

@@ -140,12 +140,15 @@ SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const Uniform
   return out;
 }
 
-void check_same_structure(const std::vector<const ChartSampler*>& samplers) {
-  if (samplers.empty()) throw InvalidInput("remesh: no charts given");
-  const auto& first = samplers[0]->chart().patches;
-  const auto& t0 = samplers[0]->topology();
+std::vector<ChartSampler> set_samplers(const std::vector<const dissect::Chart*>& charts, const Context& context) {
+  if (charts.empty()) throw InvalidInput("remesh: no charts given");
+  std::vector<ChartSampler> samplers;
+  samplers.reserve(charts.size());
+  for (const auto* c : charts) samplers.emplace_back(*c, context);
+  const auto& first = samplers[0].chart().patches;
+  const auto& t0 = samplers[0].topology();
   for (size_t m = 1; m < samplers.size(); ++m) {
-    const auto& patches = samplers[m]->chart().patches;
+    const auto& patches = samplers[m].chart().patches;
     const std::string which = "remesh: chart " + std::to_string(m) + " does not match chart 0: ";
     if (patches.size() != first.size())
       throw InvalidInput(which + std::to_string(patches.size()) + " patches instead of " +
@@ -154,24 +157,17 @@ void check_same_structure(const std::vector<const ChartSampler*>& samplers) {
       if (patches[p].name != first[p].name)
         throw InvalidInput(which + "patch " + std::to_string(p) + " is '" + patches[p].name + "' instead of '" +
                            first[p].name + "'");
-      if (samplers[m]->topology().quads[p] != t0.quads[p])
+      if (samplers[m].topology().quads[p] != t0.quads[p])
         throw InvalidInput(which + "the corners of patch " + std::to_string(p) + " ('" + first[p].name +
                            "') join other base vertices; the base domains differ");
     }
   }
+  return samplers;
 }
 
 SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, int level,
                               const UniformOptions& options, const Context& context) {
-  if (charts.empty()) throw InvalidInput("remesh: no charts given");
-  std::vector<ChartSampler> samplers;
-  samplers.reserve(charts.size());
-  std::vector<const ChartSampler*> ptrs;
-  for (const auto* c : charts) {
-    samplers.emplace_back(*c, context);
-    ptrs.push_back(&samplers.back());
-  }
-  check_same_structure(ptrs);
+  const std::vector<ChartSampler> samplers = set_samplers(charts, context);
   SemiRegularSet out;
   out.connectivity = uniform_connectivity(samplers[0].topology(), level, options);
   for (size_t m = 0; m < samplers.size(); ++m) {

@@ -81,9 +81,10 @@ SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, 
 SemiRegularSet remesh_uniform(const std::vector<dissect::Chart>& charts, int level,
                               const UniformOptions& options = {}, const Context& context = {});
 
-/// Throws InvalidInput unless every sampler's patch list matches sampler 0's (count, names,
+/// One sampler per chart of a set, checked to share sampler 0's structure (patch count, names,
 /// base-domain quads). Used by the set remeshers.
+/// \throws InvalidInput for no charts or charts of different dissections (naming what differs).
 class ChartSampler;
-void check_same_structure(const std::vector<const ChartSampler*>& samplers);
+std::vector<ChartSampler> set_samplers(const std::vector<const dissect::Chart*>& charts, const Context& context = {});
 
 }  // namespace qs::remesh
