@@ -252,3 +252,19 @@ TEST(Dissect, StretchMinimizedLeavesKeepEveryInvariantAndLowerStretch) {
   }
   EXPECT_GT(lower, 0);
 }
+
+TEST(Dissect, SplitStretchJudgesPatchesByTheirMinimizedMap) {
+  // Over-tau patches are judged by a stretch-minimized map: no node may be recorded with more
+  // stretch than under the plain rule, so no more splits are needed, and every invariant holds.
+  const auto m = qs::shapes::star_blob(4, 1.5, 4);
+  qs::dissect::DissectOptions o;
+  o.tau = 1.4;
+  const auto plain = qs::dissect::dissect(m, std::nullopt, o);
+  o.split_stretch_rounds = 6;
+  const auto d = qs::dissect::dissect(m, std::nullopt, o);
+  check_dissection(d, m.num_faces());
+  ASSERT_FALSE(d.tree.empty());
+  ASSERT_FALSE(plain.tree.empty());
+  EXPECT_LT(d.tree[0].stretch, plain.tree[0].stretch) << "the root is judged by its minimized map";
+  EXPECT_LE(d.chart.patches.size(), plain.chart.patches.size());
+}

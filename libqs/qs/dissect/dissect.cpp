@@ -439,10 +439,12 @@ Param MeshDissector::parameterize(const Node& node) {
     po.stretch_iterations = squeezed ? std::max(opt_.split_stretch_rounds, kRepairRounds) : opt_.split_stretch_rounds;
     try {
       param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+      // Kept when it folds less, or, both bijective, when it is less stretched.
       const int bad = sp.flipped_faces + sp.zero_area_faces;
-      if (bad < p.sp.flipped_faces + p.sp.zero_area_faces) {
+      const int old_bad = p.sp.flipped_faces + p.sp.zero_area_faces;
+      if (bad < old_bad || (bad == 0 && old_bad == 0)) {
         param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, sp.uv);
-        if (squeezed || st.patch < p.st.patch) {
+        if (bad < old_bad || st.patch < p.st.patch) {
           p.sp = std::move(sp);
           p.st = std::move(st);
         }
