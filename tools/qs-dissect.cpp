@@ -4,6 +4,7 @@
 // Exit codes: 0 done (patches left over tau are listed with their reasons), 1 usage, 2 invalid
 // mesh or landmarks, 3 i/o, 4 solver failure, 70 internal error.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -23,24 +24,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::array<int, 4> seeds_from_landmarks(const qs::landmarks::Landmarks& lm, const qs::TriMesh& mesh,
-                                        std::ostream& notes) {
-  std::array<int, 4> seeds{};
-  for (int i = 0; i < 4; ++i) {
-    const auto& l = lm.seeds[i];
-    if (l.vertex >= 0) {
-      seeds[i] = l.vertex;
-      continue;
-    }
-    // Seeds must be vertices: the nearest corner of the face the point lies on.
-    const qs::Tri& t = mesh.faces[l.where.face];
-    int best = 0;
-    for (int k = 1; k < 3; ++k)
-      if ((mesh.positions[t[k]] - l.position).norm() < (mesh.positions[t[best]] - l.position).norm()) best = k;
-    seeds[i] = t[best];
-    notes << "  note: " << l.name << " moved to the nearest vertex " << seeds[i] << " ("
-          << (mesh.positions[t[best]] - l.position).norm() << " away)\n";
-  }
+// Seeds as surface points: qs-dissect inserts a seed that is not on a vertex into the mesh, so that
+// it is exactly a corner of the two seed patches.
+std::array<qs::landmarks::SurfacePoint, 4> seeds_from_landmarks(const qs::landmarks::Landmarks& lm) {
+  std::array<qs::landmarks::SurfacePoint, 4> seeds;
+  for (int i = 0; i < 4; ++i) seeds[i] = lm.seeds[i].where;
   return seeds;
 }
 
@@ -131,7 +119,7 @@ int main(int argc, char** argv) {
       set[i].name = in.file;
       if (!in.landmarks) continue;
       if (in.landmarks->seeds.size() == 4) {
-        set[i].seeds = seeds_from_landmarks(*in.landmarks, in.valid.mesh, text);
+        set[i].seed_points = seeds_from_landmarks(*in.landmarks);
         seed_source[i] = in.landmark_file;
         ++with_seeds;
       }
@@ -146,7 +134,7 @@ int main(int argc, char** argv) {
     if (with_seeds != 0 && with_seeds != static_cast<int>(inputs.size())) {
       std::string which;
       for (size_t i = 0; i < inputs.size(); ++i)
-        if (!set[i].seeds) which += (which.empty() ? "" : ", ") + inputs[i].file;
+        if (!set[i].seed_points) which += (which.empty() ? "" : ", ") + inputs[i].file;
       throw qs::InvalidInput("seeds correspond by order across the set, so every mesh needs them: " + which +
                              " has no seeds (give a landmark file with 4 seeds for each mesh, or for none)");
     }
@@ -155,14 +143,18 @@ int main(int argc, char** argv) {
                    "axes, which correspond only for similar poses. Give seeds for a reliable correspondence.\n";
 
     qs::Context ctx;
-    int last_pct = -1;
+    // Each stage once at its start, then at every quarter it passes, never backwards or twice.
+    std::string last_stage;
+    int last_quarter = -1;
     if (!quiet)
       ctx.progress = [&](const std::string& stage, double f) {
-        const int pct = static_cast<int>(f * 100);
-        if (pct / 25 != last_pct / 25 || pct == 100) {
-          std::cerr << "qs-dissect: " << stage << " " << pct << "%\n";
-          last_pct = pct;
-        }
+        const int pct = static_cast<int>(std::floor(std::clamp(f, 0.0, 1.0) * 100));
+        const int quarter = pct / 25;
+        if (stage == last_stage && quarter <= last_quarter) return;
+        if (stage != last_stage) last_quarter = -1;
+        std::cerr << "qs-dissect: " << stage << " " << pct << "%\n";
+        last_stage = stage;
+        last_quarter = quarter;
       };
     const auto t1 = std::chrono::steady_clock::now();
     qs::dissect::DissectionSet result = qs::dissect::dissect_set(set, opt, ctx);
@@ -171,6 +163,7 @@ int main(int argc, char** argv) {
     const auto charts = chart_names(meshes);
     std::vector<qs::dissect::DissectedMesh> out(inputs.size());
     int flipped = 0;
+    std::ostringstream folded;  // the patches left folded, for the error
     for (size_t i = 0; i < inputs.size(); ++i) {
       auto& dm = out[i];
       dm.dissection = std::move(result.meshes[i]);
@@ -199,6 +192,21 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
+      for (const auto& n : d.tree)
+        if (i < n.refined_faces.size() && n.refined_faces[i] > 0)
+          text << "  refined patch " << n.name << ": +" << n.refined_faces[i]
+               << " faces (edges split at their midpoints; the surface is unchanged)\n";
+      for (size_t pi = 0; pi < d.chart.patches.size(); ++pi) {
+        const auto& p = d.chart.patches[pi];
+        if (p.flipped_faces + p.zero_area_faces == 0) continue;
+        std::string feats;
+        for (const auto& f : d.features)
+          if (f.patch == static_cast<int>(pi)) feats += (feats.empty() ? "'" : ", '") + f.name + "'";
+        folded << "patch " << p.name << " of " << dm.file << " (" << p.faces << " faces, "
+               << p.flipped_faces + p.zero_area_faces << " folded"
+               << (feats.empty() ? "" : ", features " + feats) << ", " << qs::dissect::stop_reason_name(p.stop)
+               << "); ";
+      }
       for (const auto& f : d.features)
         text << "  feature " << f.name << ": patch " << d.chart.patches[f.patch].name << " uv (" << std::setprecision(6)
              << f.uv.x() << ", " << f.uv.y() << ")\n";
@@ -228,9 +236,10 @@ int main(int argc, char** argv) {
              << ", flipped " << p.flipped_faces << "\n";
     if (!report_file.empty()) qs::write_file_atomically(report_file, full.str());
     if (flipped > 0)
-      throw qs::SolverError(std::to_string(flipped) +
-                            " uv faces are flipped or of zero area in patches that could not be split further "
-                            "(see the report above); try a larger --max-depth or a smaller --min-faces");
+      throw qs::SolverError(std::to_string(flipped) + " uv faces stay flipped or of zero area after splitting, " +
+                            "local refinement and repair: " + folded.str() +
+                            "check that the landmarks correspond (features in the same order around each other on "
+                            "every mesh, seeds at the same places)");
     return 0;
   });
 }

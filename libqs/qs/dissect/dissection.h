@@ -85,6 +85,10 @@ struct TreeNode {
   int features_held = 0;           ///< groups left in place (too near the border)
   int pinned_solves = 0;           ///< meshes whose warped map folded and was solved again pinned
   int split_mesh = -1;             ///< split nodes: the mesh whose peak was used
+  /// Faces added per mesh by local refinement of this node (empty: none). A node that would have
+  /// ended folded, or whose split failed, has its patch's edges split at their midpoints (the
+  /// surface is unchanged, only its sampling) and is evaluated again, at most 3 times.
+  std::vector<int> refined_faces;
   bool split = false;              ///< children are name + ".0" .. ".4"
   Vec2 peak_uv = Vec2::Zero();     ///< split nodes: the peak point used
   double w = 0;                    ///< split nodes: the w used
@@ -115,8 +119,18 @@ struct FeaturePlacement {
   Vec2 uv = Vec2::Zero();     ///< in that patch; equal across the set (the aligned mean)
 };
 
+/// Where a seed of the loop ended: a chart vertex (an input vertex, or one inserted at the given
+/// surface point so that the seed is exactly the patch corner).
+struct SeedPlacement {
+  int vertex = -1;                  ///< chart vertex id (input vertex ids are kept by the chart)
+  bool inserted = false;            ///< true: a new vertex at `where`; false: an input vertex
+  landmarks::SurfacePoint where;    ///< on the input mesh, when inserted (face -1 otherwise)
+  Vec3 position = Vec3::Zero();
+};
+
 struct Dissection {
-  std::array<int, 4> seeds{};                 ///< input-mesh vertex ids
+  std::array<int, 4> seeds{};                 ///< chart vertex ids of the seed-loop corners
+  std::array<SeedPlacement, 4> seed_placements{};
   std::vector<TreeNode> tree;                 ///< parents before children, siblings by name
   Chart chart;
   BaseDomain base;
@@ -137,6 +151,10 @@ struct MeshToDissect {
   std::optional<std::array<int, 4>> seeds;       ///< vertex ids; nullopt: choose_seeds
   std::vector<Feature> features;                 ///< the same names in every mesh of the set
   std::string name;                              ///< for messages (e.g. the file)
+  /// Seeds as surface points: each is inserted into the mesh (an edge or face split, as features
+  /// are) unless it lies on a vertex, so that it is exactly a corner of the seed patches. When
+  /// set, it takes the place of `seeds`.
+  std::optional<std::array<landmarks::SurfacePoint, 4>> seed_points;
 };
 
 /// The common dissection of a set: one union tree, and per mesh a chart whose patches have the

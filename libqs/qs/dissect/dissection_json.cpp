@@ -47,6 +47,7 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
       j["warp_events"] = n.warp_events;
       j["pinned_solves"] = n.pinned_solves;
     }
+    if (!n.refined_faces.empty()) j["refined_faces"] = n.refined_faces;  // per mesh
     tree.push_back(j);
   }
   doc["tree"] = tree;
@@ -92,6 +93,17 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                           {"vertex", f.vertex},
                           {"patch", d.chart.patches[f.patch].name},
                           {"uv", {f.uv.x(), f.uv.y()}}});
+    // Where each seed landed: a chart vertex, and the input surface point it was inserted at.
+    ordered_json seed_places = ordered_json::array();
+    for (const auto& sp : d.seed_placements) {
+      ordered_json q = {{"vertex", sp.vertex}, {"inserted", sp.inserted}};
+      if (sp.inserted) {
+        q["face"] = sp.where.face;
+        q["bary"] = sp.where.bary;
+      }
+      q["position"] = {sp.position.x(), sp.position.y(), sp.position.z()};
+      seed_places.push_back(q);
+    }
     ordered_json j = {{"file", m.file},
                       {"chart", m.chart_file},
                       {"input_vertices", m.input_vertices},
@@ -100,6 +112,7 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                       {"chart_faces", d.chart.mesh.faces.size()},
                       {"seed_source", m.seed_source},
                       {"seeds", d.seeds},
+                      {"seed_placements", seed_places},
                       {"base_vertices", d.base.vertices},
                       {"max_stretch", d.max_stretch},
                       {"patches_over_tau", over},

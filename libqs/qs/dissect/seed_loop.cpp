@@ -697,6 +697,135 @@ SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, c
   return std::move(attempt.loop);
 }
 
+namespace {
+
+/// The side of each vertex (-1 on the loop) from the face labels.
+std::vector<int> vertex_sides(const TriMesh& mesh, const std::vector<int>& labels, const std::vector<int>& vertices) {
+  std::vector<int> want(mesh.num_vertices(), -2);
+  for (size_t k = 0; k < vertices.size(); ++k) want[vertices[k]] = -1;
+  std::vector<int> side(mesh.num_vertices(), -2);  // -2 untouched, -1 mixed (on the loop)
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.faces[f]) {
+      if (want[v] == -2) continue;
+      if (side[v] == -2) side[v] = labels[f];
+      else if (side[v] != labels[f]) side[v] = -1;
+    }
+  std::vector<int> out;
+  for (int v : vertices) out.push_back(side[v] < 0 ? -1 : side[v]);
+  return out;
+}
+
+int count_wrong(const TriMesh& mesh, const std::vector<int>& labels, const std::vector<SideConstraint>& sides) {
+  std::vector<int> vs;
+  for (const auto& c : sides) vs.push_back(c.vertex);
+  const std::vector<int> got = vertex_sides(mesh, labels, vs);
+  int wrong = 0;
+  for (size_t k = 0; k < sides.size(); ++k) wrong += got[k] != sides[k].side;
+  return wrong;
+}
+
+double loop_length(const TriMesh& mesh, const SeedLoop& loop) {
+  double l = 0;
+  for (const auto& p : loop.paths) l += path_length(mesh, p);
+  return l;
+}
+
+}  // namespace
+
+std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& vertices) {
+  return vertex_sides(mesh, seed_patch_of_faces(mesh, loop), vertices);
+}
+
+SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& avoid,
+                           const std::vector<SideConstraint>& sides, const Context& context) {
+  check_seeds(mesh, loop.seeds);
+  const Graph g = build_graph(mesh);
+  Dijkstra dijkstra(g);
+  std::string why;
+  std::vector<int> labels = label_faces(mesh, g, loop, why);
+  if (labels.empty()) throw InvalidInput("seed loop does not cut the mesh into two patches: " + why);
+  SeedLoop cur = loop;
+  int wrong = count_wrong(mesh, labels, sides);
+  const int nv = mesh.num_vertices();
+  for (int round = 0; wrong > 0 && round < 2 * static_cast<int>(sides.size()) + 2; ++round) {
+    context.check_cancel();
+    // The first vertex on the wrong side.
+    std::vector<int> vs;
+    for (const auto& c : sides) vs.push_back(c.vertex);
+    const std::vector<int> got = vertex_sides(mesh, labels, vs);
+    int f = -1;
+    for (size_t k = 0; k < sides.size() && f < 0; ++k)
+      if (got[k] != sides[k].side) f = sides[k].vertex;
+    const std::vector<double> df = dijkstra.all_distances(f);
+    SeedLoop best;
+    int best_wrong = wrong;
+    double best_len = kInf;
+    std::vector<char> blocked(nv, 0);
+    for (int i = 0; i < 4; ++i) {
+      const std::vector<int>& old = cur.paths[i];
+      int x = old.front();
+      for (int v : old)
+        if (df[v] < df[x]) x = v;
+      const double r = df[x];
+      if (!(r < kInf) || r <= 0) continue;
+      const std::vector<double> dx = dijkstra.all_distances(x);
+      for (double factor : {1.0, 1.5, 2.5}) {
+        // The waypoint: about factor * r from the feature, as far as possible from x.
+        std::fill(blocked.begin(), blocked.end(), 0);
+        for (int s : cur.seeds) blocked[s] = 1;
+        for (int v : avoid) blocked[v] = 1;
+        blocked[f] = 1;
+        for (int j = 0; j < 4; ++j)
+          if (j != i)
+            for (size_t k = 1; k + 1 < cur.paths[j].size(); ++k) blocked[cur.paths[j][k]] = 1;
+        int w = -1;
+        for (int v = 0; v < nv; ++v) {
+          if (blocked[v] || !(df[v] >= 0.8 * factor * r && df[v] <= 1.25 * factor * r)) continue;
+          if (w < 0 || dx[v] > dx[w]) w = v;
+        }
+        if (w < 0) continue;
+        const int a = cur.seeds[i], b = cur.seeds[(i + 1) % 4];
+        std::vector<int> p1, p2;
+        blocked[a] = blocked[b] = 0;
+        blocked[b] = 1;
+        if (!dijkstra.path(a, w, blocked, p1)) continue;
+        for (int v : p1) blocked[v] = 1;
+        blocked[w] = 0;
+        blocked[b] = 0;
+        if (!dijkstra.path(w, b, blocked, p2)) continue;
+        SeedLoop cand = cur;
+        cand.paths[i] = p1;
+        cand.paths[i].insert(cand.paths[i].end(), p2.begin() + 1, p2.end());
+        std::string w2;
+        const std::vector<int> lab = label_faces(mesh, g, cand, w2);
+        if (lab.empty()) continue;
+        const int cw = count_wrong(mesh, lab, sides);
+        const double len = loop_length(mesh, cand);
+        if (cw < best_wrong || (cw == best_wrong && cw < wrong && len < best_len)) {
+          best = std::move(cand);
+          best_wrong = cw;
+          best_len = len;
+        }
+      }
+    }
+    if (best_wrong >= wrong) break;
+    cur = std::move(best);
+    labels = label_faces(mesh, g, cur, why);
+    wrong = best_wrong;
+  }
+  if (wrong > 0) {
+    std::vector<int> vs;
+    for (const auto& c : sides) vs.push_back(c.vertex);
+    const std::vector<int> got = vertex_sides(mesh, labels, vs);
+    std::string list;
+    for (size_t k = 0; k < sides.size(); ++k)
+      if (got[k] != sides[k].side) list += (list.empty() ? "" : ", ") + std::to_string(sides[k].vertex);
+    throw InvalidInput("no seed loop through these seeds puts vertices " + list +
+                       " on the required side (found by rerouting one path at a time)");
+  }
+  return cur;
+}
+
 std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop) {
   check_seeds(mesh, loop.seeds);
   const Graph g = build_graph(mesh);

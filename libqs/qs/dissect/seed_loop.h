@@ -37,6 +37,26 @@ SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, c
 SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
                          const Context& context = {});
 
+/// A vertex that must end on a given side of the seed loop (0: left of s0->s1->s2->s3, patch 0).
+struct SideConstraint {
+  int vertex = -1;
+  int side = 0;
+};
+
+/// Re-routes `loop` so that every constrained vertex lies on its side, when the shortest loop
+/// puts some on the other (for example a head between two hands: the shortest hand-to-hand path
+/// may pass in front of the neck on one mesh and behind it on another). One vertex at a time, the
+/// path of the loop nearest it is routed through a waypoint across the vertex (on the far side
+/// of it, at 1, 1.5 or 2.5 times its distance to the path); among the loops that cut the mesh in
+/// two and leave fewer vertices on the wrong side, the shortest is kept. Every path still avoids
+/// `avoid`. Returns the loop unchanged when all sides already hold.
+/// 	hrows InvalidInput naming the vertices whose side cannot be met.
+SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& avoid,
+                           const std::vector<SideConstraint>& sides, const Context& context = {});
+
+/// The side of the loop each vertex in `vertices` lies on (0 or 1); -1 for a vertex on the loop.
+std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& vertices);
+
 /// Which seed patch each face lies in: #F labels, 0 for the faces left of the loop
 /// s0 -> s1 -> s2 -> s3 -> s0 (the loop runs counter-clockwise around patch 0 seen from outside,
 /// faces being counter-clockwise seen from outside as validate() leaves them), 1 for the others.

@@ -1,0 +1,255 @@
+#pragma once
+// Internal to the dissect module: the per-mesh dissection state (MeshDissector) and the set driver
+// (SetDissector) share these types. Not installed, not part of the API.
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "qs/core/context.h"
+#include "qs/dissect/cut_mesh.h"
+#include "qs/dissect/dissection.h"
+#include "qs/dissect/seed_loop.h"
+#include "qs/landmarks/landmarks.h"
+#include "qs/param/square_param.h"
+
+namespace qs::dissect::detail {
+
+// A split that could not be completed; the parent is restored and kept as a leaf.
+struct SplitFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+inline std::uint64_t edge_key(int a, int b) {
+  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint64_t>(std::max(a, b));
+}
+
+inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+inline double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) { return 0.5 * cross2(b - a, c - a); }
+
+inline const std::array<Vec2, 4> kSquare = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+
+struct Node {
+  std::string name;
+  int depth = 0;
+  int label = 0;
+  std::array<int, 4> corners{};
+  double parent_stretch = std::numeric_limits<double>::infinity();  ///< this mesh's, at the parent
+  double grandparent_stretch = std::numeric_limits<double>::infinity();
+  int refinements = 0;  ///< local refinement rounds this node had (no_dead_ends)
+};
+
+// A patch as a PatchMesh, with its local -> global maps.
+struct Extracted {
+  param::PatchMesh pm;
+  std::vector<int> verts;  // local -> global vertex
+  std::vector<int> faces;  // local -> global face
+};
+
+enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature = 4 };
+
+/// Per-mesh work on a node of a set runs on several threads from this many faces (all meshes).
+constexpr size_t kParallelFaces = 8000;
+/// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
+constexpr int kRepairRounds = 12;
+
+/// Runs f(i) for i in [0, n) on up to hardware_concurrency() threads (one thread when !parallel:
+/// starting threads costs more than small work). Every i runs; then the exception of the lowest i
+/// that threw is rethrown, so errors do not depend on timing.
+template <class F>
+void parallel_for(size_t n, F&& f, bool parallel = true) {
+  std::vector<std::exception_ptr> errors(n);
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t i; (i = next++) < n;) {
+      try {
+        f(i);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+  };
+  const size_t threads = parallel ? std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), n) : 1;
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+// The per-node result of one mesh: its patch extracted and parameterized (after alignment).
+struct Param {
+  Extracted ex;
+  param::SquareParam sp;
+  param::Stretch st;
+  std::vector<std::pair<int, int>> features;  // (feature index, local vertex), by feature index
+};
+
+// The dissection state of one mesh of the set: the cut mesh and the faces of every tree node.
+// The set driver (SetDissector) walks the union tree and asks each mesh to parameterize, split,
+
+class MeshDissector {
+ public:
+  MeshDissector(const MeshToDissect& in, int index, const std::vector<std::string>& feature_names,
+                const DissectOptions& options, const Context& context);
+
+  /// Traces the shortest seed loop through `seeds`, avoiding the features.
+  SeedLoop trace_loop(const std::array<int, 4>& seeds) const;
+  /// The side of the loop (0 or 1) of every feature, by feature index.
+  std::vector<int> feature_sides(const SeedLoop& loop) const;
+  /// Re-routes the loop so that feature k lies on side want[k] (InvalidInput when impossible).
+  SeedLoop reroute_loop(const SeedLoop& loop, const std::vector<int>& want) const;
+  /// Labels the two seed patches of a traced loop (relaxing it first when asked).
+  std::array<Node, 2> seed(SeedLoop loop);
+  Param parameterize(const Node& node);
+  std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
+  /// Puts a node's faces back after a failed split (in any mesh of the set).
+  void restore(const Node& node, size_t first_new_label);
+  /// Local refinement: splits every edge inside the node's patch at its midpoint (the surface is
+  /// unchanged, only its sampling). Neighbouring patches are untouched. Returns the faces added.
+  int refine(const Node& node);
+  size_t labels() const { return patch_faces_.size(); }
+  size_t node_faces(const Node& node) const { return patch_faces_[node.label].size(); }
+  /// Drops the parent's face list once every mesh of the set has split it.
+  void commit_split(const Node& node) { patch_faces_[node.label].clear(); }
+  /// Records a node as a leaf with its (aligned) parameterization.
+  void keep_leaf(const Node& node, const Param& p, PatchInfo info);
+  Dissection finish(const std::vector<TreeNode>& tree);
+  const std::string& name() const { return name_; }
+  /// The label of the patch holding feature k (features never lie on a patch border).
+  int feature_label(int k) const { return cm_.patch(CutMesh::face_of(cm_.out_halfedge(feature_vertex_[k]))); }
+
+  /// Smoothed per-face stretch peak: (face, value). One sliver cannot decide.
+  std::pair<int, double> peak(const Param& p) const;
+
+ private:
+  void grow() {
+    const size_t n = cm_.num_vertices();
+    if (local_of_.size() < n) {
+      local_of_.resize(n, -1);
+      uv_of_.resize(n, Vec2::Zero());
+      flag_.resize(n, kFree);
+    }
+    face_uv_.resize(cm_.num_faces());
+  }
+  int split_edge(int h, double t) {
+    const int m = cm_.split_edge(h, t);
+    const int nf = cm_.num_faces();
+    patch_faces_[cm_.patch(nf - 2)].push_back(nf - 2);
+    patch_faces_[cm_.patch(nf - 1)].push_back(nf - 1);
+    grow();
+    return m;
+  }
+  int split_face(int f, const Vec3& bary) {
+    const int m = cm_.split_face(f, bary);
+    const int nf = cm_.num_faces();
+    patch_faces_[cm_.patch(f)].push_back(nf - 2);
+    patch_faces_[cm_.patch(f)].push_back(nf - 1);
+    grow();
+    return m;
+  }
+  int new_label() {
+    patch_faces_.emplace_back();
+    return static_cast<int>(patch_faces_.size()) - 1;
+  }
+  bool interior_edge(int h, int label) const {
+    return cm_.patch(CutMesh::face_of(h)) == label && cm_.patch(CutMesh::face_of(cm_.opposite(h))) == label;
+  }
+  int insert_feature(const Feature& f);
+  /// Inserts a vertex at a point of the input surface (or returns the vertex it lies on).
+  int insert_surface_point(const landmarks::SurfacePoint& where, bool* inserted = nullptr);
+  Extracted extract(const Node& node);
+  /// p.features from p.ex: (feature index, local vertex), sorted.
+  void collect_features(Param& p) const {
+    p.features.clear();
+    for (size_t i = 0; i < p.ex.verts.size(); ++i) {
+      const int v = p.ex.verts[i];
+      if (v < static_cast<int>(feature_of_.size()) && feature_of_[v] >= 0)
+        p.features.emplace_back(feature_of_[v], static_cast<int>(i));
+    }
+    std::sort(p.features.begin(), p.features.end());
+  }
+  int insert_point(int label, const Vec2& q, bool snap);
+  std::vector<int> trace(int label, int a, int b);
+
+  const TriMesh& mesh_;  // the input, before any cut
+  std::string name_;
+  CutMesh cm_;
+  DissectOptions opt_;
+  const Context& ctx_;
+  std::vector<int> feature_vertex_;            // by feature index (names sorted)
+  std::vector<int> feature_of_;                // by vertex: feature index or -1
+  std::vector<std::vector<int>> patch_faces_;  // by label
+  std::vector<int> local_of_;                  // scratch: global vertex -> local, -1
+  std::vector<Vec2> uv_of_;                    // scratch: uv of the patch being split
+  std::vector<char> flag_;                     // scratch: Flag of the patch being split
+  std::vector<std::array<Vec2, 3>> face_uv_;   // leaves' wedge uv, by global face
+  std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
+  std::vector<Node> leaves_;
+  std::vector<PatchInfo> infos_;
+  struct Repair {
+    size_t leaf;  // index into leaves_ / infos_
+    Param param;  // the leaf as kept
+    int rounds;
+  };
+  std::vector<Repair> repairs_;  // leaves to minimize in finish()
+  void set_leaf_map(size_t leaf, const Param& p, const param::SquareParam& sp, const param::Stretch& st);
+  void run_repairs();
+  std::array<int, 4> seeds_{};
+  std::array<SeedPlacement, 4> seed_placements_{};
+
+ public:
+  /// The seeds given as surface points, inserted by the constructor (nullopt: none given).
+  std::optional<std::array<int, 4>> inserted_seeds;
+};
+
+/// Local refinement rounds a node may get when it would otherwise end folded (set_dissector.cpp).
+constexpr int kMaxRefinements = 3;
+/// Only patches of at most this many faces are refined (each round about quadruples them).
+constexpr size_t kRefineFaces = 2000;
+
+/// Local untangling of a folded map (leaf_repair.cpp).
+param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam& in, const std::vector<char>& fixed,
+                            int rounds);
+/// A stretch-minimized, bijective map of a leaf, or an empty map when none is better (leaf_repair.cpp).
+param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& context);
+
+/// Smallest distance from the features to the 8 cuts of a split at (peak, w) (split_choice.cpp).
+double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w);
+/// The children's stretch predicted from the parent's map for a split at (peak, w) (split_choice.cpp).
+double predicted_children_stretch(const Param& p, const Vec2& peak, double w);
+
+// Walks the union quinary tree over every mesh of the set at once (set_dissector.cpp; the
+// alignment in feature_alignment.cpp, the choice of the split in split_choice.cpp).
+class SetDissector {
+ public:
+  SetDissector(const std::vector<MeshToDissect>& in, const DissectOptions& options, const Context& context);
+  DissectionSet run();
+
+ private:
+  // Parameterizes a node in every mesh and aligns its features to their mean (u,v).
+  // `nodes` holds the node of every mesh (same name and label, each mesh's own corner ids).
+  std::vector<Param> evaluate(const std::vector<Node>& nodes, TreeNode& tn);
+  void align(std::vector<Param>& ps, TreeNode& tn);
+  std::pair<Vec2, double> choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
+                                       const std::vector<bool>& over);
+
+  const std::vector<MeshToDissect>& in_;
+  DissectOptions opt_;
+  const Context& ctx_;
+  std::vector<std::string> feature_names_;
+  std::vector<MeshDissector> meshes_;
+};
+
+}  // namespace qs::dissect::detail

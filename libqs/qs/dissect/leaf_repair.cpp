@@ -1,0 +1,115 @@
+// Repairs of folded or over-stretched maps: local untangling, and the stretch minimization of
+// leaves left over tau or not bijective (run after the subdivision, in parallel over leaves).
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+#include "qs/warp/warp.h"
+
+#include "qs/core/error.h"
+#include "qs/dissect/dissect_detail.h"
+
+namespace qs::dissect::detail {
+
+// Local untangling of a folded map: the free vertices of folded faces and two rings around them
+// move to the average of their neighbours (Gauss-Seidel), the border and `fixed` vertices stay.
+// Repeated while folds remain (at most `rounds` times). Returns the map with fewer folds.
+param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam& in, const std::vector<char>& fixed,
+                            int rounds) {
+  const int nv = static_cast<int>(pm.positions.size());
+  std::vector<std::vector<int>> nb(nv);
+  for (const Tri& t : pm.faces)
+    for (int k = 0; k < 3; ++k) nb[t[k]].push_back(t[(k + 1) % 3]), nb[t[k]].push_back(t[(k + 2) % 3]);
+  for (auto& n : nb) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  std::vector<char> pinned = fixed;
+  pinned.resize(nv, 0);
+  for (int b : pm.boundary) pinned[b] = 1;
+  param::SquareParam best = in, cur = in;
+  for (int r = 0; r < rounds && !best.bijective(); ++r) {
+    std::vector<char> mark(nv, 0);
+    for (const Tri& t : pm.faces)
+      if (signed_area(cur.uv[t[0]], cur.uv[t[1]], cur.uv[t[2]]) <= param::kZeroUvArea)
+        for (int v : t) mark[v] = 1;
+    for (int ring = 0; ring < 2 + std::min(r, 6); ++ring) {  // a wider region every round
+      std::vector<char> grown = mark;
+      for (int v = 0; v < nv; ++v)
+        if (mark[v])
+          for (int w : nb[v]) grown[w] = 1;
+      mark.swap(grown);
+    }
+    for (int sweep = 0; sweep < 10; ++sweep)
+      for (int v = 0; v < nv; ++v) {
+        if (!mark[v] || pinned[v] || nb[v].empty()) continue;
+        Vec2 c = Vec2::Zero();
+        for (int w : nb[v]) c += cur.uv[w];
+        cur.uv[v] = c / static_cast<double>(nb[v].size());
+      }
+    param::count_uv_faces(pm.faces, cur);
+    if (cur.flipped_faces + cur.zero_area_faces < best.flipped_faces + best.zero_area_faces) best = cur;
+  }
+  return best;
+}
+
+// A stretch-minimized map of a leaf (see keep_leaf), or an empty map when none is better.
+// Pure: it reads the leaf only, so leaves are repaired in parallel.
+param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& context) {
+  // Minimize without pins (pins inside a squeezed protrusion defeat it), then warp the features
+  // back onto their aligned (u,v): the spread-out map folds far less under the warp.
+  param::SquareParamOptions po;
+  po.stretch_iterations = rounds;
+  param::SquareParam min_sp;
+  try {
+    min_sp = param::parameterize_square(p.ex.pm, po, context);
+    if (!p.features.empty()) {
+      std::vector<Vec2> from, to;
+      for (const auto& [k, local] : p.features) {
+        from.push_back(min_sp.uv[local]);
+        to.push_back(p.sp.uv[local]);
+      }
+      min_sp.uv = warp::warp_square(from, to, min_sp.uv, {}, context).points;
+      param::count_uv_faces(p.ex.pm.faces, min_sp);
+      if (!min_sp.bijective()) {
+        std::vector<char> fixed(p.ex.verts.size(), 0);
+        for (const auto& f : p.features) fixed[f.second] = 1;
+        min_sp = untangle(p.ex.pm, min_sp, fixed, 20);
+      }
+      if (!min_sp.bijective()) {  // then try minimizing with the features pinned
+        for (const auto& [k, local] : p.features) po.pinned.emplace_back(local, p.sp.uv[local]);
+        param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, context);
+        if (pinned.flipped_faces + pinned.zero_area_faces < min_sp.flipped_faces + min_sp.zero_area_faces)
+          min_sp = std::move(pinned);
+      }
+    }
+  } catch (const Error& e) {
+    if (e.code() == ErrorCode::Internal) throw;  // cancelled, or a bug
+    return {};  // a singular system or features the warp cannot place: keep the given map
+  }
+  if (!min_sp.bijective()) return {};
+  return min_sp;
+}
+
+void MeshDissector::run_repairs() {
+  // Independent leaves, one result slot each: the outcome does not depend on the thread count.
+  Context quiet = ctx_.without_progress();
+  quiet.log = nullptr;  // the minimization's fold warnings are expected; the result is counted
+  std::vector<param::SquareParam> result(repairs_.size());
+  size_t faces = 0;
+  for (const auto& r : repairs_) faces += r.param.ex.faces.size();
+  parallel_for(
+      repairs_.size(), [&](size_t r) { result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet); },
+      faces >= kParallelFaces / 8);
+  for (size_t r = 0; r < repairs_.size(); ++r) {
+    const Param& p = repairs_[r].param;
+    if (result[r].uv.empty()) continue;
+    const param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, result[r].uv);
+    if (!p.sp.bijective() || st.patch < p.st.patch) set_leaf_map(repairs_[r].leaf, p, result[r], st);
+  }
+  repairs_.clear();
+}
+
+}  // namespace qs::dissect::detail

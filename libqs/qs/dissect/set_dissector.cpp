@@ -1,0 +1,309 @@
+// The union quinary tree (paper 3.4): walks the tree over every mesh of the set at once; a node over
+// tau in any mesh is split in every mesh at one point of the aligned parameter domain.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+#include <deque>
+#include <map>
+#include <iterator>
+#include "qs/dissect/seed_loop.h"
+
+#include "qs/core/error.h"
+#include "qs/dissect/dissect_detail.h"
+
+namespace qs::dissect::detail {
+
+SetDissector::SetDissector(const std::vector<MeshToDissect>& in, const DissectOptions& options,
+                           const Context& context)
+    : in_(in), opt_(options), ctx_(context) {
+  // Features correspond by name: every mesh must have the same names, each once.
+  for (size_t i = 0; i < in.size(); ++i) {
+    std::vector<std::string> names;
+    for (const auto& f : in[i].features) names.push_back(f.name);
+    std::sort(names.begin(), names.end());
+    const auto dup = std::adjacent_find(names.begin(), names.end());
+    if (dup != names.end())
+      throw InvalidInput((in[i].name.empty() ? "mesh " + std::to_string(i) : in[i].name) + ": feature '" + *dup +
+                         "' is given twice");
+    if (i == 0) {
+      feature_names_ = names;
+      continue;
+    }
+    std::vector<std::string> missing, extra;
+    std::set_difference(feature_names_.begin(), feature_names_.end(), names.begin(), names.end(),
+                        std::back_inserter(missing));
+    std::set_difference(names.begin(), names.end(), feature_names_.begin(), feature_names_.end(),
+                        std::back_inserter(extra));
+    if (!missing.empty() || !extra.empty()) {
+      std::string m = "features must have the same names in every mesh of the set;";
+      auto list = [](const std::vector<std::string>& v) {
+        std::string r;
+        for (const auto& x : v) r += (r.empty() ? "'" : ", '") + x + "'";
+        return r;
+      };
+      if (!missing.empty()) m += " " + in[i].name + " lacks " + list(missing) + " (found in " + in[0].name + ");";
+      if (!extra.empty()) m += " " + in[i].name + " has " + list(extra) + " that " + in[0].name + " lacks;";
+      throw InvalidInput(m);
+    }
+  }
+  meshes_.reserve(in.size());
+  for (size_t i = 0; i < in.size(); ++i)
+    meshes_.emplace_back(in[i], static_cast<int>(i), feature_names_, opt_, ctx_);
+}
+
+std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNode& tn) {
+  const Node& node = nodes[0];
+  // The meshes of a set are independent here: one thread each for large nodes (the results do
+  // not depend on it).
+  std::vector<Param> ps(meshes_.size());
+  size_t faces = 0;
+  for (size_t i = 0; i < meshes_.size(); ++i) faces += meshes_[i].node_faces(nodes[i]);
+  parallel_for(meshes_.size(), [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i]); }, faces >= kParallelFaces);
+  // The same features must lie inside the node in every mesh: they are aligned before every split,
+  // so only the seed loops (traced on each mesh independently) can separate them.
+  for (size_t i = 1; i < ps.size(); ++i) {
+    if (ps[i].features.size() == ps[0].features.size() &&
+        std::equal(ps[i].features.begin(), ps[i].features.end(), ps[0].features.begin(),
+                   [](const auto& a, const auto& b) { return a.first == b.first; }))
+      continue;
+    std::vector<int> a, b, diff;
+    for (const auto& f : ps[0].features) a.push_back(f.first);
+    for (const auto& f : ps[i].features) b.push_back(f.first);
+    std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(diff));
+    if (node.depth > 0)
+      throw SolverError("feature '" + feature_names_[diff.front()] + "' ended in different children of patch " +
+                        node.name.substr(0, node.name.rfind('.')) + " across the set (please report this)");
+    throw InvalidInput("feature '" + feature_names_[diff.front()] + "' lies in seed patch " + node.name + " of " +
+                       (std::binary_search(a.begin(), a.end(), diff.front()) ? meshes_[0].name() : meshes_[i].name()) +
+                       " but not of " +
+                       (std::binary_search(a.begin(), a.end(), diff.front()) ? meshes_[i].name() : meshes_[0].name()) +
+                       ": the seed loop s0-s1-s2-s3 separates the features differently on the two meshes; "
+                       "place the seeds so that each feature is on the same side of the loop in every mesh");
+  }
+  tn.features = static_cast<int>(ps[0].features.size());
+  if (meshes_.size() > 1 && !ps[0].features.empty()) align(ps, tn);
+  tn.stretch = 0;
+  tn.mesh_stretch.clear();
+  for (const auto& p : ps) {
+    tn.mesh_stretch.push_back(p.st.patch);
+    tn.stretch = std::max(tn.stretch, p.st.patch);
+  }
+  return ps;
+}
+
+DissectionSet SetDissector::run() {
+  ctx_.report("seed loops", 0.0);
+  const size_t nm = meshes_.size();
+  // The shortest loop of every mesh (in parallel: the meshes are independent here).
+  std::vector<SeedLoop> loops(nm);
+  parallel_for(nm, [&](size_t i) {
+    const std::array<int, 4> s = meshes_[i].inserted_seeds ? *meshes_[i].inserted_seeds
+                                 : in_[i].seeds      ? *in_[i].seeds
+                                                     : choose_seeds(*in_[i].mesh);
+    loops[i] = meshes_[i].trace_loop(s);
+  }, nm > 1);
+  // Consistent loops: every feature on the same side in every mesh. The side each feature takes
+  // in most meshes (ties: the first mesh's) is required of all; a mesh whose shortest loop puts a
+  // feature on the other side is routed again around it.
+  if (nm > 1 && !feature_names_.empty()) {
+    std::vector<std::vector<int>> sides(nm);
+    parallel_for(nm, [&](size_t i) { sides[i] = meshes_[i].feature_sides(loops[i]); }, true);
+    const size_t nf = feature_names_.size();
+    std::vector<int> want(nf);
+    for (size_t k = 0; k < nf; ++k) {
+      size_t zeros = 0;
+      for (size_t i = 0; i < nm; ++i) zeros += sides[i][k] == 0;
+      want[k] = 2 * zeros > nm ? 0 : 2 * zeros < nm ? 1 : sides[0][k];
+    }
+    parallel_for(nm, [&](size_t i) {
+      if (sides[i] == want) return;
+      try {
+        loops[i] = meshes_[i].reroute_loop(loops[i], want);
+      } catch (const InvalidInput& e) {
+        std::string names;
+        for (size_t k = 0; k < nf; ++k)
+          if (sides[i][k] != want[k]) names += (names.empty() ? "'" : ", '") + feature_names_[k] + "'";
+        throw InvalidInput(meshes_[i].name() + ": feature " + names +
+                           " lies on the other side of the seed loop s0-s1-s2-s3 than in most meshes of the set, "
+                           "and no loop through its seeds puts it on the same side (" + e.what() +
+                           "); move the seeds so that each feature is on the same side of the loop in every mesh");
+      }
+    }, true);
+  }
+  std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
+  for (size_t i = 0; i < nm; ++i) {
+    const auto r = meshes_[i].seed(std::move(loops[i]));
+    for (int k = 0; k < 2; ++k) roots[k].push_back(r[k]);
+    ctx_.report("seed loops", static_cast<double>(i + 1) / static_cast<double>(nm));
+  }
+  DissectionSet out;
+  std::map<std::string, std::vector<int>> refined_faces;  // node name -> faces added per mesh
+  std::vector<size_t> refined_total(nm, 0);                // faces added per mesh
+  std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
+  // Progress: the share of the surface area in finished leaves (cuts add faces, not area).
+  double total_area = 0, done_area = 0;
+  std::vector<double> max_area;  // per mesh: opt_.max_patch_area times its surface area
+  for (const auto& m : in_) {
+    double area = 0;
+    for (int f = 0; f < m.mesh->num_faces(); ++f) area += face_area(*m.mesh, f);
+    total_area += area;
+    max_area.push_back(opt_.max_patch_area > 0 ? opt_.max_patch_area * area : INFINITY);
+  }
+  while (!queue.empty()) {
+    ctx_.check_cancel();
+    const std::vector<Node> nodes = queue.front();
+    queue.pop_front();
+    const Node& node = nodes[0];
+    TreeNode tn;
+    tn.name = node.name;
+    tn.depth = node.depth;
+    std::vector<Param> ps = evaluate(nodes, tn);
+    // A long protrusion shrinks exponentially under a Floater map, down to UV triangles of zero
+    // area in floating point: such a patch is over tau whatever its RMS stretch, and splitting
+    // it around its peak is exactly the cure. Only a leaf must be bijective.
+    std::vector<bool> over(ps.size());
+    bool any_over = false;
+    int biggest_over = 0;
+    for (size_t i = 0; i < ps.size(); ++i) {
+      over[i] = ps[i].st.patch > opt_.tau || !ps[i].sp.bijective() || ps[i].st.area3d > max_area[i];
+      if (over[i]) {
+        any_over = true;
+        biggest_over = std::max(biggest_over, static_cast<int>(ps[i].ex.faces.size()));
+      }
+    }
+    // No progress: a bijective patch at least as stretched as its parent in every mesh that is
+    // over (a corner whose 3D angle the square cannot take: every split hands it to a smaller
+    // child, whose stretch only grows). Splitting again would not help; the leaf is repaired
+    // instead. A strongly stretched parent (over 2 tau: a protrusion) gets one more generation
+    // when it had improved on its own parent, since the first split of a protrusion can raise
+    // the stretch of the child that holds its tip.
+    bool progress = false;
+    for (size_t i = 0; i < ps.size() && !progress; ++i) {
+      const double parent = nodes[i].parent_stretch, grandparent = nodes[i].grandparent_stretch;
+      progress = over[i] && (!ps[i].sp.bijective() || ps[i].st.area3d > max_area[i] || ps[i].st.patch < parent ||
+                             (parent > 2 * opt_.tau && parent < grandparent));
+    }
+    StopReason stop = StopReason::None;
+    std::string detail;
+    if (any_over && !progress) {
+      stop = StopReason::NoProgress;
+    } else if (any_over && node.depth < opt_.max_depth && biggest_over >= opt_.min_faces_to_split) {
+      const size_t first_new_label = meshes_[0].labels();
+      const auto [peak, w] = choose_split(node, ps, tn, over);
+      std::vector<std::array<Node, 5>> kids(meshes_.size());
+      size_t node_faces = 0;
+      for (const auto& p : ps) node_faces += p.ex.faces.size();
+      try {
+        parallel_for(meshes_.size(), [&](size_t i) {
+          try {
+            kids[i] = meshes_[i].split(nodes[i], ps[i], peak, w);
+          } catch (const SplitFailure& e) {
+            throw SplitFailure(meshes_.size() > 1 ? meshes_[i].name() + ": " + e.what() : std::string(e.what()));
+          }
+        }, node_faces >= kParallelFaces);
+        // Counterparts must land in the same child. They do when every mesh's map is bijective
+        // (the cuts are the same segments of the aligned domain); a folded map can break that.
+        for (const auto& [k, local] : ps[0].features)
+          for (size_t i = 1; i < meshes_.size(); ++i)
+            if (meshes_[i].feature_label(k) != meshes_[0].feature_label(k))
+              throw SplitFailure("feature '" + feature_names_[k] + "' would land in different children (a folded map)");
+      } catch (const SplitFailure& e) {
+        for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
+        tn = TreeNode{};
+        tn.name = node.name;
+        tn.depth = node.depth;
+        ps = evaluate(nodes, tn);
+        stop = StopReason::SplitFailed;
+        detail = e.what();
+      }
+      if (stop == StopReason::None) {
+        for (size_t i = 0; i < meshes_.size(); ++i) {
+          meshes_[i].commit_split(nodes[i]);
+          for (int k = 0; k < 5; ++k)
+            if (kids[i][k].label != kids[0][k].label) throw InternalError("tree labels differ across the set");
+        }
+        tn.split = true;
+        if (auto it = refined_faces.find(node.name); it != refined_faces.end()) tn.refined_faces = it->second;
+        out.tree.push_back(tn);
+        for (int k = 0; k < 5; ++k) {
+          std::vector<Node> child;
+          for (size_t i = 0; i < kids.size(); ++i) {
+            child.push_back(kids[i][k]);
+            child.back().parent_stretch = ps[i].st.patch;
+            child.back().grandparent_stretch = nodes[i].parent_stretch;
+          }
+          queue.push_back(std::move(child));
+        }
+        continue;
+      }
+    } else if (any_over) {
+      stop = node.depth >= opt_.max_depth ? StopReason::MaxDepth : StopReason::TooFewFaces;
+    }
+    // No dead ends: a leaf that would stay folded in some mesh even after the repair finish()
+    // tries, or whose split failed, has its patch refined (edges split at their midpoints: the
+    // surface is unchanged) in those meshes and is evaluated again: more faces let it split, and
+    // give the repair room to untangle.
+    if (auto it = refined_faces.find(node.name); it != refined_faces.end()) tn.refined_faces = it->second;
+    if (node.refinements < kMaxRefinements) {
+      std::vector<char> refine(nm, stop == StopReason::SplitFailed);
+      Context quiet = ctx_.without_progress();
+      quiet.log = nullptr;
+      // Local means local: a patch of at most kRefineFaces faces (or one whose split failed), and
+      // at most max(2 F, 20000) faces added to a mesh of F input faces.
+      parallel_for(nm, [&](size_t i) {
+        const size_t faces = ps[i].ex.faces.size();
+        const bool small = faces <= kRefineFaces || stop == StopReason::SplitFailed;
+        const size_t budget = std::max<size_t>(2 * in_[i].mesh->faces.size(), 20000);
+        if (!small || refined_total[i] + 3 * faces > budget) {
+          refine[i] = 0;
+          return;
+        }
+        if (!refine[i] && !ps[i].sp.bijective())
+          refine[i] = minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet).uv.empty();
+      }, true);
+      if (std::find(refine.begin(), refine.end(), 1) != refine.end()) {
+        std::vector<int>& added = refined_faces[node.name];
+        added.resize(nm, 0);
+        std::vector<Node> again = nodes;
+        for (size_t i = 0; i < nm; ++i) {
+          if (refine[i]) {
+            const int n = meshes_[i].refine(nodes[i]);
+            added[i] += n;
+            refined_total[i] += static_cast<size_t>(n);
+          }
+          ++again[i].refinements;
+        }
+        queue.push_front(std::move(again));
+        continue;
+      }
+    }
+    out.tree.push_back(tn);
+    for (size_t i = 0; i < meshes_.size(); ++i) {
+      PatchInfo info;
+      const bool over_i = ps[i].st.patch > opt_.tau || !ps[i].sp.bijective();
+      if (over_i) {
+        info.stop = stop;
+        info.stop_detail = detail;
+      }
+      meshes_[i].keep_leaf(nodes[i], ps[i], info);
+      done_area += ps[i].st.area3d;
+    }
+    ctx_.report("quinary subdivision", std::min(1.0, done_area / std::max(total_area, 1e-300)));
+  }
+  std::stable_sort(out.tree.begin(), out.tree.end(), [](const TreeNode& a, const TreeNode& b) {
+    return a.depth != b.depth ? a.depth < b.depth : a.name < b.name;
+  });
+  for (auto& m : meshes_) {
+    ctx_.report("leaf repairs", static_cast<double>(out.meshes.size()) / static_cast<double>(meshes_.size()));
+    out.meshes.push_back(m.finish(out.tree));
+    out.max_stretch = std::max(out.max_stretch, out.meshes.back().max_stretch);
+    for (size_t k = 0; k < feature_names_.size(); ++k) out.meshes.back().features[k].name = feature_names_[k];
+  }
+  for (const auto& n : out.tree) out.warp_events += n.warp_events;
+  return out;
+}
+
+}  // namespace qs::dissect::detail

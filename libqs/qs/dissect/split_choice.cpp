@@ -1,0 +1,197 @@
+// Where a patch is split: the smoothed stretch peak, the w rule, the nudge that keeps features
+// clear of the cuts, and (optional) candidate splits ranked by the predicted children's stretch.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "qs/core/error.h"
+#include "qs/dissect/dissect_detail.h"
+
+namespace qs::dissect::detail {
+
+std::pair<int, double> MeshDissector::peak(const Param& p) const {
+  const Extracted& ex = p.ex;
+  const int nv = static_cast<int>(ex.verts.size());
+  std::vector<double> vs(nv, 0.0), va(nv, 0.0);
+  const auto& F = ex.pm.faces;
+  for (size_t f = 0; f < F.size(); ++f) {
+    const Tri& t = F[f];
+    const Vec3& q0 = ex.pm.positions[t[0]];
+    const double area = 0.5 * (ex.pm.positions[t[1]] - q0).cross(ex.pm.positions[t[2]] - q0).norm() + 1e-300;
+    const double s = std::min(p.st.face[f], 1e6);
+    for (int v : t) {
+      vs[v] += s * area;
+      va[v] += area;
+    }
+  }
+  int peak = 0;
+  double peak_s = -1;
+  for (size_t f = 0; f < F.size(); ++f) {
+    const Tri& t = F[f];
+    const double s = (vs[t[0]] + vs[t[1]] + vs[t[2]]) / (va[t[0]] + va[t[1]] + va[t[2]]);
+    if (s > peak_s) {
+      peak_s = s;
+      peak = static_cast<int>(f);
+    }
+  }
+  return {peak, peak_s};
+}
+
+// Distance from q to the segment ab.
+double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const double t = std::clamp((q - a).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+  return (a + t * d - q).norm();
+}
+
+// The smallest distance from the features to the 8 cuts (and their ends) of a split at (peak, w).
+double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w) {
+  std::array<Vec2, 8> c;
+  for (int i = 0; i < 4; ++i) {
+    c[i] = kSquare[i];
+    c[i + 4] = (1 - w) * kSquare[i] + w * peak;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (const Vec2& q : features)
+    for (int i = 0; i < 4; ++i) {
+      best = std::min(best, segment_distance(q, c[i], c[i + 4]));
+      best = std::min(best, segment_distance(q, c[i + 4], c[(i + 1) % 4 + 4]));
+    }
+  return best;
+}
+
+// The stretch the children of a split at (peak, w) would have if each kept the parent's map,
+// carried onto its own square (inner child: a scaling; outer children: the inverse of the
+// bilinear map of their trapezoid): the largest over the 5 children. Every child map predicted
+// this way is bijective, and the fresh maps are usually better, so it ranks candidate splits.
+// Faces are subsampled to about 2000 (deterministic stride); a face folded by the prediction
+// counts as stretch 1e3.
+double predicted_children_stretch(const Param& p, const Vec2& peak, double w) {
+  std::array<Vec2, 8> c;
+  for (int i = 0; i < 4; ++i) {
+    c[i] = kSquare[i];
+    c[i + 4] = (1 - w) * kSquare[i] + w * peak;
+  }
+  std::array<std::array<Vec2, 4>, 5> quad;
+  for (int k = 0; k < 4; ++k) quad[k] = {c[k], c[(k + 1) % 4], c[(k + 1) % 4 + 4], c[k + 4]};
+  quad[4] = {c[4], c[5], c[6], c[7]};
+  auto inside = [](const std::array<Vec2, 4>& q, const Vec2& x) {
+    for (int i = 0; i < 4; ++i)
+      if (cross2(q[(i + 1) % 4] - q[i], x - q[i]) < 0) return false;
+    return true;
+  };
+  auto to_child = [](const std::array<Vec2, 4>& q, const Vec2& x) {
+    Vec2 st(0.5, 0.5);
+    for (int it = 0; it < 8; ++it) {
+      const double s = st.x(), t = st.y();
+      const Vec2 f = (1 - s) * (1 - t) * q[0] + s * (1 - t) * q[1] + s * t * q[2] + (1 - s) * t * q[3] - x;
+      const Vec2 ds = (1 - t) * (q[1] - q[0]) + t * (q[2] - q[3]);
+      const Vec2 dt = (1 - s) * (q[3] - q[0]) + s * (q[2] - q[1]);
+      const double det = cross2(ds, dt);
+      if (std::abs(det) < 1e-300) break;
+      st -= Vec2(cross2(f, dt), cross2(ds, f)) / det;
+    }
+    return st;
+  };
+  std::array<double, 5> e{}, a3{}, auv{};
+  const auto& F = p.ex.pm.faces;
+  const auto& P = p.ex.pm.positions;
+  const size_t stride = std::max<size_t>(1, F.size() / 2000);
+  for (size_t f = 0; f < F.size(); f += stride) {
+    const Tri& t = F[f];
+    const Vec2 q = (p.sp.uv[t[0]] + p.sp.uv[t[1]] + p.sp.uv[t[2]]) / 3.0;
+    int k = 4;
+    if (!inside(quad[4], q))
+      for (k = 0; k < 3 && !inside(quad[k], q); ++k) {
+      }
+    std::array<Vec2, 3> u;
+    for (int j = 0; j < 3; ++j) u[j] = to_child(quad[k], p.sp.uv[t[j]]);
+    const double area3 = 0.5 * (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).norm();
+    const double area2 = 0.5 * cross2(u[1] - u[0], u[2] - u[0]);
+    double l2sq;
+    if (area2 <= 1e-300) {
+      l2sq = 1e6;
+    } else {
+      const Vec3 ss = (P[t[0]] * (u[1].y() - u[2].y()) + P[t[1]] * (u[2].y() - u[0].y()) + P[t[2]] * (u[0].y() - u[1].y())) / (2 * area2);
+      const Vec3 st = (P[t[0]] * (u[2].x() - u[1].x()) + P[t[1]] * (u[0].x() - u[2].x()) + P[t[2]] * (u[1].x() - u[0].x())) / (2 * area2);
+      l2sq = 0.5 * (ss.squaredNorm() + st.squaredNorm());
+    }
+    e[k] += l2sq * area3;
+    a3[k] += area3;
+    auv[k] += std::max(area2, 0.0);
+  }
+  double worst = 0;
+  for (int k = 0; k < 5; ++k)
+    if (a3[k] > 0) worst = std::max(worst, std::sqrt(e[k] / a3[k] * auv[k] / a3[k]));
+  return worst;
+}
+
+
+// The split point: the smoothed stretch peak of the most stretched mesh that is over tau, in the
+// aligned domain (so the children correspond in every mesh), nudged off the features if needed.
+std::pair<Vec2, double> SetDissector::choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
+                                                   const std::vector<bool>& over) {
+  int best = -1;
+  for (size_t i = 0; i < ps.size(); ++i)
+    if (over[i] && (best < 0 || ps[i].st.patch > ps[best].st.patch)) best = static_cast<int>(i);
+  const auto [face, peak_s] = meshes_[best].peak(ps[best]);
+  const Param& p = ps[best];
+  const Tri& t = p.ex.pm.faces[face];
+  const Vec2 raw = (p.sp.uv[t[0]] + p.sp.uv[t[1]] + p.sp.uv[t[2]]) / 3.0;
+  double w = std::clamp(opt_.w_bias + std::log10(std::max(peak_s, 1e-12)), opt_.w_min, opt_.w_max);
+  auto clamp = [&](const Vec2& q) { return Vec2(q.cwiseMax(opt_.peak_margin).cwiseMin(1 - opt_.peak_margin)); };
+  Vec2 peak = clamp(raw);
+  tn.split_mesh = best;
+  if (opt_.predict_split) {
+    // Candidates: the rule above first, the raw peak with smaller margins, a 3x3 grid of centres,
+    // each with w in {0.5, 0.65, 0.8}; the lowest predicted children's stretch wins (ties: first).
+    std::vector<Vec2> centres = {peak};
+    for (double m : {0.25, 0.15}) centres.push_back(Vec2(raw.cwiseMax(m).cwiseMin(1 - m)));
+    for (double y : {0.3, 0.5, 0.7})
+      for (double x : {0.3, 0.5, 0.7}) centres.emplace_back(x, y);
+    double best_score = predicted_children_stretch(p, peak, w);
+    for (const Vec2& cc : centres)
+      for (double ww : {0.5, 0.65, 0.8}) {
+        const double sc = predicted_children_stretch(p, cc, ww);
+        if (sc < best_score * (1 - 1e-9)) {
+          best_score = sc;
+          peak = cc;
+          w = ww;
+        }
+      }
+  }
+  if (!p.features.empty()) {
+    // Every mesh's features must clear the cuts (grouped or held features are not aligned).
+    std::vector<Vec2> fuv;
+    for (const auto& q : ps)
+      for (const auto& f : q.features) fuv.push_back(q.sp.uv[f.second]);
+    // Candidates: the peak, then rings of 8 around it; the first clear by the margin wins, else
+    // the one with the largest clearance.
+    Vec2 best_peak = peak;
+    double best_clear = feature_clearance(fuv, peak, w);
+    for (double r : {0.03, 0.06, 0.1, 0.15}) {
+      if (best_clear >= opt_.feature_cut_margin) break;
+      for (int k = 0; k < 8 && best_clear < opt_.feature_cut_margin; ++k) {
+        const double a = k * M_PI / 4;
+        const Vec2 q = clamp(peak + r * Vec2(std::cos(a), std::sin(a)));
+        const double c = feature_clearance(fuv, q, w);
+        if (c > best_clear) {
+          best_clear = c;
+          best_peak = q;
+        }
+      }
+    }
+    if (best_clear < 1e-6)
+      throw InvalidInput("patch " + node.name + ": a feature lies on every candidate cut line (clearance " +
+                         std::to_string(best_clear) + "); features too close together or to a patch corner");
+    peak = best_peak;
+  }
+  tn.peak_uv = peak;
+  tn.w = w;
+  return {peak, w};
+}
+
+}  // namespace qs::dissect::detail
