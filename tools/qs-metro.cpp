@@ -205,9 +205,10 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
          << "  baseline (similarity on " << pm.baseline_landmarks << " landmarks + nearest point): "
          << stats_text(pm.baseline) << "\n";
     if (pm.truth_tolerance > 0) {
-      char tol[64];
-      std::snprintf(tol, sizeof tol, "%.3f%%", pm.truth_tolerance);
-      text << "  ground truth exact at vertices, within " << tol << " between them (re-tessellation chord distance)\n";
+      char tol[160];
+      std::snprintf(tol, sizeof tol, "%.3f%% (mean %.4f%%)", pm.truth_tolerance, pm.truth_tolerance_mean);
+      text << "  ground truth: exact at the vertices; between them within the re-tessellation's distance from its "
+              "reference, at most " << tol << "\n";
     }
     pairs.push_back({{"a", truth.mesh(0).name},
                      {"b", truth.mesh(b).name},
@@ -217,7 +218,8 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                      {"same_patch_share", pm.same_patch_share},
                      {"baseline", stats_json(pm.baseline)},
                      {"baseline_landmarks", pm.baseline_landmarks},
-                     {"truth_tolerance_percent", pm.truth_tolerance}});
+                     {"truth_tolerance_percent", pm.truth_tolerance},
+                     {"truth_tolerance_mean_percent", pm.truth_tolerance_mean}});
   }
   nlohmann::json doc = {{"dissection", folder_name},
                         {"meshes", n},

@@ -130,7 +130,7 @@ struct GroundTruth::Impl {
   };
   std::vector<TruthMesh> meshes;
   std::vector<Side> sides;
-  double tolerance = 0;
+  double tolerance = 0, tolerance_mean = 0;
 
   struct DomainPoint {
     Vec3 d = Vec3::Zero();
@@ -242,7 +242,9 @@ GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique
       metro::MetroOptions mo;
       mo.face_samples = 20000;
       mo.sample_vertices = true;
-      impl_->tolerance = std::max(impl_->tolerance, metro::metro(m.mesh, m.reference, mo).max);
+      const metro::MetroResult mr = metro::metro(m.mesh, m.reference, mo);
+      impl_->tolerance = std::max(impl_->tolerance, mr.max);
+      impl_->tolerance_mean = std::max(impl_->tolerance_mean, mr.mean);
     }
     if (s.kind != Kind::Sphere) {
       const std::vector<Tri>* faces = s.kind == Kind::Identity ? &m.mesh.faces : &m.reference.faces;
@@ -269,6 +271,7 @@ GroundTruth& GroundTruth::operator=(GroundTruth&&) noexcept = default;
 int GroundTruth::size() const { return static_cast<int>(impl_->meshes.size()); }
 const TruthMesh& GroundTruth::mesh(int i) const { return impl_->meshes.at(i); }
 double GroundTruth::tolerance() const { return impl_->tolerance; }
+double GroundTruth::tolerance_mean() const { return impl_->tolerance_mean; }
 
 landmarks::SurfacePoint GroundTruth::map(int a, int b, const landmarks::SurfacePoint& p) const {
   return impl_->from_domain(b, impl_->to_domain(a, p));
@@ -416,6 +419,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   pm.same_patch_share = s / n;
   pm.baseline_landmarks = src.size() >= 3 ? static_cast<int>(src.size()) : 0;
   pm.truth_tolerance = 100 * truth.tolerance() / diag;
+  pm.truth_tolerance_mean = 100 * truth.tolerance_mean() / diag;
   return pm;
 }
 

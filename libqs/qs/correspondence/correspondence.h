@@ -69,6 +69,8 @@ class GroundTruth {
   /// sphere maps and identical connectivity; for surface maps the largest Metro distance between
   /// a mapped mesh and its reference (sampled).
   double tolerance() const;
+  /// The mean of that distance over the surface (sampled; 0 without surface maps).
+  double tolerance_mean() const;
 
   struct Impl;
 
@@ -96,6 +98,7 @@ struct PairMeasure {
   double same_patch_share = 0;    ///< share of A's area whose exact image is in the same patch of B
   int baseline_landmarks = 0;     ///< landmark pairs the similarity used
   double truth_tolerance = 0;     ///< GroundTruth::tolerance() in % of the diagonal
+  double truth_tolerance_mean = 0;  ///< GroundTruth::tolerance_mean() in % of the diagonal
 };
 
 /// One dissected mesh as the measure needs it: its chart (whose first vertices are the validated
