@@ -7,6 +7,7 @@
 // non-manifold, several components, any genus) are measured anyway, with a note.
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -15,6 +16,8 @@
 #include <vector>
 
 #include "qs/core/atomic_file.h"
+#include "qs/correspondence/correspondence.h"
+#include "qs/dissect/dissection_json.h"
 #include "qs/core/error.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
@@ -129,6 +132,106 @@ nlohmann::json json_report(const Input& a, const Input& b, const qs::metro::Metr
             {"rms_percent", 100 * r.rms / d}}}};
 }
 
+
+// ---- --correspondence: a dissection measured against ground truth ----------------------------
+
+/// A mesh file named in dissection.json: as written (relative to the working folder), else
+/// relative to the dissection folder or its parent.
+std::filesystem::path find_mesh(const std::string& file, const std::filesystem::path& folder) {
+  namespace fs = std::filesystem;
+  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file})
+    if (fs::exists(p)) return p;
+  throw qs::IoError(file + ": mesh of the dissection " + folder.string() +
+                    " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)");
+}
+
+nlohmann::json stats_json(const qs::correspondence::ErrorStats& s) {
+  return {{"mean_percent", s.mean}, {"median_percent", s.median}, {"p95_percent", s.p95}, {"max_percent", s.max}};
+}
+
+std::string stats_text(const qs::correspondence::ErrorStats& s) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "mean %.3f%%, median %.3f%%, p95 %.3f%%, max %.3f%%", s.mean, s.median, s.p95, s.max);
+  return buf;
+}
+
+int run_correspondence(const std::string& folder_name, const std::vector<std::string>& maps, long samples,
+                       std::uint64_t seed, bool as_json, const std::optional<std::string>& output) {
+  namespace fs = std::filesystem;
+  const fs::path folder(folder_name);
+  const qs::dissect::LoadedDissection loaded = qs::dissect::read_dissection(folder);
+  const int n = static_cast<int>(loaded.meshes.size());
+  if (n < 2) throw qs::InvalidInput(folder_name + ": the dissection holds 1 mesh; a correspondence needs 2 or more");
+  if (!maps.empty() && static_cast<int>(maps.size()) != n)
+    throw qs::UsageError("--map: " + std::to_string(maps.size()) + " files given for " + std::to_string(n) +
+                         " meshes (one per mesh in the dissection's order, '-' for a mesh without a map)");
+  std::vector<qs::correspondence::TruthMesh> truth_meshes;
+  std::vector<std::string> map_used;
+  for (int i = 0; i < n; ++i) {
+    const fs::path mesh_file = find_mesh(loaded.meshes[i].file, folder);
+    std::optional<fs::path> map;
+    if (!maps.empty()) {
+      if (maps[i] != "-") map = maps[i];
+    } else {
+      const fs::path beside = mesh_file.parent_path() / (mesh_file.stem().string() + ".map.json");
+      if (fs::exists(beside)) map = beside;
+    }
+    truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_file, map));
+    map_used.push_back(map ? map->string() : "");
+  }
+  const qs::correspondence::GroundTruth truth(std::move(truth_meshes));
+  std::vector<qs::correspondence::DissectedInput> inputs(n);
+  for (int i = 0; i < n; ++i) {
+    inputs[i].chart = &loaded.meshes[i].dissection.chart;
+    inputs[i].landmarks = qs::correspondence::dissection_landmarks(loaded.meshes[i].dissection);
+  }
+  qs::correspondence::MeasureOptions mo;
+  if (samples > 0) mo.samples = samples;
+  mo.seed = seed;
+  std::ostringstream text;
+  nlohmann::json pairs = nlohmann::json::array();
+  text << "qs-metro: correspondence of " << folder_name << " (" << n << " meshes, "
+       << loaded.meshes[0].dissection.chart.patches.size() << " patches), " << mo.samples
+       << " samples per pair, uniform per unit area on A; errors in % of B's bounding-box diagonal\n";
+  for (int i = 0; i < n; ++i)
+    text << "  mesh " << i << ": " << truth.mesh(i).name << " (ground truth: "
+         << (map_used[i].empty() ? std::string("its own face list") : map_used[i]) << ")\n";
+  for (int b = 1; b < n; ++b) {
+    const auto pm = qs::correspondence::measure_pair(truth, inputs, 0, b, mo);
+    char share[64];
+    std::snprintf(share, sizeof share, "%.1f%%", 100 * pm.same_patch_share);
+    text << truth.mesh(0).name << " -> " << truth.mesh(b).name << ":\n"
+         << "  dissection: " << stats_text(pm.dissection) << "; same patch: " << share << " of A's area\n"
+         << "  baseline (similarity on " << pm.baseline_landmarks << " landmarks + nearest point): "
+         << stats_text(pm.baseline) << "\n";
+    if (pm.truth_tolerance > 0) {
+      char tol[160];
+      std::snprintf(tol, sizeof tol, "%.3f%% (mean %.4f%%)", pm.truth_tolerance, pm.truth_tolerance_mean);
+      text << "  ground truth: exact at the vertices; between them within the re-tessellation's distance from its "
+              "reference, at most " << tol << "\n";
+    }
+    pairs.push_back({{"a", truth.mesh(0).name},
+                     {"b", truth.mesh(b).name},
+                     {"samples", pm.samples},
+                     {"diagonal_of_b", pm.diagonal},
+                     {"dissection", stats_json(pm.dissection)},
+                     {"same_patch_share", pm.same_patch_share},
+                     {"baseline", stats_json(pm.baseline)},
+                     {"baseline_landmarks", pm.baseline_landmarks},
+                     {"truth_tolerance_percent", pm.truth_tolerance},
+                     {"truth_tolerance_mean_percent", pm.truth_tolerance_mean}});
+  }
+  nlohmann::json doc = {{"dissection", folder_name},
+                        {"meshes", n},
+                        {"patches", loaded.meshes[0].dissection.chart.patches.size()},
+                        {"seed", seed},
+                        {"pairs", pairs}};
+  const std::string report = as_json ? doc.dump(2) + "\n" : text.str();
+  if (output) qs::write_file_atomically(*output, report);
+  else std::cout << report;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -143,9 +246,16 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   bool as_json = false, no_vertices = false;
   std::optional<std::string> output;
+  std::optional<std::string> correspondence;
+  std::vector<std::string> maps;
   app.add_option("A", file_a, "First mesh (.obj .off .ply .stl); its bounding-box diagonal is the "
-                              "reference for the percentages")->required();
-  app.add_option("B", file_b, "Second mesh")->required();
+                              "reference for the percentages");
+  app.add_option("B", file_b, "Second mesh");
+  app.add_option("--correspondence", correspondence,
+                 "Measure the correspondence of a qs-dissect folder against ground truth instead (no A, B): "
+                 "the first mesh against every other (README \"Correspondence\")");
+  app.add_option("--map", maps, "With --correspondence: a map file per mesh in the dissection's order, '-' for "
+                                "none (default: <stem>.map.json beside each mesh when present)");
   app.add_option("--samples", samples,
                  "Surface samples per direction (default: max(100000, 2 x the larger face count))")
       ->check(CLI::PositiveNumber);
@@ -155,6 +265,13 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", output, "Write the report to this file instead of stdout");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
+    if (correspondence) {
+      if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
+      if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
+      return run_correspondence(*correspondence, maps, samples, seed, as_json, output);
+    }
+    if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
+    if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");
     const Input a = load(file_a, "A");
     const Input b = load(file_b, "B");
     qs::metro::MetroOptions opt;

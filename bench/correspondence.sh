@@ -1,0 +1,124 @@
+#!/usr/bin/env bash
+# Correspondence benchmark (issue 17): every pair is dissected with qs-dissect as a user would
+# (landmarks given), then measured with `qs-metro --correspondence` against its exact ground truth.
+#
+#   usage: bench/correspondence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-correspondence)
+#   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000)
+#
+# Pairs (data made here, nothing committed but the SMPL landmark file):
+#   gen-sS        generated pair (qs-family, seed S = 1, 2, 3): two warps of one base, own tessellations
+#   gen-v0        one smooth surface (qs-family --variation 0) with two tessellations (ideal: the identity)
+#   fam4-s1       a family of 4 dissected together; shape00 against each of the other three
+#   self-gen      a generated shape against its own re-tessellation (ideal: the identity)
+#   self-smpl-*   smpl_man_14k / smpl_woman_14k against its own re-tessellation (ideal: the identity)
+#   human-retess  smpl_man_14k against smpl_woman_14k re-tessellated (same pose, registered)
+#   human-same    smpl_man_14k against smpl_woman_14k as shipped (identical connectivity)
+# Seeds of the humans: middle fingers and big toes; features: nose, head top, heels
+# (bench/correspondence/smpl.landmarks.json, SMPL vertex ids).
+set -uo pipefail
+cd "$(dirname "$0")/.."
+MESHES=${1:-../shared/meshes}
+OUT=${2:-out/bench-correspondence}
+TOOLS=${QS_TOOLS:-build/tools}
+SAMPLES=${SAMPLES:-100000}
+FACES=${FACES:-8000}
+LM=bench/correspondence/smpl.landmarks.json
+mkdir -p "$OUT"
+RESULTS="$OUT/results.tsv"
+: > "$RESULTS"
+
+# dissect NAME OUTDIR MESH... -- LANDMARKS...   ; then measure with the remaining args (maps)
+run_pair() {
+  local name=$1 dir=$2; shift 2
+  local meshes=() lms=() maps=()
+  while [ "$1" != "--" ]; do meshes+=("$1"); shift; done; shift
+  while [ "$1" != "--" ]; do lms+=("$1"); shift; done; shift
+  maps=("$@")
+  local t0 t1 rc
+  t0=$(date +%s.%N)
+  "$TOOLS/qs-dissect" "${meshes[@]}" --landmarks "${lms[@]}" -o "$dir" --quiet --report "$dir.report.txt" \
+      > "$dir.dissect.log" 2>&1
+  rc=$?
+  t1=$(date +%s.%N)
+  local secs; secs=$(python3 -c "print(f'{$t1-$t0:.2f}')")
+  if [ ! -f "$dir/dissection.json" ]; then
+    printf '%s\t%s\t%s\t%s\n' "$name" "$rc" "$secs" "-" >> "$RESULTS"
+    echo "$name: qs-dissect exit $rc, nothing to measure ($(tail -n1 "$dir.dissect.log"))"
+    return
+  fi
+  local mapargs=()
+  [ ${#maps[@]} -gt 0 ] && mapargs=(--map "${maps[@]}")
+  if "$TOOLS/qs-metro" --correspondence "$dir" "${mapargs[@]}" --samples "$SAMPLES" --json -o "$dir.corr.json" \
+      > "$dir.metro.log" 2>&1; then
+    printf '%s\t%s\t%s\t%s\n' "$name" "$rc" "$secs" "$dir.corr.json" >> "$RESULTS"
+    echo "$name: dissect exit $rc in $secs s, measured"
+  else
+    printf '%s\t%s\t%s\t%s\n' "$name" "$rc" "$secs" "-" >> "$RESULTS"
+    echo "$name: measuring failed: $(tail -n1 "$dir.metro.log")"
+  fi
+}
+
+# Generated pairs.
+for s in 1 2 3; do
+  g="$OUT/gen-s$s"
+  "$TOOLS/qs-family" generate -n 2 --seed "$s" --faces "$FACES" --quiet -o "$g" || exit 1
+  run_pair "gen-s$s" "$g/dissection" "$g/shape00.obj" "$g/shape01.obj" -- \
+      "$g/shape00.landmarks.json" "$g/shape01.landmarks.json" --
+done
+
+# One smooth surface tessellated twice (--variation 0): tessellation independence with an exact map.
+v="$OUT/gen-v0"
+"$TOOLS/qs-family" generate -n 2 --seed 1 --variation 0 --faces "$FACES" --quiet -o "$v" || exit 1
+run_pair "gen-v0" "$v/dissection" "$v/shape00.obj" "$v/shape01.obj" -- \
+    "$v/shape00.landmarks.json" "$v/shape01.landmarks.json" --
+
+# A family of 4 dissected together.
+f="$OUT/fam4-s1"
+"$TOOLS/qs-family" generate -n 4 --seed 1 --faces "$FACES" --quiet -o "$f" || exit 1
+run_pair "fam4-s1" "$f/dissection" "$f"/shape0{0,1,2,3}.obj -- "$f"/shape0{0,1,2,3}.landmarks.json --
+
+# A generated shape against its own re-tessellation.
+g="$OUT/gen-s1"
+"$TOOLS/qs-family" retessellate "$g/shape00.obj" --landmarks "$g/shape00.landmarks.json" \
+    -o "$OUT/self-gen/shape00_r.obj" --quiet || exit 1
+run_pair "self-gen" "$OUT/self-gen/dissection" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
+    "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
+
+if [ -f "$MESHES/smpl_man_14k.obj" ] && [ -f "$MESHES/smpl_woman_14k.obj" ]; then
+  h="$OUT/human"
+  mkdir -p "$h"
+  "$TOOLS/qs-family" retessellate "$MESHES/smpl_man_14k.obj" --landmarks "$LM" -o "$h/smpl_man_14k_r.obj" --quiet || exit 1
+  "$TOOLS/qs-family" retessellate "$MESHES/smpl_woman_14k.obj" --landmarks "$LM" -o "$h/smpl_woman_14k_r.obj" --quiet || exit 1
+  run_pair "self-smpl-man" "$h/self-man" "$MESHES/smpl_man_14k.obj" "$h/smpl_man_14k_r.obj" -- \
+      "$LM" "$h/smpl_man_14k_r.landmarks.json" -- - "$h/smpl_man_14k_r.map.json"
+  run_pair "self-smpl-woman" "$h/self-woman" "$MESHES/smpl_woman_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
+      "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
+  run_pair "human-retess" "$h/retess" "$MESHES/smpl_man_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
+      "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
+  run_pair "human-same" "$h/same" "$MESHES/smpl_man_14k.obj" "$MESHES/smpl_woman_14k.obj" -- "$LM" "$LM" -- - -
+else
+  echo "no smpl_man_14k / smpl_woman_14k in $MESHES: human pairs skipped"
+fi
+
+# The table (Markdown): one row per measured pair (A = the first mesh of the dissection).
+python3 - "$RESULTS" <<'PY'
+import json, sys
+print()
+print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | baseline mean | baseline p95 | baseline max | truth within (mean / max) |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+for line in open(sys.argv[1]):
+    name, rc, secs, path = line.rstrip("\n").split("\t")
+    if path == "-":
+        print(f"| {name} | {rc} | {secs} s | | not measured | | | | | | | | |")
+        continue
+    doc = json.load(open(path))
+    for p in doc["pairs"]:
+        a = p["a"].rsplit("/", 1)[-1]; b = p["b"].rsplit("/", 1)[-1]
+        d, bl = p["dissection"], p["baseline"]
+        label = name if len(doc["pairs"]) == 1 else f"{name} {a}->{b}"
+        t, tm = p["truth_tolerance_percent"], p["truth_tolerance_mean_percent"]
+        tol = "exact" if t == 0 else f"{tm:.3f}% / {t:.2f}%"
+        print(f"| {label} | {rc} | {secs} s | {doc['patches']} | {d['mean_percent']:.2f}% | {d['median_percent']:.2f}% | "
+              f"{d['p95_percent']:.2f}% | {d['max_percent']:.2f}% | {100*p['same_patch_share']:.1f}% | "
+              f"{bl['mean_percent']:.2f}% | {bl['p95_percent']:.2f}% | {bl['max_percent']:.2f}% | {tol} |")
+PY

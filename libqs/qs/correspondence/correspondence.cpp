@@ -1,0 +1,426 @@
+#include "qs/correspondence/correspondence.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <thread>
+#include <unordered_map>
+
+#include "qs/core/error.h"
+#include "qs/io/read_mesh.h"
+#include "qs/mesh/validate.h"
+#include "qs/metro/metro.h"
+#include "qs/remesh/chart_sampler.h"
+
+namespace qs::correspondence {
+
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+double unit_double(std::uint64_t x) { return static_cast<double>(x >> 11) * 0x1.0p-53; }
+
+/// Barycentric weights of the point of triangle (a, b, c) closest to p (p on or very near it).
+Vec3 closest_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
+  const Vec3 e0 = b - a, e1 = c - a, r = p - a;
+  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), d20 = r.dot(e0), d21 = r.dot(e1);
+  const double den = d00 * d11 - d01 * d01;
+  Vec3 w(1, 0, 0);
+  if (den > 0) {
+    const double v = (d11 * d20 - d01 * d21) / den, u = (d00 * d21 - d01 * d20) / den;
+    w = Vec3(1 - v - u, v, u);
+  }
+  if (w.minCoeff() < 0) {  // outside by rounding, or a degenerate face: the nearest edge point
+    double best = 1e300;
+    const Vec3 pts[3] = {a, b, c};
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 &s = pts[i], &t = pts[(i + 1) % 3];
+      const double len2 = (t - s).squaredNorm();
+      const double f = len2 > 0 ? std::clamp((p - s).dot(t - s) / len2, 0.0, 1.0) : 0.0;
+      const double d = (s + f * (t - s) - p).squaredNorm();
+      if (d < best) {
+        best = d;
+        w = Vec3::Zero();
+        w[i] = 1 - f;
+        w[(i + 1) % 3] = f;
+      }
+    }
+  }
+  return w;
+}
+
+landmarks::SurfacePoint surface_point_at(const TriMesh& m, int face, const Vec3& p) {
+  const Tri& t = m.faces[face];
+  const Vec3 w = closest_weights(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], p);
+  landmarks::SurfacePoint sp;
+  sp.face = face;
+  sp.bary = {w.x(), w.y(), w.z()};
+  return sp;
+}
+
+/// A validated mesh's vertex -> the file's vertex id (inverse of vertex_map).
+std::vector<int> file_ids(const mesh::ValidationResult& v) {
+  std::vector<int> ids(v.mesh.positions.size(), -1);
+  for (std::size_t u = 0; u < v.vertex_map.size(); ++u)
+    if (v.vertex_map[u] >= 0) ids[v.vertex_map[u]] = static_cast<int>(u);
+  return ids;
+}
+
+mesh::ValidationResult read_valid(const std::filesystem::path& file) {
+  io::ReadResult r = io::read_mesh(file);
+  mesh::ValidationResult v = mesh::validate(r.mesh);
+  if (!v.report.accepted)
+    throw InvalidInput("mesh rejected:\n" + mesh::format_report(file.string(), v.report));
+  return v;
+}
+
+enum class Kind { Sphere, Identity, Surface };
+
+}  // namespace
+
+TruthMesh load_truth_mesh(const std::filesystem::path& mesh_file, const std::optional<std::filesystem::path>& map_file) {
+  TruthMesh t;
+  t.name = mesh_file.string();
+  const mesh::ValidationResult v = read_valid(mesh_file);
+  t.mesh = v.mesh;
+  if (!map_file) return t;
+  family::SurfaceMap map = family::read_surface_map(*map_file);
+  if (map.num_vertices() != v.report.input_vertices)
+    throw InvalidInput(map_file->string() + ": " + std::to_string(map.num_vertices()) + " vertices, but " +
+                       mesh_file.string() + " has " + std::to_string(v.report.input_vertices) +
+                       " (is it the map of that mesh?)");
+  const std::vector<int> ids = file_ids(v);
+  family::SurfaceMap out = map;
+  if (map.domain == family::MapDomain::Sphere) {
+    out.sphere.resize(ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) out.sphere[i] = map.sphere[ids[i]];
+  } else {
+    std::filesystem::path ref(map.reference);
+    if (ref.is_relative()) ref = map_file->parent_path() / ref;
+    const mesh::ValidationResult rv = read_valid(ref);
+    if (rv.report.input_vertices != map.reference_vertices || rv.report.input_faces != map.reference_faces)
+      throw InvalidInput(map_file->string() + ": its reference " + ref.string() + " has " +
+                         std::to_string(rv.report.input_vertices) + " vertices and " +
+                         std::to_string(rv.report.input_faces) + " faces, the map expects " +
+                         std::to_string(map.reference_vertices) + " and " + std::to_string(map.reference_faces));
+    out.origins.resize(ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      out.origins[i] = map.origins[ids[i]];
+      if (rv.report.orientation_flipped) std::swap(out.origins[i].bary[1], out.origins[i].bary[2]);
+    }
+    t.reference = rv.mesh;
+  }
+  t.map = std::move(out);
+  return t;
+}
+
+struct GroundTruth::Impl {
+  struct Side {
+    Kind kind = Kind::Identity;
+    std::unique_ptr<metro::SurfaceDistance> mesh_distance;   // Surface: closest point of the mesh
+    std::unique_ptr<metro::SurfaceDistance> other_distance;  // Sphere: parameter mesh; Surface: reference
+    TriMesh parameter_mesh;                                  // Sphere
+    std::vector<std::array<int, 3>> neighbour;               // Sphere: across the edge opposite corner k
+  };
+  std::vector<TruthMesh> meshes;
+  std::vector<Side> sides;
+  double tolerance = 0, tolerance_mean = 0;
+
+  struct DomainPoint {
+    Vec3 d = Vec3::Zero();
+    landmarks::SurfacePoint sp;
+  };
+
+  DomainPoint to_domain(int a, const landmarks::SurfacePoint& p) const {
+    const TruthMesh& m = meshes[a];
+    const Side& s = sides[a];
+    DomainPoint dp;
+    if (s.kind == Kind::Identity) {
+      dp.sp = p;
+    } else if (s.kind == Kind::Sphere) {
+      const Tri& t = m.mesh.faces[p.face];
+      dp.d = (p.bary[0] * m.map->sphere[t[0]] + p.bary[1] * m.map->sphere[t[1]] + p.bary[2] * m.map->sphere[t[2]])
+                 .normalized();
+    } else {
+      const Vec3 x = landmarks::position_of(m.mesh, p);
+      const auto c = s.other_distance->closest(x);
+      dp.sp = surface_point_at(m.reference, c.face, c.point);
+    }
+    return dp;
+  }
+
+  landmarks::SurfacePoint from_domain(int b, const DomainPoint& dp) const {
+    const TruthMesh& m = meshes[b];
+    const Side& s = sides[b];
+    if (s.kind == Kind::Identity) return dp.sp;
+    if (s.kind == Kind::Surface) {
+      const Vec3 y = landmarks::position_of(m.reference, dp.sp);
+      const auto c = s.mesh_distance->closest(y);
+      return surface_point_at(m.mesh, c.face, c.point);
+    }
+    // Sphere: walk from the face nearest to the parameter to the one the ray crosses.
+    const auto& P = s.parameter_mesh.positions;
+    int f = s.other_distance->closest(dp.d).face;
+    for (int step = 0; step < 100000; ++step) {
+      const Tri& t = s.parameter_mesh.faces[f];
+      const Vec3 b(dp.d.dot(P[t[1]].cross(P[t[2]])), dp.d.dot(P[t[2]].cross(P[t[0]])), dp.d.dot(P[t[0]].cross(P[t[1]])));
+      int worst = 0;
+      b.minCoeff(&worst);
+      if (b[worst] >= -1e-15 * b.cwiseAbs().maxCoeff() || b.sum() <= 0) {
+        const Vec3 w = b.cwiseMax(0.0) / b.cwiseMax(0.0).sum();
+        landmarks::SurfacePoint sp;
+        sp.face = f;
+        sp.bary = {w.x(), w.y(), w.z()};
+        return sp;
+      }
+      f = s.neighbour[f][worst];
+    }
+    throw InternalError("ground truth: the walk on the parameter sphere of " + m.name + " did not end");
+  }
+};
+
+GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique<Impl>()) {
+  impl_->meshes = std::move(meshes);
+  const auto& ms = impl_->meshes;
+  if (ms.size() < 2) throw InvalidInput("ground truth: at least 2 meshes are needed");
+  const std::vector<Tri>* domain_faces = nullptr;
+  std::string domain_owner;
+  int spheres = 0;
+  for (const TruthMesh& m : ms) {
+    Impl::Side s;
+    if (!m.map) {
+      s.kind = Kind::Identity;
+    } else if (m.map->domain == family::MapDomain::Sphere) {
+      s.kind = Kind::Sphere;
+      ++spheres;
+      s.parameter_mesh.positions = m.map->sphere;
+      s.parameter_mesh.faces = m.mesh.faces;
+      int inverted = 0, first = -1;
+      for (int f = 0; f < m.mesh.num_faces(); ++f) {
+        const Tri& t = m.mesh.faces[f];
+        const auto& P = s.parameter_mesh.positions;
+        if (P[t[0]].dot(P[t[1]].cross(P[t[2]])) <= 0) {
+          if (first < 0) first = f;
+          ++inverted;
+        }
+      }
+      if (inverted > 0)
+        throw InvalidInput("ground truth: the sphere map of " + m.name + " is not a bijection of that mesh: " +
+                           std::to_string(inverted) + " faces (first " + std::to_string(first) +
+                           ") are inverted or flat on the sphere (is it the map of another mesh?)");
+      s.other_distance = std::make_unique<metro::SurfaceDistance>(s.parameter_mesh, "parameter sphere");
+      std::unordered_map<std::uint64_t, std::pair<int, int>> edge;  // directed edge -> (face, corner opposite)
+      const int nf = m.mesh.num_faces();
+      for (int f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) {
+          const int u = m.mesh.faces[f][(k + 1) % 3], v = m.mesh.faces[f][(k + 2) % 3];
+          edge[(static_cast<std::uint64_t>(u) << 32) | static_cast<std::uint32_t>(v)] = {f, k};
+        }
+      s.neighbour.assign(nf, {-1, -1, -1});
+      for (int f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) {
+          const int u = m.mesh.faces[f][(k + 1) % 3], v = m.mesh.faces[f][(k + 2) % 3];
+          auto it = edge.find((static_cast<std::uint64_t>(v) << 32) | static_cast<std::uint32_t>(u));
+          if (it == edge.end()) throw InvalidInput("ground truth: " + m.name + " is not a closed oriented mesh");
+          s.neighbour[f][k] = it->second.first;
+        }
+    } else {
+      s.kind = Kind::Surface;
+      const double tol = 1e-9 * bounding_box(m.mesh.positions).diagonal();
+      for (int v = 0; v < m.mesh.num_vertices(); ++v)
+        if ((landmarks::position_of(m.reference, m.map->origins[v]) - m.mesh.positions[v]).norm() > tol)
+          throw InvalidInput("ground truth: vertex " + std::to_string(v) + " of " + m.name +
+                             " is not at its origin on the map's reference (is it the map of another mesh?)");
+      s.mesh_distance = std::make_unique<metro::SurfaceDistance>(m.mesh, "mesh");
+      s.other_distance = std::make_unique<metro::SurfaceDistance>(m.reference, "reference");
+      metro::MetroOptions mo;
+      mo.face_samples = 20000;
+      mo.sample_vertices = true;
+      const metro::MetroResult mr = metro::metro(m.mesh, m.reference, mo);
+      impl_->tolerance = std::max(impl_->tolerance, mr.max);
+      impl_->tolerance_mean = std::max(impl_->tolerance_mean, mr.mean);
+    }
+    if (s.kind != Kind::Sphere) {
+      const std::vector<Tri>* faces = s.kind == Kind::Identity ? &m.mesh.faces : &m.reference.faces;
+      if (!domain_faces) {
+        domain_faces = faces;
+        domain_owner = m.name;
+      } else if (*faces != *domain_faces) {
+        throw InvalidInput("ground truth: " + m.name + (s.kind == Kind::Identity ? "" : " (through its map's reference)") +
+                           " does not have the connectivity of " + domain_owner +
+                           "; without map files, meshes must share one face list (give each a map file, "
+                           "e.g. <stem>.map.json)");
+      }
+    }
+    impl_->sides.push_back(std::move(s));
+  }
+  if (spheres != 0 && spheres != static_cast<int>(ms.size()))
+    throw InvalidInput("ground truth: " + std::to_string(spheres) + " of " + std::to_string(ms.size()) +
+                       " meshes have sphere maps; either all or none must (a sphere and a surface cannot be compared)");
+}
+
+GroundTruth::~GroundTruth() = default;
+GroundTruth::GroundTruth(GroundTruth&&) noexcept = default;
+GroundTruth& GroundTruth::operator=(GroundTruth&&) noexcept = default;
+int GroundTruth::size() const { return static_cast<int>(impl_->meshes.size()); }
+const TruthMesh& GroundTruth::mesh(int i) const { return impl_->meshes.at(i); }
+double GroundTruth::tolerance() const { return impl_->tolerance; }
+double GroundTruth::tolerance_mean() const { return impl_->tolerance_mean; }
+
+landmarks::SurfacePoint GroundTruth::map(int a, int b, const landmarks::SurfacePoint& p) const {
+  return impl_->from_domain(b, impl_->to_domain(a, p));
+}
+
+std::vector<std::pair<std::string, Vec3>> dissection_landmarks(const dissect::Dissection& d) {
+  std::vector<std::pair<std::string, Vec3>> out;
+  const int nv = d.chart.mesh.num_vertices();
+  for (int k = 0; k < 4; ++k)
+    if (d.seeds[k] >= 0 && d.seeds[k] < nv) out.emplace_back("seed" + std::to_string(k), d.chart.mesh.positions[d.seeds[k]]);
+  for (const auto& f : d.features)
+    if (f.vertex >= 0 && f.vertex < nv) out.emplace_back(f.name, d.chart.mesh.positions[f.vertex]);
+  return out;
+}
+
+namespace {
+
+ErrorStats stats(std::vector<double> e) {
+  ErrorStats s;
+  if (e.empty()) return s;
+  double sum = 0;
+  for (double x : e) sum += x;  // in sample order: deterministic
+  s.mean = sum / e.size();
+  std::sort(e.begin(), e.end());
+  auto q = [&](double f) { return e[std::min(e.size() - 1, static_cast<std::size_t>(std::floor(f * (e.size() - 1) + 0.5)))]; };
+  s.median = q(0.5);
+  s.p95 = q(0.95);
+  s.max = e.back();
+  return s;
+}
+
+}  // namespace
+
+PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedInput>& inputs, int a, int b,
+                         const MeasureOptions& options, const Context& context) {
+  if (options.samples < 1) throw InvalidInput("correspondence: samples must be at least 1");
+  if (a < 0 || b < 0 || a >= truth.size() || b >= truth.size() || static_cast<int>(inputs.size()) != truth.size() || a == b)
+    throw InvalidInput("correspondence: a pair of two different meshes of the set is needed");
+  for (int i : {a, b}) {
+    const TriMesh& m = truth.mesh(i).mesh;
+    const dissect::Chart& c = *inputs[i].chart;
+    bool same = c.mesh.num_vertices() >= m.num_vertices();
+    for (int v = 0; same && v < m.num_vertices(); ++v) same = c.mesh.positions[v] == m.positions[v];
+    if (!same)
+      throw InvalidInput("correspondence: " + truth.mesh(i).name + " is not the mesh that was dissected (its chart's "
+                         "first vertices differ)");
+  }
+  const dissect::Chart& ca = *inputs[a].chart;
+  const dissect::Chart& cb = *inputs[b].chart;
+  if (ca.patches.size() != cb.patches.size())
+    throw InvalidInput("correspondence: the charts of " + truth.mesh(a).name + " and " + truth.mesh(b).name +
+                       " have different patch counts");
+  for (std::size_t p = 0; p < ca.patches.size(); ++p)
+    if (ca.patches[p].name != cb.patches[p].name)
+      throw InvalidInput("correspondence: patch " + std::to_string(p) + " is " + ca.patches[p].name + " in one chart and " +
+                         cb.patches[p].name + " in the other");
+
+  const remesh::ChartSampler sampler(cb, context.without_progress());
+  const metro::SurfaceDistance on_a(truth.mesh(a).mesh, "A");
+  const metro::SurfaceDistance on_b_chart(cb.mesh, "B");
+  const TriMesh& mb = truth.mesh(b).mesh;
+
+  // The baseline's similarity, from the landmarks both meshes have.
+  std::vector<Vec3> src, dst;
+  for (const auto& [name, p] : inputs[a].landmarks)
+    for (const auto& [name_b, q] : inputs[b].landmarks)
+      if (name == name_b) {
+        src.push_back(p);
+        dst.push_back(q);
+      }
+  Eigen::Matrix4d similarity = Eigen::Matrix4d::Identity();
+  if (src.size() >= 3) {
+    Eigen::Matrix3Xd s(3, src.size()), d(3, dst.size());
+    for (std::size_t i = 0; i < src.size(); ++i) {
+      s.col(i) = src[i];
+      d.col(i) = dst[i];
+    }
+    similarity = Eigen::umeyama(s, d, true);
+  }
+
+  // Samples uniformly per unit area on A's chart (A's surface): systematic along the faces.
+  const int nf = ca.mesh.num_faces();
+  std::vector<double> cumulative(nf + 1, 0.0);
+  for (int f = 0; f < nf; ++f) cumulative[f + 1] = cumulative[f] + face_area(ca.mesh, f);
+  const double total = cumulative[nf];
+  if (!(total > 0)) throw InvalidInput("correspondence: " + truth.mesh(a).name + " has zero area");
+  const long n = options.samples;
+  std::vector<double> err(n), base_err(n);
+  std::vector<double> same(n);
+  const Box3 box = bounding_box(cb.mesh.positions);
+  const double diag = box.diagonal();
+
+  constexpr long kChunk = 1024;
+  const long chunks = (n + kChunk - 1) / kChunk;
+  std::atomic<long> next{0}, done{0};
+  std::atomic<bool> cancelled{false};
+  auto work = [&] {
+    int hint = -1;
+    for (long c = next++; c < chunks; c = next++) {
+      if (context.cancel && context.cancel->load()) {
+        cancelled = true;
+        return;
+      }
+      for (long k = c * kChunk; k < std::min(n, (c + 1) * kChunk); ++k) {
+        const std::uint64_t r0 = splitmix64(options.seed * 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(k));
+        const double target = (static_cast<double>(k) + unit_double(r0)) / static_cast<double>(n) * total;
+        int f = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()) - 1;
+        f = std::clamp(f, 0, nf - 1);
+        while (f > 0 && cumulative[f + 1] - cumulative[f] <= 0) --f;
+        const double s1 = std::sqrt(unit_double(splitmix64(r0))), s2 = unit_double(splitmix64(r0 ^ 0x5bd1e995ULL));
+        const Vec3 beta(1 - s1, s1 * (1 - s2), s1 * s2);
+        const Tri& t = ca.mesh.faces[f];
+        const Vec3 x = beta[0] * ca.mesh.positions[t[0]] + beta[1] * ca.mesh.positions[t[1]] + beta[2] * ca.mesh.positions[t[2]];
+        const Vec2 uv = beta[0] * ca.face_uv[f][0] + beta[1] * ca.face_uv[f][1] + beta[2] * ca.face_uv[f][2];
+        const int patch = ca.face_patch[f];
+        const Vec3 mapped = sampler.point(patch, uv.cwiseMax(0.0).cwiseMin(1.0), hint);
+        const auto ca_closest = on_a.closest(x);
+        const landmarks::SurfacePoint on_input = surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point);
+        const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
+        err[k] = 100 * (mapped - exact).norm() / diag;
+        same[k] = cb.face_patch[on_b_chart.closest(exact).face] == patch ? 1.0 : 0.0;
+        const Vec3 moved = (similarity * x.homogeneous()).head<3>();
+        base_err[k] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
+      }
+      context.report("correspondence", static_cast<double>(++done) / chunks);
+    }
+  };
+  int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::clamp<int>(threads, 1, static_cast<int>(std::min<long>(chunks, 64)));
+  std::vector<std::thread> pool;
+  for (int i = 1; i < threads; ++i) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
+  if (cancelled) throw Error(ErrorCode::Internal, "cancelled");
+
+  PairMeasure pm;
+  pm.a = a;
+  pm.b = b;
+  pm.samples = n;
+  pm.diagonal = diag;
+  pm.dissection = stats(err);
+  pm.baseline = stats(base_err);
+  double s = 0;
+  for (double v : same) s += v;
+  pm.same_patch_share = s / n;
+  pm.baseline_landmarks = src.size() >= 3 ? static_cast<int>(src.size()) : 0;
+  pm.truth_tolerance = 100 * truth.tolerance() / diag;
+  pm.truth_tolerance_mean = 100 * truth.tolerance_mean() / diag;
+  return pm;
+}
+
+}  // namespace qs::correspondence

@@ -1,0 +1,33 @@
+#pragma once
+// A new tessellation of the same surface, with each new vertex's exact origin on the input: for
+// "a shape against its own re-tessellation" and for re-tessellating one mesh of a registered pair
+// (README "Correspondence").
+
+#include <vector>
+
+#include "qs/core/context.h"
+#include "qs/core/mesh.h"
+#include "qs/landmarks/landmarks.h"
+
+namespace qs::family {
+
+struct RetessellateOptions {
+  int faces = 0;        ///< target face count (about); 0: the input's. \pre 0 or >= 100
+  int iterations = 3;   ///< rounds of isotropic remeshing. \pre 1..20
+};
+
+struct Retessellation {
+  TriMesh mesh;                                  ///< closed, manifold, genus 0 (checked)
+  std::vector<landmarks::SurfacePoint> origins;  ///< #V: the input face and weights of each vertex
+  double max_origin_distance = 0;  ///< before snapping, the farthest a vertex was from the input
+};
+
+/// Isotropic remeshing (CGAL Polygon_mesh_processing, target edge length from the face count,
+/// vertices projected onto the input), then every vertex is placed exactly at its closest point
+/// of the input, recorded as (face, barycentric weights). \pre `mesh` is validated (closed,
+/// manifold, genus 0). \throws InvalidInput for an option out of range, SolverError when the
+/// result is not a closed genus-0 mesh without zero-area faces.
+Retessellation retessellate(const TriMesh& mesh, const RetessellateOptions& options = {},
+                            const Context& context = {});
+
+}  // namespace qs::family

@@ -1,0 +1,243 @@
+// Ground truth between meshes (sphere maps, identical connectivity, surface maps) and the measure
+// of a dissection's correspondence against it.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "qs/core/error.h"
+#include "qs/correspondence/correspondence.h"
+#include "qs/dissect/dissection.h"
+#include "qs/family/family.h"
+#include "qs/family/retessellate.h"
+#include "qs/family/surface_map.h"
+#include "qs/io/write_mesh.h"
+#include "qs/landmarks/landmarks.h"
+#include "qs/mesh/validate.h"
+#include "qs/shapes/shapes.h"
+
+using ::testing::HasSubstr;
+using qs::Vec3;
+namespace cr = qs::correspondence;
+
+namespace {
+
+qs::family::Family small_family(int n, std::uint64_t seed, double variation = 1.0) {
+  qs::family::FamilyOptions o;
+  o.shapes = n;
+  o.seed = seed;
+  o.faces = 2000;
+  o.limbs = 4;
+  o.variation = variation;
+  return qs::family::generate_family(o);
+}
+
+cr::TruthMesh sphere_truth(const qs::family::FamilyShape& s) {
+  cr::TruthMesh t;
+  t.name = s.name;
+  t.mesh = s.mesh;
+  qs::family::SurfaceMap m;
+  m.sphere = s.parameters;
+  t.map = m;
+  return t;
+}
+
+cr::TruthMesh plain_truth(const qs::TriMesh& mesh, const std::string& name) {
+  cr::TruthMesh t;
+  t.name = name;
+  t.mesh = mesh;
+  return t;
+}
+
+int nearest_corner(const qs::TriMesh& m, const qs::landmarks::SurfacePoint& p) {
+  const auto& b = p.bary;
+  return m.faces[p.face][std::max_element(b.begin(), b.end()) - b.begin()];
+}
+
+/// The set dissection of family shapes as qs-dissect would run it: seeds at their nearest
+/// vertices, features at their (face, bary).
+qs::dissect::DissectionSet dissect_shapes(const std::vector<const qs::family::FamilyShape*>& shapes) {
+  std::vector<qs::dissect::MeshToDissect> in;
+  for (const auto* s : shapes) {
+    qs::dissect::MeshToDissect m;
+    m.mesh = &s->mesh;
+    m.name = s->name;
+    std::array<int, 4> seeds{};
+    for (int k = 0; k < 4; ++k) seeds[k] = nearest_corner(s->mesh, s->seeds[k].where);
+    m.seeds = seeds;
+    for (const auto& f : s->features) m.features.push_back({f.name, -1, f.where});
+    in.push_back(m);
+  }
+  return qs::dissect::dissect_set(in);
+}
+
+std::vector<cr::DissectedInput> inputs_of(const qs::dissect::DissectionSet& set) {
+  std::vector<cr::DissectedInput> in;
+  for (const auto& d : set.meshes) in.push_back({&d.chart, cr::dissection_landmarks(d)});
+  return in;
+}
+
+}  // namespace
+
+TEST(GroundTruth, SphereMapsTakeLandmarksToLandmarksAndRoundTrip) {
+  const auto fam = small_family(2, 3);
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  EXPECT_EQ(truth.tolerance(), 0);
+  const auto &a = fam.shapes[0], &b = fam.shapes[1];
+  for (std::size_t k = 0; k < a.features.size(); ++k) {
+    const auto img = truth.map(0, 1, a.features[k].where);
+    EXPECT_LT((qs::landmarks::position_of(b.mesh, img) - qs::landmarks::position_of(b.mesh, b.features[k].where)).norm(), 1e-9)
+        << a.features[k].name;
+  }
+  for (int f = 0; f < a.mesh.num_faces(); f += 97) {
+    qs::landmarks::SurfacePoint p;
+    p.face = f;
+    p.bary = {0.2, 0.3, 0.5};
+    const auto there = truth.map(0, 1, p);
+    for (double w : there.bary) EXPECT_GE(w, 0);
+    // The image lies on B's mesh near B's smooth surface at the same parameter (within the chord
+    // error of a 2000-face mesh, largest at the limb tips).
+    const qs::Tri& t = a.mesh.faces[f];
+    const Vec3 d = (0.2 * a.parameters[t[0]] + 0.3 * a.parameters[t[1]] + 0.5 * a.parameters[t[2]]).normalized();
+    EXPECT_LT((qs::landmarks::position_of(b.mesh, there) - qs::family::family_surface_point(fam.options, 1, d)).norm(),
+              0.03 * qs::bounding_box(b.mesh.positions).diagonal());
+    const auto back = truth.map(1, 0, there);
+    EXPECT_LT((qs::landmarks::position_of(a.mesh, back) - qs::landmarks::position_of(a.mesh, p)).norm(), 1e-9);
+  }
+}
+
+TEST(GroundTruth, IdenticalConnectivityIsTheSameFaceAndWeights) {
+  const qs::TriMesh m = qs::shapes::icosphere(2);
+  qs::TriMesh big = m;
+  for (auto& p : big.positions) p *= 3;
+  const cr::GroundTruth truth({plain_truth(m, "a"), plain_truth(big, "b")});
+  qs::landmarks::SurfacePoint p;
+  p.face = 17;
+  p.bary = {0.1, 0.6, 0.3};
+  const auto q = truth.map(0, 1, p);
+  EXPECT_EQ(q.face, 17);
+  EXPECT_EQ(q.bary, p.bary);
+}
+
+TEST(GroundTruth, SurfaceMapsGoThroughTheirReference) {
+  // B is a re-tessellation of R, which has A's connectivity: a point of A maps to R's same
+  // (face, bary), then to B's closest point.
+  const qs::TriMesh a = qs::mesh::validate(qs::shapes::bumpy_sphere(0.2, 3, 3)).mesh;
+  qs::TriMesh r = a;
+  for (auto& p : r.positions) p = qs::Vec3(1.5 * p.x(), p.y(), 0.8 * p.z());
+  qs::family::RetessellateOptions ro;
+  ro.faces = 1500;
+  const auto re = qs::family::retessellate(r, ro);
+  cr::TruthMesh tb;
+  tb.name = "b";
+  tb.mesh = re.mesh;
+  qs::family::SurfaceMap map;
+  map.domain = qs::family::MapDomain::Surface;
+  map.origins = re.origins;
+  tb.map = map;
+  tb.reference = r;
+  const cr::GroundTruth truth({plain_truth(a, "a"), tb});
+  EXPECT_GT(truth.tolerance(), 0);
+  EXPECT_LT(truth.tolerance(), 0.02);
+  // Vertex v of B is exactly its origin on R, whose (face, bary) on A gives the same point back.
+  for (int v = 0; v < re.mesh.num_vertices(); v += 53) {
+    const auto on_a = re.origins[v];
+    const auto img = truth.map(0, 1, on_a);
+    EXPECT_LT((qs::landmarks::position_of(re.mesh, img) - re.mesh.positions[v]).norm(), 1e-9);
+  }
+}
+
+TEST(GroundTruth, MeshesWithoutACommonDomainAreRejected) {
+  const auto fam = small_family(1, 2);
+  try {
+    cr::GroundTruth({sphere_truth(fam.shapes[0]), plain_truth(fam.shapes[0].mesh, "plain")});
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("either all or none"));
+  }
+  try {
+    cr::GroundTruth({plain_truth(qs::shapes::icosphere(2), "ico"), plain_truth(qs::shapes::cube_sphere(4), "cube")});
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cube does not have the connectivity of ico"));
+  }
+}
+
+TEST(Measure, AMeshAgainstItselfIsExact) {
+  const auto fam = small_family(1, 4);
+  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[0]});
+  const cr::GroundTruth truth({plain_truth(fam.shapes[0].mesh, "a"), plain_truth(fam.shapes[0].mesh, "b")});
+  cr::MeasureOptions o;
+  o.samples = 20000;
+  const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  EXPECT_EQ(pm.samples, 20000);
+  EXPECT_LT(pm.dissection.max, 1e-9);
+  EXPECT_LT(pm.baseline.max, 1e-6);
+  EXPECT_GT(pm.same_patch_share, 0.999);
+  EXPECT_GE(pm.baseline_landmarks, 4);
+}
+
+TEST(Measure, AFamilyPairHasOrderedFiniteStatisticsIndependentOfThreads) {
+  const auto fam = small_family(2, 6);
+  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[1]});
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  cr::MeasureOptions o;
+  o.samples = 20000;
+  o.threads = 1;
+  const auto one = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  o.threads = 3;
+  const auto three = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  EXPECT_EQ(one.dissection.mean, three.dissection.mean);
+  EXPECT_EQ(one.dissection.max, three.dissection.max);
+  EXPECT_EQ(one.baseline.p95, three.baseline.p95);
+  EXPECT_EQ(one.same_patch_share, three.same_patch_share);
+  for (const auto& s : {one.dissection, one.baseline}) {
+    EXPECT_GT(s.mean, 0);
+    EXPECT_LE(s.median, s.p95);
+    EXPECT_LE(s.p95, s.max);
+    EXPECT_LT(s.max, 100);
+  }
+  EXPECT_GT(one.same_patch_share, 0.5);
+  EXPECT_LE(one.same_patch_share, 1.0);
+  // Another seed samples other points: close but not equal figures.
+  o.seed = 2;
+  const auto other = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  EXPECT_NE(other.dissection.mean, one.dissection.mean);
+  EXPECT_NEAR(other.dissection.mean, one.dissection.mean, 0.1 * one.dissection.mean);
+}
+
+TEST(Measure, TheWrongMeshIsNamed) {
+  const auto fam = small_family(2, 7);
+  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[1]});
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[1]), sphere_truth(fam.shapes[0])});
+  try {
+    cr::measure_pair(truth, inputs_of(set), 0, 1);
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is not the mesh that was dissected"));
+  }
+}
+
+TEST(LoadTruthMesh, ChecksTheMapAgainstTheMesh) {
+  const auto dir = std::filesystem::temp_directory_path() / ("qs_truth_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto fam = small_family(1, 8);
+  qs::io::write_mesh(dir / "s.obj", fam.shapes[0].mesh);
+  qs::family::SurfaceMap m;
+  m.sphere = fam.shapes[0].parameters;
+  qs::family::write_surface_map(dir / "s.map.json", m);
+  const auto t = cr::load_truth_mesh(dir / "s.obj", dir / "s.map.json");
+  ASSERT_TRUE(t.map.has_value());
+  EXPECT_EQ(t.map->sphere, fam.shapes[0].parameters);
+  m.sphere.pop_back();
+  qs::family::write_surface_map(dir / "short.map.json", m);
+  try {
+    cr::load_truth_mesh(dir / "s.obj", dir / "short.map.json");
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("short.map.json: 1001 vertices"));
+  }
+  std::filesystem::remove_all(dir);
+}

@@ -1,0 +1,89 @@
+// qs-metro --correspondence as a user runs it: qs-family -> qs-dissect -> measure; exit codes.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tool_runner.h"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace {
+
+class CorrespondenceTool : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("qs_corr_tool_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    ASSERT_EQ(run_tool("qs-family", "generate -n 2 --seed 2 --faces 1600 --limbs 4 --quiet -o " + d()).exit, 0);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string d() const { return dir_.string(); }
+  std::string mesh(int i) const { return d() + "/shape0" + std::to_string(i) + ".obj"; }
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(CorrespondenceTool, MeasuresAFamilyPairAgainstItsMapFiles) {
+  RunResult r = run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 20000");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("(ground truth: " + d() + "/shape00.map.json)"));
+  EXPECT_THAT(r.out, HasSubstr("  dissection: mean "));
+  EXPECT_THAT(r.out, HasSubstr("baseline (similarity on 8 landmarks + nearest point)"));
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 20000 --json -o " + d() + "/c.json");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  std::ifstream in(d() + "/c.json");
+  const auto doc = nlohmann::json::parse(in);
+  ASSERT_EQ(doc["pairs"].size(), 1u);
+  const auto& p = doc["pairs"][0];
+  EXPECT_EQ(p["samples"], 20000);
+  EXPECT_GT(p["dissection"]["mean_percent"].get<double>(), 0);
+  EXPECT_LE(p["dissection"]["p95_percent"].get<double>(), p["dissection"]["max_percent"].get<double>());
+  EXPECT_GT(p["same_patch_share"].get<double>(), 0.5);
+  EXPECT_LE(p["same_patch_share"].get<double>(), 1.0);
+  // The same run twice gives the same bytes.
+  ASSERT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 20000 --json -o " + d() + "/c2.json").exit, 0);
+  std::ifstream a(d() + "/c.json"), b(d() + "/c2.json");
+  std::stringstream sa, sb;
+  sa << a.rdbuf();
+  sb << b.rdbuf();
+  EXPECT_EQ(sa.str(), sb.str());
+}
+
+TEST_F(CorrespondenceTool, TwoMeshesWithOneFaceListNeedNoMap) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(0) + " --quiet -o " + d() + "/self").exit, 0);
+  const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/self --map - - --samples 5000");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("(ground truth: its own face list)"));
+  EXPECT_THAT(r.out, HasSubstr("dissection: mean 0.000%, median 0.000%, p95 0.000%, max 0.000%; same patch: 100.0%"));
+}
+
+TEST_F(CorrespondenceTool, BadInputsGiveTheDocumentedExitCodes) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --map " + d() + "/shape00.map.json");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("1 files given for 2 meshes"));
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair " + mesh(0));
+  EXPECT_EQ(r.exit, 1) << r.out;
+  r = run_tool("qs-metro", "--correspondence " + d() + "/nothing");
+  EXPECT_EQ(r.exit, 3) << r.out;
+  // Different tessellations without maps: no common domain.
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --map - -");
+  EXPECT_EQ(r.exit, 2) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("does not have the connectivity of"));
+  // A map of the other mesh.
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --map " + d() + "/shape01.map.json " + d() +
+                               "/shape00.map.json");
+  EXPECT_EQ(r.exit, 2) << r.out;
+  r = run_tool("qs-metro", "--map x.json " + mesh(0) + " " + mesh(1));
+  EXPECT_EQ(r.exit, 1) << r.out;
+}
