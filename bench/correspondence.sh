@@ -49,7 +49,9 @@ run_pair() {
   local mapargs=()
   [ ${#maps[@]} -gt 0 ] && mapargs=(--map "${maps[@]}")
   if "$TOOLS/qs-metro" --correspondence "$dir" "${mapargs[@]}" --samples "$SAMPLES" --json -o "$dir.corr.json" \
-      > "$dir.metro.log" 2>&1; then
+      > "$dir.metro.log" 2>&1 &&
+     "$TOOLS/qs-metro" --correspondence "$dir" "${mapargs[@]}" --samples "$SAMPLES" --level 4 --json \
+      -o "$dir.corr-L4.json" >> "$dir.metro.log" 2>&1; then
     printf '%s\t%s\t%s\t%s\n' "$name" "$rc" "$secs" "$dir.corr.json" >> "$RESULTS"
     echo "$name: dissect exit $rc in $secs s, measured"
   else
@@ -104,15 +106,16 @@ fi
 python3 - "$RESULTS" <<'PY'
 import json, sys
 print()
-print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | baseline mean | baseline p95 | baseline max | truth within (mean / max) |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | level 4: mean / p95 / max | baseline mean | baseline p95 | baseline max | truth within (mean / max) |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for line in open(sys.argv[1]):
     name, rc, secs, path = line.rstrip("\n").split("\t")
     if path == "-":
-        print(f"| {name} | {rc} | {secs} s | | not measured | | | | | | | | |")
+        print(f"| {name} | {rc} | {secs} s | | not measured | | | | | | | | | |")
         continue
     doc = json.load(open(path))
-    for p in doc["pairs"]:
+    l4 = json.load(open(path.replace(".corr.json", ".corr-L4.json")))["pairs"]
+    for p, q in zip(doc["pairs"], l4):
         a = p["a"].rsplit("/", 1)[-1]; b = p["b"].rsplit("/", 1)[-1]
         d, bl = p["dissection"], p["baseline"]
         label = name if len(doc["pairs"]) == 1 else f"{name} {a}->{b}"
@@ -120,5 +123,6 @@ for line in open(sys.argv[1]):
         tol = "exact" if t == 0 else f"{tm:.3f}% / {t:.2f}%"
         print(f"| {label} | {rc} | {secs} s | {doc['patches']} | {d['mean_percent']:.2f}% | {d['median_percent']:.2f}% | "
               f"{d['p95_percent']:.2f}% | {d['max_percent']:.2f}% | {100*p['same_patch_share']:.1f}% | "
+              f"{q['dissection']['mean_percent']:.2f} / {q['dissection']['p95_percent']:.2f} / {q['dissection']['max_percent']:.2f}% | "
               f"{bl['mean_percent']:.2f}% | {bl['p95_percent']:.2f}% | {bl['max_percent']:.2f}% | {tol} |")
 PY

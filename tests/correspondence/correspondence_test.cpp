@@ -208,6 +208,28 @@ TEST(Measure, AFamilyPairHasOrderedFiniteStatisticsIndependentOfThreads) {
   EXPECT_NEAR(other.dissection.mean, one.dissection.mean, 0.1 * one.dissection.mean);
 }
 
+TEST(Measure, TheRemeshMapConvergesToTheChartMapWithTheLevel) {
+  const auto fam = small_family(2, 6);
+  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[1]});
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  cr::MeasureOptions o;
+  o.samples = 5000;
+  const auto chart = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  double previous = 1e300;
+  for (int level : {1, 3, 5, 8}) {
+    o.level = level;
+    const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+    EXPECT_EQ(pm.level, level);
+    const double gap = std::abs(pm.dissection.mean - chart.dissection.mean);
+    EXPECT_LT(gap, previous) << "level " << level;
+    previous = gap;
+    EXPECT_EQ(pm.same_patch_share, chart.same_patch_share);  // the patch comes from A's chart
+  }
+  EXPECT_LT(previous, 0.01 * chart.dissection.mean);
+  o.level = 13;
+  EXPECT_THROW(cr::measure_pair(truth, inputs_of(set), 0, 1, o), qs::InvalidInput);
+}
+
 TEST(Measure, TheWrongMeshIsNamed) {
   const auto fam = small_family(2, 7);
   const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[1]});
