@@ -5,6 +5,10 @@
 // a face index out of range, a NaN or infinite coordinate, zero total area); 3 a file that
 // cannot be read or written. Meshes that qs-inspect would reject for other reasons (open,
 // non-manifold, several components, any genus) are measured anyway, with a note.
+//
+// --correspondence DIR: a qs-dissect folder measured against ground truth (map files, or identical
+// face lists): qs::correspondence, README "Correspondence". Exit 2 also for meshes without a
+// common domain or a map of another mesh.
 
 #include <cstdio>
 #include <filesystem>
@@ -244,8 +248,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Metro-style two-sided distance between two meshes: mean, RMS and max (Hausdorff) of\n"
                "the distances from points sampled on each to the surface of the other, absolute and\n"
                "as % of the bounding-box diagonal of A.\n"
-               "Exit codes: 0 measured, 1 usage, 2 a mesh that cannot be measured, 3 a file unreadable\n"
-               "or unwritable.",
+               "With --correspondence DIR: how far a dissection's map A -> B is from the exact one.\n"
+               "Exit codes: 0 measured, 1 usage, 2 a mesh that cannot be measured (or no common ground\n"
+               "truth), 3 a file unreadable or unwritable.",
                "qs-metro"};
   std::string file_a, file_b;
   long samples = 0;
@@ -267,7 +272,8 @@ int main(int argc, char** argv) {
   app.add_option("--map", maps, "With --correspondence: a map file per mesh in the dissection's order, '-' for "
                                 "none (default: <stem>.map.json beside each mesh when present)");
   app.add_option("--samples", samples,
-                 "Surface samples per direction (default: max(100000, 2 x the larger face count))")
+                 "Surface samples per direction (default: max(100000, 2 x the larger face count)); with "
+                 "--correspondence: points on A per pair (default 100000)")
       ->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "Seed of the sampling (the same seed gives the same numbers)");
   app.add_flag("--no-vertices", no_vertices, "Do not measure at the vertices (surface samples only)");
