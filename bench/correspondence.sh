@@ -9,6 +9,7 @@
 #   gen-sS        generated pair (qs-family, seed S = 1, 2, 3): two warps of one base, own tessellations
 #   gen-v0        one smooth surface (qs-family --variation 0) with two tessellations (ideal: the identity)
 #   fam4-s1       a family of 4 dissected together; shape00 against each of the other three
+#   fam8-s1       a family of 8 dissected together; shape00 against the 7 others, averaged
 #   self-gen      a generated shape against its own re-tessellation (ideal: the identity)
 #   self-smpl-*   smpl_man_14k / smpl_woman_14k against its own re-tessellation (ideal: the identity)
 #   human-retess  smpl_man_14k against smpl_woman_14k re-tessellated (same pose, registered)
@@ -79,6 +80,11 @@ f="$OUT/fam4-s1"
 "$TOOLS/qs-family" generate -n 4 --seed 1 --faces "$FACES" --quiet -o "$f" || exit 1
 run_pair "fam4-s1" "$f/dissection" "$f"/shape0{0,1,2,3}.obj -- "$f"/shape0{0,1,2,3}.landmarks.json --
 
+# A family of 8 (summarized in one row: the average over the 7 pairs, the largest max).
+f="$OUT/fam8-s1"
+"$TOOLS/qs-family" generate -n 8 --seed 1 --faces "$FACES" --quiet -o "$f" || exit 1
+run_pair "fam8-s1" "$f/dissection" "$f"/shape0{0,1,2,3,4,5,6,7}.obj -- "$f"/shape0{0,1,2,3,4,5,6,7}.landmarks.json --
+
 # A generated shape against its own re-tessellation.
 g="$OUT/gen-s1"
 "$TOOLS/qs-family" retessellate "$g/shape00.obj" --landmarks "$g/shape00.landmarks.json" \
@@ -115,7 +121,22 @@ for line in open(sys.argv[1]):
         continue
     doc = json.load(open(path))
     l4 = json.load(open(path.replace(".corr.json", ".corr-L4.json")))["pairs"]
-    for p, q in zip(doc["pairs"], l4):
+    rows = list(zip(doc["pairs"], l4))
+    if len(rows) > 3:  # a large family: one row, averages over the pairs and the largest max
+        def avg(pairs, key, stat, red=lambda v: sum(v) / len(v)):
+            return red([p[key][stat] for p in pairs])
+        P, Q = doc["pairs"], l4
+        m = {k: avg(P, "dissection", k + "_percent") for k in ("mean", "median", "p95")}
+        m["max"] = avg(P, "dissection", "max_percent", max)
+        b = {k: avg(P, "baseline", k + "_percent") for k in ("mean", "p95")}
+        b["max"] = avg(P, "baseline", "max_percent", max)
+        share = sum(p["same_patch_share"] for p in P) / len(P)
+        print(f"| {name} (average of {len(P)} pairs, largest max) | {rc} | {secs} s | {doc['patches']} | {m['mean']:.2f}% | "
+              f"{m['median']:.2f}% | {m['p95']:.2f}% | {m['max']:.2f}% | {100*share:.1f}% | "
+              f"{avg(Q, 'dissection', 'mean_percent'):.2f} / {avg(Q, 'dissection', 'p95_percent'):.2f} / "
+              f"{avg(Q, 'dissection', 'max_percent', max):.2f}% | {b['mean']:.2f}% | {b['p95']:.2f}% | {b['max']:.2f}% | exact |")
+        continue
+    for p, q in rows:
         a = p["a"].rsplit("/", 1)[-1]; b = p["b"].rsplit("/", 1)[-1]
         d, bl = p["dissection"], p["baseline"]
         label = name if len(doc["pairs"]) == 1 else f"{name} {a}->{b}"
