@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "qs/core/error.h"
@@ -162,6 +163,48 @@ TEST(GroundTruth, MeshesWithoutACommonDomainAreRejected) {
     ADD_FAILURE();
   } catch (const qs::InvalidInput& e) {
     EXPECT_THAT(e.what(), HasSubstr("cube does not have the connectivity of ico"));
+  }
+}
+
+TEST(GroundTruth, ASphereMapMustCoverTheSphereOncePositively) {
+  const auto fam = small_family(2, 5);
+  // Every parameter mirrored: each face inverted on the sphere.
+  cr::TruthMesh mirrored = sphere_truth(fam.shapes[1]);
+  for (Vec3& d : mirrored.map->sphere) d.x() = -d.x();
+  try {
+    cr::GroundTruth({sphere_truth(fam.shapes[0]), mirrored});
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is not a bijection of that mesh: 2000 faces"));
+  }
+  // An octahedron whose sphere map wraps twice around the z axis (the angle about z doubled):
+  // every face stays positive, but the sphere is covered twice.
+  qs::TriMesh octa;
+  const int ring = 8;  // a bipyramid over a ring of 8
+  octa.positions.push_back(Vec3(0, 0, 1));
+  octa.positions.push_back(Vec3(0, 0, -1));
+  for (int k = 0; k < ring; ++k) octa.positions.push_back(Vec3(std::cos(2 * M_PI * k / ring), std::sin(2 * M_PI * k / ring), 0));
+  for (int k = 0; k < ring; ++k) {
+    octa.faces.push_back({0, 2 + k, 2 + (k + 1) % ring});
+    octa.faces.push_back({1, 2 + (k + 1) % ring, 2 + k});
+  }
+  cr::TruthMesh twice = plain_truth(octa, "twice");
+  qs::family::SurfaceMap m;
+  for (const Vec3& p : octa.positions) {
+    const double a = 2 * std::atan2(p.y(), p.x()), r = std::hypot(p.x(), p.y());
+    m.sphere.push_back(Vec3(r * std::cos(a), r * std::sin(a), p.z()).normalized());
+  }
+  twice.map = m;
+  cr::TruthMesh once = plain_truth(octa, "once");
+  qs::family::SurfaceMap m1;
+  m1.sphere = octa.positions;
+  once.map = m1;
+  EXPECT_NO_THROW(cr::GroundTruth({once, once}));
+  try {
+    cr::GroundTruth({once, twice});
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("covers the sphere 2"));
   }
 }
 

@@ -181,7 +181,8 @@ struct GroundTruth::Impl {
       }
       f = s.neighbour[f][worst];
     }
-    throw InternalError("ground truth: the walk on the parameter sphere of " + m.name + " did not end");
+    throw InvalidInput("ground truth: the walk on the parameter sphere of " + m.name +
+                       " did not end: its sphere map is not a bijection");
   }
 };
 
@@ -214,6 +215,17 @@ GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique
         throw InvalidInput("ground truth: the sphere map of " + m.name + " is not a bijection of that mesh: " +
                            std::to_string(inverted) + " faces (first " + std::to_string(first) +
                            ") are inverted or flat on the sphere (is it the map of another mesh?)");
+      // Positive faces could still wrap the sphere more than once: their solid angles (Van
+      // Oosterom and Strackee) must add up to exactly one sphere.
+      double solid = 0;
+      for (const Tri& t : m.mesh.faces) {
+        const auto& P = s.parameter_mesh.positions;
+        const Vec3 &a = P[t[0]], &b = P[t[1]], &c = P[t[2]];
+        solid += 2 * std::atan2(a.dot(b.cross(c)), 1 + a.dot(b) + b.dot(c) + c.dot(a));
+      }
+      if (std::abs(solid - 4 * 3.14159265358979323846) > 1e-6)
+        throw InvalidInput("ground truth: the sphere map of " + m.name + " covers the sphere " +
+                           std::to_string(solid / (4 * 3.14159265358979323846)) + " times; a map file must cover it once");
       s.other_distance = std::make_unique<metro::SurfaceDistance>(s.parameter_mesh, "parameter sphere");
       std::unordered_map<std::uint64_t, std::pair<int, int>> edge;  // directed edge -> (face, corner opposite)
       const int nf = m.mesh.num_faces();
