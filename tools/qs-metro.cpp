@@ -5,6 +5,10 @@
 // a face index out of range, a NaN or infinite coordinate, zero total area); 3 a file that
 // cannot be read or written. Meshes that qs-inspect would reject for other reasons (open,
 // non-manifold, several components, any genus) are measured anyway, with a note.
+//
+// --correspondence DIR: a qs-dissect folder measured against ground truth (map files, or identical
+// face lists): qs::correspondence, README "Correspondence". Exit 2 also for meshes without a
+// common domain or a map of another mesh.
 
 #include <cstdio>
 #include <filesystem>
@@ -136,10 +140,12 @@ nlohmann::json json_report(const Input& a, const Input& b, const qs::metro::Metr
 // ---- --correspondence: a dissection measured against ground truth ----------------------------
 
 /// A mesh file named in dissection.json: as written (relative to the working folder), else
-/// relative to the dissection folder or its parent.
+/// relative to the dissection folder or its parent, else its file name in either.
 std::filesystem::path find_mesh(const std::string& file, const std::filesystem::path& folder) {
   namespace fs = std::filesystem;
-  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file})
+  const fs::path name = fs::path(file).filename();
+  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file, folder / name,
+                            folder.parent_path() / name})
     if (fs::exists(p)) return p;
   throw qs::IoError(file + ": mesh of the dissection " + folder.string() +
                     " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)");
@@ -156,7 +162,7 @@ std::string stats_text(const qs::correspondence::ErrorStats& s) {
 }
 
 int run_correspondence(const std::string& folder_name, const std::vector<std::string>& maps, long samples,
-                       std::uint64_t seed, bool as_json, const std::optional<std::string>& output) {
+                       std::uint64_t seed, int level, bool as_json, const std::optional<std::string>& output) {
   namespace fs = std::filesystem;
   const fs::path folder(folder_name);
   const qs::dissect::LoadedDissection loaded = qs::dissect::read_dissection(folder);
@@ -188,11 +194,14 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   qs::correspondence::MeasureOptions mo;
   if (samples > 0) mo.samples = samples;
   mo.seed = seed;
+  mo.level = level;
   std::ostringstream text;
   nlohmann::json pairs = nlohmann::json::array();
   text << "qs-metro: correspondence of " << folder_name << " (" << n << " meshes, "
        << loaded.meshes[0].dissection.chart.patches.size() << " patches), " << mo.samples
-       << " samples per pair, uniform per unit area on A; errors in % of B's bounding-box diagonal\n";
+       << " samples per pair, uniform per unit area on A, mapped "
+       << (level == 0 ? std::string("by the charts") : "through B's level-" + std::to_string(level) + " remesh")
+       << "; errors in % of B's bounding-box diagonal\n";
   for (int i = 0; i < n; ++i)
     text << "  mesh " << i << ": " << truth.mesh(i).name << " (ground truth: "
          << (map_used[i].empty() ? std::string("its own face list") : map_used[i]) << ")\n";
@@ -225,6 +234,7 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                         {"meshes", n},
                         {"patches", loaded.meshes[0].dissection.chart.patches.size()},
                         {"seed", seed},
+                        {"level", level},
                         {"pairs", pairs}};
   const std::string report = as_json ? doc.dump(2) + "\n" : text.str();
   if (output) qs::write_file_atomically(*output, report);
@@ -238,8 +248,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Metro-style two-sided distance between two meshes: mean, RMS and max (Hausdorff) of\n"
                "the distances from points sampled on each to the surface of the other, absolute and\n"
                "as % of the bounding-box diagonal of A.\n"
-               "Exit codes: 0 measured, 1 usage, 2 a mesh that cannot be measured, 3 a file unreadable\n"
-               "or unwritable.",
+               "With --correspondence DIR: how far a dissection's map A -> B is from the exact one.\n"
+               "Exit codes: 0 measured, 1 usage, 2 a mesh that cannot be measured (or no common ground\n"
+               "truth), 3 a file unreadable or unwritable.",
                "qs-metro"};
   std::string file_a, file_b;
   long samples = 0;
@@ -248,16 +259,21 @@ int main(int argc, char** argv) {
   std::optional<std::string> output;
   std::optional<std::string> correspondence;
   std::vector<std::string> maps;
+  int level = 0;
   app.add_option("A", file_a, "First mesh (.obj .off .ply .stl); its bounding-box diagonal is the "
                               "reference for the percentages");
   app.add_option("B", file_b, "Second mesh");
   app.add_option("--correspondence", correspondence,
                  "Measure the correspondence of a qs-dissect folder against ground truth instead (no A, B): "
                  "the first mesh against every other (README \"Correspondence\")");
+  app.add_option("--level", level, "With --correspondence: map through B's uniform level-N common remesh "
+                                  "(1..12) instead of the charts' continuous map (0, the default)")
+      ->check(CLI::Range(0, 12));
   app.add_option("--map", maps, "With --correspondence: a map file per mesh in the dissection's order, '-' for "
                                 "none (default: <stem>.map.json beside each mesh when present)");
   app.add_option("--samples", samples,
-                 "Surface samples per direction (default: max(100000, 2 x the larger face count))")
+                 "Surface samples per direction (default: max(100000, 2 x the larger face count)); with "
+                 "--correspondence: points on A per pair (default 100000)")
       ->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "Seed of the sampling (the same seed gives the same numbers)");
   app.add_flag("--no-vertices", no_vertices, "Do not measure at the vertices (surface samples only)");
@@ -268,9 +284,10 @@ int main(int argc, char** argv) {
     if (correspondence) {
       if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
       if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
-      return run_correspondence(*correspondence, maps, samples, seed, as_json, output);
+      return run_correspondence(*correspondence, maps, samples, seed, level, as_json, output);
     }
     if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
+    if (level != 0) throw qs::UsageError("--level needs --correspondence");
     if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");
     const Input a = load(file_a, "A");
     const Input b = load(file_b, "B");

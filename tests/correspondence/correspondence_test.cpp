@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "qs/core/error.h"
@@ -165,6 +166,48 @@ TEST(GroundTruth, MeshesWithoutACommonDomainAreRejected) {
   }
 }
 
+TEST(GroundTruth, ASphereMapMustCoverTheSphereOncePositively) {
+  const auto fam = small_family(2, 5);
+  // Every parameter mirrored: each face inverted on the sphere.
+  cr::TruthMesh mirrored = sphere_truth(fam.shapes[1]);
+  for (Vec3& d : mirrored.map->sphere) d.x() = -d.x();
+  try {
+    cr::GroundTruth({sphere_truth(fam.shapes[0]), mirrored});
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is not a bijection of that mesh: 2000 faces"));
+  }
+  // An octahedron whose sphere map wraps twice around the z axis (the angle about z doubled):
+  // every face stays positive, but the sphere is covered twice.
+  qs::TriMesh octa;
+  const int ring = 8;  // a bipyramid over a ring of 8
+  octa.positions.push_back(Vec3(0, 0, 1));
+  octa.positions.push_back(Vec3(0, 0, -1));
+  for (int k = 0; k < ring; ++k) octa.positions.push_back(Vec3(std::cos(2 * M_PI * k / ring), std::sin(2 * M_PI * k / ring), 0));
+  for (int k = 0; k < ring; ++k) {
+    octa.faces.push_back({0, 2 + k, 2 + (k + 1) % ring});
+    octa.faces.push_back({1, 2 + (k + 1) % ring, 2 + k});
+  }
+  cr::TruthMesh twice = plain_truth(octa, "twice");
+  qs::family::SurfaceMap m;
+  for (const Vec3& p : octa.positions) {
+    const double a = 2 * std::atan2(p.y(), p.x()), r = std::hypot(p.x(), p.y());
+    m.sphere.push_back(Vec3(r * std::cos(a), r * std::sin(a), p.z()).normalized());
+  }
+  twice.map = m;
+  cr::TruthMesh once = plain_truth(octa, "once");
+  qs::family::SurfaceMap m1;
+  m1.sphere = octa.positions;
+  once.map = m1;
+  EXPECT_NO_THROW(cr::GroundTruth({once, once}));
+  try {
+    cr::GroundTruth({once, twice});
+    ADD_FAILURE();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("covers the sphere 2"));
+  }
+}
+
 TEST(Measure, AMeshAgainstItselfIsExact) {
   const auto fam = small_family(1, 4);
   const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[0]});
@@ -206,6 +249,28 @@ TEST(Measure, AFamilyPairHasOrderedFiniteStatisticsIndependentOfThreads) {
   const auto other = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
   EXPECT_NE(other.dissection.mean, one.dissection.mean);
   EXPECT_NEAR(other.dissection.mean, one.dissection.mean, 0.1 * one.dissection.mean);
+}
+
+TEST(Measure, TheRemeshMapConvergesToTheChartMapWithTheLevel) {
+  const auto fam = small_family(2, 6);
+  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[1]});
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  cr::MeasureOptions o;
+  o.samples = 5000;
+  const auto chart = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  double previous = 1e300;
+  for (int level : {1, 3, 5, 8}) {
+    o.level = level;
+    const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+    EXPECT_EQ(pm.level, level);
+    const double gap = std::abs(pm.dissection.mean - chart.dissection.mean);
+    EXPECT_LT(gap, previous) << "level " << level;
+    previous = gap;
+    EXPECT_EQ(pm.same_patch_share, chart.same_patch_share);  // the patch comes from A's chart
+  }
+  EXPECT_LT(previous, 0.01 * chart.dissection.mean);
+  o.level = 13;
+  EXPECT_THROW(cr::measure_pair(truth, inputs_of(set), 0, 1, o), qs::InvalidInput);
 }
 
 TEST(Measure, TheWrongMeshIsNamed) {

@@ -50,6 +50,10 @@ TEST_F(CorrespondenceTool, MeasuresAFamilyPairAgainstItsMapFiles) {
   EXPECT_LE(p["dissection"]["p95_percent"].get<double>(), p["dissection"]["max_percent"].get<double>());
   EXPECT_GT(p["same_patch_share"].get<double>(), 0.5);
   EXPECT_LE(p["same_patch_share"].get<double>(), 1.0);
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --level 4");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("mapped through B's level-4 remesh"));
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --level 13").exit, 1);
   // The same run twice gives the same bytes.
   ASSERT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 20000 --json -o " + d() + "/c2.json").exit, 0);
   std::ifstream a(d() + "/c.json"), b(d() + "/c2.json");

@@ -181,7 +181,8 @@ struct GroundTruth::Impl {
       }
       f = s.neighbour[f][worst];
     }
-    throw InternalError("ground truth: the walk on the parameter sphere of " + m.name + " did not end");
+    throw InvalidInput("ground truth: the walk on the parameter sphere of " + m.name +
+                       " did not end: its sphere map is not a bijection");
   }
 };
 
@@ -214,6 +215,17 @@ GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique
         throw InvalidInput("ground truth: the sphere map of " + m.name + " is not a bijection of that mesh: " +
                            std::to_string(inverted) + " faces (first " + std::to_string(first) +
                            ") are inverted or flat on the sphere (is it the map of another mesh?)");
+      // Positive faces could still wrap the sphere more than once: their solid angles (Van
+      // Oosterom and Strackee) must add up to exactly one sphere.
+      double solid = 0;
+      for (const Tri& t : m.mesh.faces) {
+        const auto& P = s.parameter_mesh.positions;
+        const Vec3 &a = P[t[0]], &b = P[t[1]], &c = P[t[2]];
+        solid += 2 * std::atan2(a.dot(b.cross(c)), 1 + a.dot(b) + b.dot(c) + c.dot(a));
+      }
+      if (std::abs(solid - 4 * 3.14159265358979323846) > 1e-6)
+        throw InvalidInput("ground truth: the sphere map of " + m.name + " covers the sphere " +
+                           std::to_string(solid / (4 * 3.14159265358979323846)) + " times; a map file must cover it once");
       s.other_distance = std::make_unique<metro::SurfaceDistance>(s.parameter_mesh, "parameter sphere");
       std::unordered_map<std::uint64_t, std::pair<int, int>> edge;  // directed edge -> (face, corner opposite)
       const int nf = m.mesh.num_faces();
@@ -308,6 +320,8 @@ ErrorStats stats(std::vector<double> e) {
 PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedInput>& inputs, int a, int b,
                          const MeasureOptions& options, const Context& context) {
   if (options.samples < 1) throw InvalidInput("correspondence: samples must be at least 1");
+  if (options.level < 0 || options.level > 12)
+    throw InvalidInput("correspondence: level " + std::to_string(options.level) + " is outside [0, 12]");
   if (a < 0 || b < 0 || a >= truth.size() || b >= truth.size() || static_cast<int>(inputs.size()) != truth.size() || a == b)
     throw InvalidInput("correspondence: a pair of two different meshes of the set is needed");
   for (int i : {a, b}) {
@@ -387,7 +401,26 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
         const Vec3 x = beta[0] * ca.mesh.positions[t[0]] + beta[1] * ca.mesh.positions[t[1]] + beta[2] * ca.mesh.positions[t[2]];
         const Vec2 uv = beta[0] * ca.face_uv[f][0] + beta[1] * ca.face_uv[f][1] + beta[2] * ca.face_uv[f][2];
         const int patch = ca.face_patch[f];
-        const Vec3 mapped = sampler.point(patch, uv.cwiseMax(0.0).cwiseMin(1.0), hint);
+        const Vec2 st = uv.cwiseMax(0.0).cwiseMin(1.0);
+        Vec3 mapped;
+        if (options.level == 0) {
+          mapped = sampler.point(patch, st, hint);
+        } else {
+          // The remesh's triangle at (u, v): cell (i, j) cut by qs-remesh's diagonal rule.
+          const int cells = 1 << options.level;
+          const int i = std::min(cells - 1, static_cast<int>(st.x() * cells));
+          const int j = std::min(cells - 1, static_cast<int>(st.y() * cells));
+          const double fu = st.x() * cells - i, fv = st.y() * cells - j;
+          auto grid = [&](int gi, int gj) {
+            return sampler.point(patch, Vec2(static_cast<double>(gi) / cells, static_cast<double>(gj) / cells), hint);
+          };
+          const Vec3 p00 = grid(i, j), p10 = grid(i + 1, j), p11 = grid(i + 1, j + 1), p01 = grid(i, j + 1);
+          if ((2 * i < cells) == (2 * j < cells))  // diagonal (i,j)-(i+1,j+1)
+            mapped = fu >= fv ? Vec3(p00 + fu * (p10 - p00) + fv * (p11 - p10)) : Vec3(p00 + fv * (p01 - p00) + fu * (p11 - p01));
+          else  // diagonal (i+1,j)-(i,j+1)
+            mapped = fu + fv <= 1 ? Vec3(p00 + fu * (p10 - p00) + fv * (p01 - p00))
+                                  : Vec3(p11 + (1 - fu) * (p01 - p11) + (1 - fv) * (p10 - p11));
+        }
         const auto ca_closest = on_a.closest(x);
         const landmarks::SurfacePoint on_input = surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point);
         const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
@@ -410,6 +443,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   PairMeasure pm;
   pm.a = a;
   pm.b = b;
+  pm.level = options.level;
   pm.samples = n;
   pm.diagonal = diag;
   pm.dissection = stats(err);

@@ -82,6 +82,10 @@ struct MeasureOptions {
   long samples = 100000;     ///< points sampled on A, uniformly per unit area. \pre >= 1
   std::uint64_t seed = 1;    ///< same seed, same points, same numbers
   int threads = 0;           ///< 0: all cores; the results do not depend on it
+  /// 0: the dissection's continuous map (B's chart at (patch, u, v)); n >= 1: through B's uniform
+  /// level-n common remesh, the point of its grid triangle at (u, v) (qs-remesh's diagonal rule,
+  /// grid vertices evaluated on B's chart), i.e. where that remesh puts the point. \pre 0..12
+  int level = 0;
 };
 
 /// Distances in % of B's bounding-box diagonal.
@@ -91,6 +95,7 @@ struct ErrorStats {
 
 struct PairMeasure {
   int a = 0, b = 0;               ///< mesh indices in the set
+  int level = 0;                  ///< MeasureOptions::level
   long samples = 0;
   double diagonal = 0;            ///< of B's chart (the length the percentages refer to)
   ErrorStats dissection;          ///< the dissection's map A -> B vs the exact image
