@@ -264,32 +264,3 @@ TEST(DissectSet, SeedsGivenAsSurfacePointsAreExactPatchCorners) {
   }
   expect_common_structure(s, {a.num_faces(), b.num_faces()});
 }
-
-TEST(DissectSet, CoarsePatchesThatWouldFoldAreRefinedLocally) {
-  // A coarse sphere (1280 faces) whose 5 features must turn by 2 radians about the seed loop's
-  // axis to align: the warp folds faces of a small patch that no split and no repair can help at
-  // this sampling, so the patch is refined, and ends bijective.
-  const auto a = qs::shapes::icosphere(3);
-  std::vector<qs::Vec3> dirs, dirs_b;
-  for (int i = 0; i < 5; ++i) {
-    dirs.push_back(qs::Vec3(std::cos(i * 1.2), std::sin(i * 1.2), 1.0));
-    dirs_b.push_back(qs::Vec3(std::cos(i * 1.2 + 2.0), std::sin(i * 1.2 + 2.0), 0.3));
-  }
-  MeshToDissect ma{&a, equator_seeds(a), features_at(a, dirs), "a"};
-  MeshToDissect mb{&a, ma.seeds, features_at(a, dirs_b), "b"};
-  const DissectionSet s = qs::dissect::dissect_set({ma, mb});
-  int refined = 0;
-  for (const auto& n : s.tree)
-    for (int f : n.refined_faces) refined += f;
-  EXPECT_GT(refined, 0) << "the test should exercise local refinement";
-  EXPECT_LE(refined, 2 * 20000);
-  for (const auto& d : s.meshes)
-    for (const auto& p : d.chart.patches) EXPECT_EQ(p.flipped_faces + p.zero_area_faces, 0) << p.name;
-  std::vector<int> faces;
-  for (const auto& d : s.meshes) faces.push_back(d.chart.mesh.num_faces() - refined / 2);
-  for (size_t i = 0; i < s.meshes.size(); ++i) {
-    EXPECT_EQ(s.meshes[i].base.quads, s.meshes[0].base.quads);
-    for (size_t k = 0; k < s.meshes[i].features.size(); ++k)
-      EXPECT_LT((s.meshes[i].features[k].uv - s.meshes[0].features[k].uv).norm(), 1e-9);
-  }
-}

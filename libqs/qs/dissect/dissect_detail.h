@@ -116,9 +116,10 @@ class MeshDissector {
   std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
   /// Puts a node's faces back after a failed split (in any mesh of the set).
   void restore(const Node& node, size_t first_new_label);
-  /// Local refinement: splits every edge inside the node's patch at its midpoint (the surface is
-  /// unchanged, only its sampling). Neighbouring patches are untouched. Returns the faces added.
-  int refine(const Node& node);
+  /// Local refinement: splits the edges inside the node's patch at their midpoints (the surface
+  /// is unchanged, only its sampling): every edge, or (with `p`) those of the faces that p's map
+  /// folds and two rings around them. Neighbouring patches are untouched. Returns faces added.
+  int refine(const Node& node, const Param* p = nullptr);
   size_t labels() const { return patch_faces_.size(); }
   size_t node_faces(const Node& node) const { return patch_faces_[node.label].size(); }
   /// Drops the parent's face list once every mesh of the set has split it.

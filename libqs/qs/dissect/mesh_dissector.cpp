@@ -255,13 +255,33 @@ void MeshDissector::restore(const Node& node, size_t first_new_label) {
   if (patch_faces_.size() > first_new_label) patch_faces_.resize(first_new_label);
 }
 
-int MeshDissector::refine(const Node& node) {
+int MeshDissector::refine(const Node& node, const Param* p) {
   std::vector<int>& faces = patch_faces_[node.label];
   std::sort(faces.begin(), faces.end());
+  std::vector<char> in_region;  // by global face; empty: the whole patch
+  if (p) {
+    in_region.assign(cm_.num_faces(), 0);
+    const auto& F = p->ex.pm.faces;
+    for (size_t f = 0; f < F.size(); ++f)
+      if (signed_area(p->sp.uv[F[f][0]], p->sp.uv[F[f][1]], p->sp.uv[F[f][2]]) <= param::kZeroUvArea)
+        in_region[p->ex.faces[f]] = 1;
+    for (int ring = 0; ring < 2; ++ring) {
+      std::vector<char> grown = in_region;
+      for (int f : faces)
+        if (in_region[f])
+          for (int k = 0; k < 3; ++k) {
+            const int g = CutMesh::face_of(cm_.opposite(3 * f + k));
+            if (cm_.patch(g) == node.label) grown[g] = 1;
+          }
+      in_region.swap(grown);
+    }
+  }
   std::vector<std::pair<int, int>> edges;
   for (int f : faces)
     for (int k = 0; k < 3; ++k) {
       const int h = 3 * f + k;
+      const int g = CutMesh::face_of(cm_.opposite(h));
+      if (!in_region.empty() && !in_region[f] && !in_region[g]) continue;
       if (cm_.tail(h) < cm_.head(h) && interior_edge(h, node.label)) edges.emplace_back(cm_.tail(h), cm_.head(h));
     }
   const int before = cm_.num_faces();

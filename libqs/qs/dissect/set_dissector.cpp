@@ -242,35 +242,36 @@ DissectionSet SetDissector::run() {
     } else if (any_over) {
       stop = node.depth >= opt_.max_depth ? StopReason::MaxDepth : StopReason::TooFewFaces;
     }
-    // No dead ends: a leaf that would stay folded in some mesh even after the repair finish()
-    // tries, or whose split failed, has its patch refined (edges split at their midpoints: the
-    // surface is unchanged) in those meshes and is evaluated again: more faces let it split, and
-    // give the repair room to untangle.
+    // No dead ends: a leaf whose map would stay folded in some mesh even after the repair that
+    // finish() tries has the region of its folds refined there (edges split at their midpoints:
+    // the surface is unchanged, only its sampling), and a node whose split failed has its whole
+    // patch refined (at most kRefineFaces faces); then the node is evaluated again. Finer faces
+    // follow the alignment warp more closely, give the repair room, and let a split through.
+    // At most max(2 F, 20000) faces are added to a mesh of F input faces.
     if (auto it = refined_faces.find(node.name); it != refined_faces.end()) tn.refined_faces = it->second;
     if (node.refinements < kMaxRefinements) {
-      std::vector<char> refine(nm, stop == StopReason::SplitFailed);
+      enum Mode : char { kNone, kFolds, kWhole };
+      std::vector<char> mode(nm, kNone);
       Context quiet = ctx_.without_progress();
       quiet.log = nullptr;
-      // Local means local: a patch of at most kRefineFaces faces (or one whose split failed), and
-      // at most max(2 F, 20000) faces added to a mesh of F input faces.
       parallel_for(nm, [&](size_t i) {
         const size_t faces = ps[i].ex.faces.size();
-        const bool small = faces <= kRefineFaces || stop == StopReason::SplitFailed;
         const size_t budget = std::max<size_t>(2 * in_[i].mesh->faces.size(), 20000);
-        if (!small || refined_total[i] + 3 * faces > budget) {
-          refine[i] = 0;
-          return;
+        if (refined_total[i] >= budget) return;
+        if (!ps[i].sp.bijective()) {
+          if (minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet).uv.empty())
+            mode[i] = kFolds;
+        } else if (stop == StopReason::SplitFailed && faces <= kRefineFaces && refined_total[i] + 3 * faces <= budget) {
+          mode[i] = kWhole;
         }
-        if (!refine[i] && !ps[i].sp.bijective())
-          refine[i] = minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet).uv.empty();
       }, true);
-      if (std::find(refine.begin(), refine.end(), 1) != refine.end()) {
+      if (std::find_if(mode.begin(), mode.end(), [](char m) { return m != kNone; }) != mode.end()) {
         std::vector<int>& added = refined_faces[node.name];
         added.resize(nm, 0);
         std::vector<Node> again = nodes;
         for (size_t i = 0; i < nm; ++i) {
-          if (refine[i]) {
-            const int n = meshes_[i].refine(nodes[i]);
+          if (mode[i] != kNone) {
+            const int n = meshes_[i].refine(nodes[i], mode[i] == kFolds ? &ps[i] : nullptr);
             added[i] += n;
             refined_total[i] += static_cast<size_t>(n);
           }
