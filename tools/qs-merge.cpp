@@ -139,6 +139,7 @@ int main(int argc, char** argv) {
                     {"slivers", {{"uv", st.slivers_uv}, {"a", st.slivers_a}, {"b", st.slivers_b}}},
                     {"input_slivers", {{"a", st.input_slivers_a}, {"b", st.input_slivers_b}}},
                     {"min_angle_degrees", {{"uv", st.min_angle_uv}, {"a", st.min_angle_a}, {"b", st.min_angle_b}}},
+                    {"thin_faces", {{"a", st.thin_faces_a}, {"b", st.thin_faces_b}}},
                     {"normal_disagreements", {{"a", st.normal_disagreements_a}, {"b", st.normal_disagreements_b}}}};
     doc["meshes"] = meshes;
     doc["vertex_patch"] = patch;
@@ -154,7 +155,8 @@ int main(int argc, char** argv) {
                 << " A on a B edge, " << st.b_on_a_edge << " B on an A edge\n"
                 << "  slivers (< " << sliver << " deg): " << st.slivers_uv << " in uv, " << st.slivers_a << " at t=0, "
                 << st.slivers_b << " at t=1 (inputs: " << st.input_slivers_a << ", " << st.input_slivers_b
-                << "); normals off their parent's: " << st.normal_disagreements_a << ", " << st.normal_disagreements_b
+                << "); too thin for a normal: " << st.thin_faces_a << ", " << st.thin_faces_b
+                << "; normals off their parent's: " << st.normal_disagreements_a << ", " << st.normal_disagreements_b
                 << "\n"
                 << "  wrote " << out_a << ", " << out_b << " and remesh.json to " << outdir << "\n"
                 << std::fixed << std::setprecision(3) << "  time: load " << seconds(t0, t1) << " s, merge "

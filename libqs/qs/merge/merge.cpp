@@ -27,6 +27,10 @@ int orient(const Vec2& p, const Vec2& q, const Vec2& r) {
                                             Epick::Point_2(r.x(), r.y())));
 }
 
+// A merged face with less than this fraction of its parent's area is too thin for its double
+// positions to have a normal (two crossings a rounding apart): counted, not judged.
+constexpr double kThinFace = 1e-12;
+
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 std::string uv_string(const Vec2& p) {
@@ -419,6 +423,10 @@ class PatchMerger {
   void triangulate(const std::array<int, 12>& poly, int n, int cfa, int cfb) {
     const auto& V = result_.vertices;
     auto emit = [&](int i, int j, int k) {
+      // Positive by construction (a strictly convex polygon's vertices, in order); checked exactly.
+      if (CGAL::orientation(V[poly[i]].p, V[poly[j]].p, V[poly[k]].p) != CGAL::LEFT_TURN)
+        throw InternalError("merge: a triangle of the overlap of A chart face " + std::to_string(cfa) +
+                            " and B chart face " + std::to_string(cfb) + " is not counter-clockwise (exact test)");
       result_.faces.push_back({poly[i], poly[j], poly[k]});
       result_.parent_a.push_back(cfa);
       result_.parent_b.push_back(cfb);
@@ -619,9 +627,13 @@ Merged merge_charts(const dissect::Chart& a, const dissect::Chart& b, const Merg
     if (qa == qa) st.min_angle_a = std::min(st.min_angle_a, qa);
     if (qb == qb) st.min_angle_b = std::min(st.min_angle_b, qb);
     auto normal = [](const std::vector<Vec3>& P, const Tri& t) { return (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]); };
-    const Vec3 na = normal(m.positions_a, t), nb = normal(m.positions_b, t);
-    st.normal_disagreements_a += !(na.dot(normal(a.mesh.positions, a.mesh.faces[m.face_parent_a[f]])) > 0);
-    st.normal_disagreements_b += !(nb.dot(normal(b.mesh.positions, b.mesh.faces[m.face_parent_b[f]])) > 0);
+    for (auto [P, chart, parent, thin, off] :
+         {std::tuple{&m.positions_a, &a, m.face_parent_a[f], &st.thin_faces_a, &st.normal_disagreements_a},
+          std::tuple{&m.positions_b, &b, m.face_parent_b[f], &st.thin_faces_b, &st.normal_disagreements_b}}) {
+      const Vec3 n = normal(*P, t), np = normal(chart->mesh.positions, chart->mesh.faces[parent]);
+      if (!(n.norm() > kThinFace * np.norm())) ++*thin;
+      else if (!(n.dot(np) > 0)) ++*off;
+    }
   }
   for (auto [chart, count] : {std::pair{&a, &st.input_slivers_a}, std::pair{&b, &st.input_slivers_b}})
     for (const Tri& t : chart->mesh.faces) {

@@ -46,8 +46,10 @@ struct MergeStats {
   int overlay_polygons = 0;                      ///< non-empty A triangle x B triangle overlaps
   int slivers_uv = 0, slivers_a = 0, slivers_b = 0;  ///< faces below sliver_degrees
   int input_slivers_a = 0, input_slivers_b = 0;  ///< chart faces below it in 3D, for comparison
-  /// Faces whose 3D normal at t = 0 (t = 1) does not point the way of their parent A (B) face's
-  /// (dot product not positive: flipped, or too thin for double to tell).
+  /// Faces with less than 1e-12 of their parent A (B) face's area at t = 0 (t = 1): exact in uv
+  /// but too thin for their double positions to have a normal (crossings a rounding apart).
+  int thin_faces_a = 0, thin_faces_b = 0;
+  /// Other faces whose 3D normal at t = 0 (t = 1) does not point the way of their parent's.
   int normal_disagreements_a = 0, normal_disagreements_b = 0;
   double min_angle_uv = 180, min_angle_a = 180, min_angle_b = 180;  ///< degrees
 };
