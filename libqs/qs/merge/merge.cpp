@@ -186,18 +186,54 @@ double min_angle_degrees(const Vec3& p, const Vec3& q, const Vec3& r) {
 
 Vec3 lerp(const Vec3& a, const Vec3& b, double t) { return (1 - t) * a + t * b; }
 
-// The point uv on the segment (q0, q1): the position interpolated along the segment.
-Vec3 on_edge(const Vec2& uv, const Vec2& q0, const Vec2& q1, const Vec3& p0, const Vec3& p1) {
-  const Vec2 d = q1 - q0;
-  const double t = std::clamp((uv - q0).dot(d) / d.squaredNorm(), 0.0, 1.0);
-  return lerp(p0, p1, t);
+// An exact number rounded to double, within 8 units in the last place: the midpoint of its
+// interval when that is that tight (nearly always), else computed exactly first.
+double rounded(const Epeck::FT& x) {
+  CGAL::Interval_nt<false> i = x.approx();
+  const double mid = 0.5 * i.inf() + 0.5 * i.sup();
+  if (!(i.sup() - i.inf() <= 16 * std::numeric_limits<double>::epsilon() * std::abs(mid))) {
+    x.exact();
+    i = x.approx();
+    return 0.5 * i.inf() + 0.5 * i.sup();
+  }
+  return mid;
 }
 
-// The point uv inside the triangle (q0, q1, q2): barycentric interpolation.
+Epeck::FT cross_exact(const EPoint& o, const EPoint& a, const EPoint& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+EPoint exact_point(const Vec2& p) { return EPoint(p.x(), p.y()); }
+
+// Below this sine of the angle between two edges (or of a triangle's smallest angle, roughly),
+// interpolation parameters are computed exactly and rounded once; above it in double, whose
+// relative error is then below 1e-13.
+constexpr double kWellConditioned = 1e-3;
+
+// The point uv on the segment (q0, q1): the position interpolated along the segment (a
+// projection: well conditioned).
+Vec3 on_edge(const Vec2& uv, const Vec2& q0, const Vec2& q1, const Vec3& p0, const Vec3& p1) {
+  const Vec2 d = q1 - q0;
+  return lerp(p0, p1, std::clamp((uv - q0).dot(d) / d.squaredNorm(), 0.0, 1.0));
+}
+
+// The point uv inside the triangle (q0, q1, q2): barycentric interpolation; for a thin triangle
+// the coordinates are computed exactly and rounded once, so that a sliver of the chart does not
+// amplify rounding errors.
 Vec3 in_face(const Vec2& uv, const std::array<Vec2, 3>& q, const std::array<Vec3, 3>& p) {
-  const double l0 = cross2(q[1] - uv, q[2] - uv), l1 = cross2(q[2] - uv, q[0] - uv), l2 = cross2(q[0] - uv, q[1] - uv);
-  const double s = l0 + l1 + l2;
-  return (l0 / s) * p[0] + (l1 / s) * p[1] + (l2 / s) * p[2];
+  const double area = cross2(q[1] - q[0], q[2] - q[0]);
+  const double longest = std::max({(q[1] - q[0]).squaredNorm(), (q[2] - q[1]).squaredNorm(), (q[0] - q[2]).squaredNorm()});
+  double l0, l1, l2;
+  if (area > kWellConditioned * longest) {
+    l0 = cross2(q[1] - uv, q[2] - uv) / area, l1 = cross2(q[2] - uv, q[0] - uv) / area;
+    l2 = cross2(q[0] - uv, q[1] - uv) / area;
+  } else {
+    const EPoint P = exact_point(uv), Q0 = exact_point(q[0]), Q1 = exact_point(q[1]), Q2 = exact_point(q[2]);
+    const Epeck::FT twice = cross_exact(Q0, Q1, Q2);
+    l0 = rounded(cross_exact(P, Q1, Q2) / twice), l1 = rounded(cross_exact(P, Q2, Q0) / twice);
+    l2 = rounded(cross_exact(P, Q0, Q1) / twice);
+  }
+  return l0 * p[0] + l1 * p[1] + l2 * p[2];
 }
 
 class PatchMerger {
@@ -324,14 +360,20 @@ class PatchMerger {
       const EPoint B0(qb[k0].x(), qb[k0].y()), B1(qb[k1].x(), qb[k1].y());
       const Epeck::Vector_2 d = A1 - A0, e = B1 - B0, w = B0 - A0;
       const Epeck::FT den = d.x() * e.y() - d.y() * e.x();
-      const Epeck::FT num = w.x() * e.y() - w.y() * e.x();
-      v.p = A0 + d * (num / den);
-      v.uv = Vec2(std::clamp(CGAL::to_double(v.p.x()), 0.0, 1.0), std::clamp(CGAL::to_double(v.p.y()), 0.0, 1.0));
+      const Epeck::FT s = (w.x() * e.y() - w.y() * e.x()) / den;  // along the A edge
+      v.p = A0 + d * s;
+      v.uv = Vec2(std::clamp(rounded(v.p.x()), 0.0, 1.0), std::clamp(rounded(v.p.y()), 0.0, 1.0));
+      // The parameters along both edges: in double when the edges cross at a fair angle, else exactly.
       const Vec2 dd = qa[i1] - qa[i0], ee = qb[k1] - qb[k0], ww = qb[k0] - qa[i0];
       const double dn = cross2(dd, ee);
-      const double s = std::clamp(cross2(ww, ee) / dn, 0.0, 1.0), t = std::clamp(cross2(ww, dd) / dn, 0.0, 1.0);
-      v.pa = lerp(pa[i0], pa[i1], s);
-      v.pb = lerp(pb[k0], pb[k1], t);
+      double sa, tb;
+      if (std::abs(dn) > kWellConditioned * dd.norm() * ee.norm()) {
+        sa = cross2(ww, ee) / dn, tb = cross2(ww, dd) / dn;
+      } else {
+        sa = rounded(s), tb = rounded((w.x() * d.y() - w.y() * d.x()) / den);
+      }
+      v.pa = lerp(pa[i0], pa[i1], std::clamp(sa, 0.0, 1.0));
+      v.pb = lerp(pb[k0], pb[k1], std::clamp(tb, 0.0, 1.0));
       v.origin = Origin::Crossing;
     }
     result_.vertices.push_back(std::move(v));
