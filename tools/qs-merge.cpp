@@ -1,5 +1,5 @@
 // qs-merge: the exact-endpoint merge of two dissected meshes (SMCC, Lee & Huang 3.5-3.7).
-// Reads a qs-dissect output folder of two meshes; writes OUTDIR/<stem>.obj|.ply per mesh (one face
+// Reads a qs-dissect output folder of two meshes (or of more, with --pair A,B); writes OUTDIR/<stem>.obj|.ply per mesh (one face
 // list, positions on A and on B) and OUTDIR/remesh.json with mode "merge", which qs-morph reads
 // like a remesh.
 //
@@ -42,11 +42,13 @@ int main(int argc, char** argv) {
                "exactly mesh A (t = 0) and exactly mesh B (t = 1): an exact-endpoint morph for qs-morph.\n"
                "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal.",
                "qs-merge"};
-  std::string folder, outdir, format = "obj";
+  std::string folder, outdir, format = "obj", pair;
   int threads = 0;
   double sliver = 1.0;
   bool quiet = false, fan = false;
   app.add_option("dissection", folder, "A qs-dissect output folder of two meshes")->required();
+  app.add_option("--pair", pair, "For a dissection of more than two meshes: the two to merge, by chart stem, "
+                                 "A,B (A is the shape at t = 0)");
   app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/merge)");
   app.add_option("--format", format, "Output format: obj (text) or ply (ASCII)")
       ->capture_default_str()
@@ -65,12 +67,32 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     if (!fs::is_directory(folder)) throw qs::IoError(folder + ": no such folder (expected a qs-dissect output folder)");
     const qs::dissect::LoadedDissection in = qs::dissect::read_dissection(folder);
-    if (in.meshes.size() != 2)
+    std::vector<std::string> stems;
+    for (const auto& dm : in.meshes) stems.push_back(stem_of_chart(dm.chart_file));
+    auto known = [&] {
+      std::string k;
+      for (const auto& s : stems) k += (k.empty() ? "" : ", ") + s;
+      return k;
+    };
+    int ia = 0, ib = 1;
+    if (!pair.empty()) {
+      const size_t comma = pair.find(',');
+      if (comma == std::string::npos || pair.find(',', comma + 1) != std::string::npos)
+        throw qs::UsageError("--pair takes two chart stems separated by a comma, A,B (not '" + pair + "')");
+      auto index = [&](const std::string& s) {
+        for (size_t i = 0; i < stems.size(); ++i)
+          if (stems[i] == s) return static_cast<int>(i);
+        throw qs::InvalidInput(folder + ": no mesh '" + s + "' in the dissection (its meshes: " + known() + ")");
+      };
+      ia = index(pair.substr(0, comma));
+      ib = index(pair.substr(comma + 1));
+      if (ia == ib) throw qs::InvalidInput("--pair names '" + stems[ia] + "' twice; merge two different meshes");
+    } else if (in.meshes.size() != 2) {
       throw qs::InvalidInput(folder + ": a dissection of " + std::to_string(in.meshes.size()) +
-                             " meshes; qs-merge merges exactly two (dissect the pair you want to merge on its own, "
-                             "e.g. qs-dissect A.off B.off -o DIR)");
-    const auto& A = in.meshes[0];
-    const auto& B = in.meshes[1];
+                             " meshes (" + known() + "); qs-merge merges exactly two: name them with --pair A,B");
+    }
+    const auto& A = in.meshes[ia];
+    const auto& B = in.meshes[ib];
     const auto t1 = Clock::now();
     qs::merge::MergeOptions options;
     options.threads = threads;
@@ -91,9 +113,7 @@ int main(int argc, char** argv) {
     std::error_code ec;
     fs::create_directories(outdir, ec);
     if (ec) throw qs::IoError(outdir + ": cannot create the folder (" + ec.message() + ")");
-    const std::string stem_a = stem_of_chart(A.chart_file);
-    std::string stem_b = stem_of_chart(B.chart_file);
-    if (stem_b == stem_a) stem_b += "-2";
+    const std::string stem_a = stems[ia], stem_b = stems[ib];
     const std::string out_a = stem_a + "." + format, out_b = stem_b + "." + format;
     qs::io::write_mesh(fs::path(outdir) / out_a, m.mesh_a());
     qs::io::write_mesh(fs::path(outdir) / out_b, m.mesh_b());

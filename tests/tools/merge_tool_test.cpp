@@ -116,8 +116,18 @@ TEST_F(MergeTool, BadInputGivesDocumentedExitCodes) {
   ASSERT_EQ(three.exit, 0) << three.out;
   const RunResult r = run_tool("qs-merge", (dir_ / "abc").string());
   EXPECT_EQ(r.exit, 2) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("qs-merge merges exactly two"));
+  EXPECT_THAT(r.out, HasSubstr("qs-merge merges exactly two: name them with --pair A,B"));
   EXPECT_FALSE(fs::exists(dir_ / "abc" / "merge"));
+  const RunResult unknown = run_tool("qs-merge", (dir_ / "abc").string() + " --pair a,d");
+  EXPECT_EQ(unknown.exit, 2) << unknown.out;
+  EXPECT_THAT(unknown.out, HasSubstr("no mesh 'd' in the dissection (its meshes: a, b, c)"));
+  EXPECT_EQ(run_tool("qs-merge", (dir_ / "abc").string() + " --pair a").exit, 1);
+  // Two of three: c at t = 0, a at t = 1.
+  const RunResult ca = run_tool("qs-merge", (dir_ / "abc").string() + " --pair c,a -q -o " + (dir_ / "ca").string());
+  ASSERT_EQ(ca.exit, 0) << ca.out;
+  const nlohmann::json doc = nlohmann::json::parse(slurp(dir_ / "ca" / "remesh.json"));
+  EXPECT_EQ(doc["meshes"][0]["output"], "c.obj");
+  EXPECT_EQ(doc["meshes"][1]["output"], "a.obj");
 
   // A chart whose uv triangle was flipped by hand: exit 2 naming the file and the patch.
   fs::copy(dir_ / "ab", dir_ / "flipped", fs::copy_options::recursive);
