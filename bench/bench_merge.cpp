@@ -89,6 +89,21 @@ double off_parent_plane(const qs::dissect::Chart& c, const std::vector<int>& par
   return worst / qs::bounding_box(c.mesh.positions).diagonal();
 }
 
+// Faces whose rounded uv (as written to remesh.json) are not counter-clockwise, counted on the
+// faces whose three vertices record the face's own patch (the exact points always are).
+int flat_in_rounded_uv(const qs::merge::Merged& m) {
+  int n = 0;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    const auto& t = m.faces[f];
+    if (m.vertex_patch[t[0]] != m.face_patch[f] || m.vertex_patch[t[1]] != m.face_patch[f] ||
+        m.vertex_patch[t[2]] != m.face_patch[f])
+      continue;
+    const qs::Vec2 &p = m.vertex_uv[t[0]], &q = m.vertex_uv[t[1]], &r = m.vertex_uv[t[2]];
+    n += !((q - p).x() * (r - p).y() - (q - p).y() * (r - p).x() > 0);
+  }
+  return n;
+}
+
 bool same(const qs::merge::Merged& a, const qs::merge::Merged& b) {
   return a.faces == b.faces && a.positions_a == b.positions_a && a.positions_b == b.positions_b &&
          a.vertex_uv == b.vertex_uv && a.vertex_patch == b.vertex_patch;
@@ -141,13 +156,13 @@ int main(int argc, char** argv) {
       const qs::merge::Merged self = qs::merge::merge_charts(a, a);
       const double self_cpu = cpu_seconds() - c0;
       std::printf("  exact: A bitwise %s, B bitwise %s, off parent planes A %.1e B %.1e, area rel. diff A %.2e B %.2e; min angle uv %.2e deg; thin "
-                  "faces %d/%d, normals off %d/%d; self-merge of A %s the chart (%.3f s cpu)\n",
+                  "faces %d/%d, normals off %d/%d, not CCW in rounded uv %d; self-merge of A %s the chart (%.3f s cpu)\n",
                   bitwise(a, m.vertex_a, m.positions_a) ? "yes" : "NO", bitwise(b, m.vertex_b, m.positions_b) ? "yes" : "NO",
                   off_parent_plane(a, m.face_parent_a, m.positions_a, m.faces),
                   off_parent_plane(b, m.face_parent_b, m.positions_b, m.faces),
                   std::abs(area(m.positions_a, m.faces) - area_a) / area_a,
                   std::abs(area(m.positions_b, m.faces) - area_b) / area_b, st.min_angle_uv, st.thin_faces_a,
-                  st.thin_faces_b, st.normal_disagreements_a, st.normal_disagreements_b,
+                  st.thin_faces_b, st.normal_disagreements_a, st.normal_disagreements_b, flat_in_rounded_uv(m),
                   self_merge_is_chart(a, self) ? "is" : "is NOT", self_cpu);
     } catch (const qs::Error& e) {
       std::fprintf(stderr, "%s: %s\n", argv[i], e.what());

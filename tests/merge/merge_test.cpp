@@ -315,3 +315,45 @@ TEST(Merge, ChartsOfDifferentDissectionsAreRefused) {
     EXPECT_THAT(e.what(), HasSubstr("not on a side of the unit square"));
   }
 }
+
+// Moves the uv of chart vertex `v` in patch `patch` (every wedge of it there).
+void move_uv(Chart& c, int v, int patch, const Vec2& uv) {
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (c.face_patch[f] == patch && c.mesh.faces[f][k] == v) c.face_uv[f][k] = uv;
+}
+
+// The chart vertex of `c` at uv `at` in patch `patch`.
+int vertex_at(const Chart& c, int patch, const Vec2& at) {
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (c.face_patch[f] == patch && c.face_uv[f][k] == at) return c.mesh.faces[f][k];
+  return -1;
+}
+
+TEST(Merge, SidePointsOrderedDifferentlyByTheTwoPatchesAreASolverError) {
+  const Chart a = pillow(2, true);
+  const double up = std::nextafter(0.5, 1.0);
+  // B's side point at u = 0.5 on v = 0 coincides with A's in patch 0 but not in patch 1.
+  Chart b = pillow(2, false);
+  const int side = vertex_at(b, 0, Vec2(0.5, 0));
+  ASSERT_GE(side, 0);
+  move_uv(b, side, 1, Vec2(up, 0));
+  try {
+    qs::merge::merge_charts(a, b);
+    FAIL() << "inconsistent side accepted";
+  } catch (const qs::SolverError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("coincides with a vertex of the other mesh in one of the patches"));
+  }
+  // B's side point just after A's in patch 0 and (mirrored) just after it in patch 1 too: the two
+  // patches order the side differently.
+  Chart c = pillow(2, false);
+  move_uv(c, side, 0, Vec2(up, 0));
+  move_uv(c, side, 1, Vec2(up, 0));
+  try {
+    qs::merge::merge_charts(a, c);
+    FAIL() << "inconsistent side order accepted";
+  } catch (const qs::SolverError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("not closed and manifold"));
+  }
+}
