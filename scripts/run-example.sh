@@ -2,7 +2,9 @@
 # The main job on the bundled examples: installs dependencies if missing, builds, and runs the
 # whole pipeline on the three quadrupeds of examples/ (spot_2k, cat_16k, koala_7k, with their
 # landmark files): one common dissection -> uniform remesh -> normal-map bake -> morph, ending in
-# a GLB with one morph target per shape that a viewer plays. Every GLB is checked with the
+# a GLB with one morph target per shape that a viewer plays; next to it the exact morph spot -> cat
+# (qs-merge: the merged embeddings; spot's own mesh at one end, the cat's own mesh, placed on spot
+# by the similarity, at the other). Every GLB is checked with the
 # Khronos glTF validator when it is installed.
 #   usage: scripts/run-example.sh [OUTDIR]   (default out/example)
 set -euo pipefail
@@ -30,9 +32,14 @@ echo "== qs-morph: spot -> cat -> koala -> spot (cat and koala placed on spot by
 "$tools/qs-morph" "$out/remesh-L4" --path spot_2k,cat_16k,koala_7k,spot_2k --frames 60 \
   --align similarity --bake "$out/bake" --glb "$out/quadrupeds-morph.glb" -o "$out/morph"
 
+echo "== qs-merge: the exact morph spot -> cat (the two meshes' embeddings overlaid: it starts and ends on the input meshes)"
+"$tools/qs-merge" "$out/dissection" --pair spot_2k,cat_16k -o "$out/merge-spot-cat"
+"$tools/qs-morph" "$out/merge-spot-cat" --frames 11 --align similarity --glb "$out/spot-cat-exact-morph.glb" \
+  -o "$out/morph-exact"
+
 echo "== glTF validator"
 status=0
-bash scripts/validate-gltf.sh "$out"/bake/*.glb "$out/quadrupeds-morph.glb" || status=$?
+bash scripts/validate-gltf.sh "$out"/bake/*.glb "$out/quadrupeds-morph.glb" "$out/spot-cat-exact-morph.glb" || status=$?
 if [ "$status" -eq 3 ]; then
   echo "(validator not installed: GLBs not validated)"
 elif [ "$status" -ne 0 ]; then

@@ -18,14 +18,17 @@ void put(std::ostream& out, T value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));  // x86-64 and aarch64: little endian
 }
 
+// Version 2 (written): texcoords as float64. Version 1 (still read): float32.
 const char* kHeaderTail =
     "property list uchar int vertex_indices\n"
-    "property list uchar float texcoord\n"
+    "property list uchar double texcoord\n"
     "property int patch\n"
     "property uchar red\n"
     "property uchar green\n"
     "property uchar blue\n"
     "end_header\n";
+const char* kFloatTexcoord = "property list uchar float texcoord\n";
+const char* kDoubleTexcoord = "property list uchar double texcoord\n";
 
 }  // namespace
 
@@ -51,6 +54,7 @@ void write_chart_ply(const std::filesystem::path& path, const Chart& chart) {
   AtomicFile file(path);
   std::ostream& out = file.stream();
   out << "ply\nformat binary_little_endian 1.0\ncomment qs chart: cut mesh, per-face patch and wedge uv\n"
+      << "comment qs chart version " << kChartFormatVersion << "\n"
       << "element vertex " << chart.mesh.positions.size()
       << "\nproperty double x\nproperty double y\nproperty double z\n"
       << "element face " << chart.mesh.faces.size() << "\n"
@@ -62,7 +66,7 @@ void write_chart_ply(const std::filesystem::path& path, const Chart& chart) {
     for (int k = 0; k < 3; ++k) put<std::int32_t>(out, chart.mesh.faces[f][k]);
     put<std::uint8_t>(out, 6);
     for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 2; ++d) put<float>(out, static_cast<float>(chart.face_uv[f][k][d]));
+      for (int d = 0; d < 2; ++d) put<double>(out, chart.face_uv[f][k][d]);
     put<std::int32_t>(out, chart.face_patch[f]);
     for (unsigned char c : patch_colour(chart.face_patch[f])) put<std::uint8_t>(out, c);
   }
@@ -85,9 +89,11 @@ Chart read_chart_ply(const std::filesystem::path& path) {
     if (line.rfind("element vertex ", 0) == 0) nv = std::stoll(line.substr(15));
     if (line.rfind("element face ", 0) == 0) nf = std::stoll(line.substr(13));
   }
-  if (header.find(kHeaderTail, 0) == std::string::npos && header.find("property int patch") == std::string::npos)
+  if (header.find("property int patch") == std::string::npos ||
+      (header.find(kDoubleTexcoord) == std::string::npos && header.find(kFloatTexcoord) == std::string::npos))
     throw InvalidInput(path.string() + ": PLY file lacks the chart's per-face patch and texcoord properties");
-  const size_t face_bytes = 1 + 12 + 1 + 24 + 4 + 3;
+  const bool double_uv = header.find(kDoubleTexcoord) != std::string::npos;
+  const size_t face_bytes = 1 + 12 + 1 + (double_uv ? 48 : 24) + 4 + 3;
   const size_t body = end + std::strlen("end_header\n");
   if (nv < 0 || nf < 0 || data.size() - body != static_cast<size_t>(nv) * 24 + static_cast<size_t>(nf) * face_bytes)
     throw InvalidInput(path.string() + ": chart file size does not match its header (truncated?)");
@@ -116,10 +122,17 @@ Chart read_chart_ply(const std::filesystem::path& path) {
         throw InvalidInput(path.string() + ": face " + std::to_string(f) + " has vertex index " +
                            std::to_string(idx[k]) + " out of range");
       chart.mesh.faces[f][k] = idx[k];
-      float u, v;
-      get(u);
-      get(v);
-      chart.face_uv[f][k] = Vec2(u, v);
+      if (double_uv) {
+        double u, v;
+        get(u);
+        get(v);
+        chart.face_uv[f][k] = Vec2(u, v);
+      } else {
+        float u, v;
+        get(u);
+        get(v);
+        chart.face_uv[f][k] = Vec2(u, v);
+      }
     }
     std::int32_t patch;
     get(patch);

@@ -53,8 +53,9 @@ LoadedRemesh read_remesh(const fs::path& folder) {
   r.dissection_folder = doc.contains("dissection_path") ? folder / string_field(doc, "dissection_path", path)
                                                         : folder.parent_path();
   r.mode = string_field(doc, "mode", path);
-  if (r.mode != "uniform" && r.mode != "adaptive")
-    throw InvalidInput(path.string() + ": \"mode\" must be \"uniform\" or \"adaptive\", not \"" + r.mode + "\"");
+  if (r.mode != "uniform" && r.mode != "adaptive" && r.mode != "merge")
+    throw InvalidInput(path.string() + ": \"mode\" must be \"uniform\", \"adaptive\" or \"merge\", not \"" + r.mode +
+                       "\"");
   r.quads = doc.value("quads", false);
   auto& c = r.set.connectivity;
   c.level = int_field(doc, "level", path);

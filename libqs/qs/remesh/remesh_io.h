@@ -15,7 +15,7 @@ struct LoadedRemesh {
   /// The dissection it was made from: remesh.json's "dissection_path" (relative to `folder`),
   /// or `folder`'s parent for files written before that field existed. Not checked to exist.
   std::filesystem::path dissection_folder;
-  std::string mode;                    ///< "uniform" or "adaptive"
+  std::string mode;                    ///< "uniform", "adaptive" or "merge" (qs-merge's output)
   bool quads = false;                  ///< the files hold the grid cells as quads (fan-split on read)
   std::vector<std::string> outputs;    ///< per mesh: its remesh file name in `folder`
   std::vector<std::string> stems;      ///< per mesh: that name without its extension

@@ -1,0 +1,152 @@
+// qs-merge as a user runs it: qs-dissect of a pair, qs-merge, then qs-morph and qs-inspect on the
+// result; exact endpoints checked on the files; identical bytes on 1 and 2 threads; bad input.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "qs/io/read_mesh.h"
+#include "qs/io/write_mesh.h"
+#include "qs/shapes/shapes.h"
+#include "tool_runner.h"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+class MergeTool : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("qs_merge_tool_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    // Two different shapes of different resolution.
+    qs::TriMesh a = qs::shapes::ellipsoid(1.0, 0.8, 0.6, 2);
+    qs::TriMesh b = qs::shapes::bumpy_sphere(0.1, 3, 3);
+    qs::io::write_mesh(dir_ / "a.obj", a);
+    qs::io::write_mesh(dir_ / "b.obj", b);
+    qs::io::write_mesh(dir_ / "c.obj", qs::shapes::icosphere(2));
+    dissect_ = run_tool("qs-dissect", (dir_ / "a.obj").string() + " " + (dir_ / "b.obj").string() +
+                                          " --tau 2 --min-faces 60 -q -o " + (dir_ / "ab").string());
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static fs::path dir_;
+  static RunResult dissect_;
+};
+fs::path MergeTool::dir_;
+RunResult MergeTool::dissect_;
+
+}  // namespace
+
+TEST_F(MergeTool, MergesAPairThatQsMorphAndQsInspectRead) {
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  const fs::path out = dir_ / "merge";
+  const RunResult r = run_tool("qs-merge", (dir_ / "ab").string() + " -o " + out.string() + " --threads 1");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("slivers"));
+  const nlohmann::json doc = nlohmann::json::parse(slurp(out / "remesh.json"));
+  EXPECT_EQ(doc["mode"], "merge");
+  EXPECT_EQ(doc["meshes"].size(), 2u);
+  EXPECT_LE(doc["merge"]["faces_over_inputs"].get<double>(), 8.0);
+  EXPECT_EQ(doc["merge"]["normal_disagreements"]["a"], 0);
+  EXPECT_EQ(doc["merge"]["normal_disagreements"]["b"], 0);
+
+  // Exact endpoints on the files: every vertex of each input is a vertex of its merged mesh, bitwise.
+  for (const char* stem : {"a", "b"}) {
+    const auto input = qs::io::read_mesh(dir_ / (std::string(stem) + ".obj")).mesh;
+    const auto merged = qs::io::read_mesh(out / (std::string(stem) + ".obj")).mesh;
+    std::set<std::array<double, 3>> have;
+    for (const auto& p : merged.positions) have.insert({p.x(), p.y(), p.z()});
+    int missing = 0;
+    for (const auto& p : input.positions) missing += !have.count({p.x(), p.y(), p.z()});
+    EXPECT_EQ(missing, 0) << stem;
+    // The same surface: total areas equal.
+    double area_in = 0, area_merged = 0;
+    for (int f = 0; f < input.num_faces(); ++f) area_in += qs::face_area(input, f);
+    for (int f = 0; f < merged.num_faces(); ++f) area_merged += qs::face_area(merged, f);
+    EXPECT_NEAR(area_merged, area_in, 1e-12 * area_in) << stem;
+  }
+
+  const RunResult inspect = run_tool("qs-inspect", (out / "a.obj").string() + " " + (out / "b.obj").string());
+  EXPECT_EQ(inspect.exit, 0) << inspect.out;
+  EXPECT_THAT(inspect.out, HasSubstr("genus: 0"));
+
+  const RunResult morph = run_tool("qs-morph", out.string() + " --frames 3 -o " + (dir_ / "morph").string());
+  ASSERT_EQ(morph.exit, 0) << morph.out;
+  // The morph's first and last frames are the merged endpoints.
+  EXPECT_EQ(qs::io::read_mesh(dir_ / "morph" / "frame_0000.obj").mesh.positions,
+            qs::io::read_mesh(out / "a.obj").mesh.positions);
+  EXPECT_EQ(qs::io::read_mesh(dir_ / "morph" / "frame_0002.obj").mesh.positions,
+            qs::io::read_mesh(out / "b.obj").mesh.positions);
+}
+
+TEST_F(MergeTool, SameBytesOnOneAndTwoThreads) {
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  for (int t : {1, 2}) {
+    const RunResult r = run_tool("qs-merge", (dir_ / "ab").string() + " -q --format ply --threads " + std::to_string(t) +
+                                                 " -o " + (dir_ / ("t" + std::to_string(t))).string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    EXPECT_EQ(r.out, "");
+  }
+  for (const char* f : {"a.ply", "b.ply", "remesh.json"})
+    EXPECT_EQ(slurp(dir_ / "t1" / f), slurp(dir_ / "t2" / f)) << f;
+}
+
+TEST_F(MergeTool, BadInputGivesDocumentedExitCodes) {
+  const RunResult missing = run_tool("qs-merge", (dir_ / "nowhere").string());
+  EXPECT_EQ(missing.exit, 3) << missing.out;
+  EXPECT_THAT(missing.out, HasSubstr("qs-merge: i/o error"));
+
+  const RunResult usage = run_tool("qs-merge", (dir_ / "ab").string() + " --format stl");
+  EXPECT_EQ(usage.exit, 1) << usage.out;
+
+  const RunResult three = run_tool("qs-dissect", (dir_ / "a.obj").string() + " " + (dir_ / "b.obj").string() + " " +
+                                                     (dir_ / "c.obj").string() + " -q -o " + (dir_ / "abc").string());
+  ASSERT_EQ(three.exit, 0) << three.out;
+  const RunResult r = run_tool("qs-merge", (dir_ / "abc").string());
+  EXPECT_EQ(r.exit, 2) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("qs-merge merges exactly two: name them with --pair A,B"));
+  EXPECT_FALSE(fs::exists(dir_ / "abc" / "merge"));
+  const RunResult unknown = run_tool("qs-merge", (dir_ / "abc").string() + " --pair a,d");
+  EXPECT_EQ(unknown.exit, 2) << unknown.out;
+  EXPECT_THAT(unknown.out, HasSubstr("no mesh 'd' in the dissection (its meshes: a, b, c)"));
+  EXPECT_EQ(run_tool("qs-merge", (dir_ / "abc").string() + " --pair a").exit, 1);
+  // Two of three: c at t = 0, a at t = 1.
+  const RunResult ca = run_tool("qs-merge", (dir_ / "abc").string() + " --pair c,a -q -o " + (dir_ / "ca").string());
+  ASSERT_EQ(ca.exit, 0) << ca.out;
+  const nlohmann::json doc = nlohmann::json::parse(slurp(dir_ / "ca" / "remesh.json"));
+  EXPECT_EQ(doc["meshes"][0]["output"], "c.obj");
+  EXPECT_EQ(doc["meshes"][1]["output"], "a.obj");
+
+  // A chart whose uv triangle was flipped by hand: exit 2 naming the file and the patch.
+  fs::copy(dir_ / "ab", dir_ / "flipped", fs::copy_options::recursive);
+  {
+    std::string chart = slurp(dir_ / "flipped" / "a.chart.ply");
+    const size_t body = chart.find("end_header\n") + 11;
+    const auto nv = qs::io::read_mesh(dir_ / "a.obj").mesh.num_vertices();
+    // The chart has more vertices than the input (cut vertices): read the count from its header.
+    const size_t at = chart.find("element vertex ") + 15;
+    const long long cv = std::stoll(chart.substr(at));
+    ASSERT_GE(cv, nv);
+    // Face 0: swap the u and v of its first corner (texcoords start 14 bytes into the face).
+    const size_t uv = body + static_cast<size_t>(cv) * 24 + 1 + 12 + 1;
+    const std::string corner1 = chart.substr(uv + 16, 16);
+    chart.replace(uv, 16, corner1);  // corner 0 takes corner 1's uv: a degenerate triangle
+    std::ofstream(dir_ / "flipped" / "a.chart.ply", std::ios::binary) << chart;
+  }
+  const RunResult flipped = run_tool("qs-merge", (dir_ / "flipped").string());
+  EXPECT_EQ(flipped.exit, 2) << flipped.out;
+  EXPECT_THAT(flipped.out, HasSubstr("a.chart.ply: patch"));
+  EXPECT_THAT(flipped.out, HasSubstr("degenerate uv triangle"));
+}
