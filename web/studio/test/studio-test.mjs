@@ -93,7 +93,7 @@ try {
     args: ['--no-sandbox', '--disable-dev-shm-usage', '--use-gl=angle', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
       '--ignore-gpu-blocklist', '--hide-scrollbars', '--mute-audio', '--no-first-run', '--disable-extensions', '--force-color-profile=srgb',
       '--no-proxy-server'],
-    defaultViewport: { width: 1280, height: 800, deviceScaleFactor: 1 },
+    defaultViewport: { width: 1280, height: 720, deviceScaleFactor: 1 },
   });
   const page = await browser.newPage();
   const logs = [];
