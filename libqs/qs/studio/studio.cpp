@@ -375,6 +375,8 @@ RunRequest parse_run_request(const std::string& text, int max_meshes) {
   std::set<std::string> stems;
   for (const auto& m : r.meshes) {
     check_mesh_name(m);
+    if (fs::path(m).stem().string().find(',') != std::string::npos)
+      throw InvalidInput("mesh '" + m + "' has a ',' in its name, which qs-morph's --path cannot take; rename it");
     if (!stems.insert(fs::path(m).stem().string()).second)
       throw InvalidInput("two meshes of the run are named '" + fs::path(m).stem().string() +
                          "' (file stems name the shapes of a set); rename one");
@@ -600,6 +602,7 @@ Response Studio::save_landmarks(const Request& r) {
   const std::string target = fs::path(name).stem().string() + ".landmarks.json";
   // The same reader qs-dissect uses: what it refuses is refused here, before anything is written.
   const auto lm = landmarks::parse_landmarks(r.body, landmarks::LandmarkFormat::Json, target, m->valid);
+  std::lock_guard lock(write_mutex_);
   const fs::path out = resolve_for_writing(root_, target);
   write_file_atomically(out, j.dump(2) + "\n");
   return json_response(json{{"file", target}, {"seeds", lm.seeds.size()}, {"features", lm.features.size()}});
@@ -649,6 +652,7 @@ Response Studio::upload(const Request& r) {
     throw HttpError(413, "upload of " + std::to_string(r.body.size()) + " bytes; at most " +
                              std::to_string(opt_.max_upload_bytes) + " are accepted");
   if (r.body.empty()) throw HttpError(400, "the upload is empty; expected the contents of a mesh file");
+  std::lock_guard lock(write_mutex_);
   const fs::path out = resolve_for_writing(root_, name);
   if (fs::exists(fs::symlink_status(out)))
     throw HttpError(409, "'" + name + "' exists already; the studio never replaces a mesh (rename the upload)");

@@ -118,6 +118,7 @@ class Studio {
   StudioOptions opt_;
   std::filesystem::path root_, web_root_;
   mutable std::mutex mutex_;
+  std::mutex write_mutex_;  ///< one landmark save or upload at a time (their temporary names are per process)
   RunState state_;
   std::thread worker_;
 };

@@ -5,6 +5,9 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { CSS2DRenderer, CSS2DObject } from 'three/addons/renderers/CSS2DRenderer.js';
+import { Line2 } from 'three/addons/lines/Line2.js';
+import { LineGeometry } from 'three/addons/lines/LineGeometry.js';
+import { LineMaterial } from 'three/addons/lines/LineMaterial.js';
 
 const $ = (id) => document.getElementById(id);
 const el = (tag, props = {}, ...kids) => {
@@ -45,7 +48,7 @@ class Viewer {
     this.scene.add(this.camera);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener('change', () => this.redraw());
-    this.clock = new THREE.Clock();
+    this.last = performance.now();
     this.mixer = null;
     this.dirty = true;
     this.resize();
@@ -53,7 +56,8 @@ class Viewer {
     const loop = () => {
       if (this.disposed) return;
       requestAnimationFrame(loop);
-      const dt = this.clock.getDelta();
+      const now = performance.now(), dt = (now - this.last) / 1000;
+      this.last = now;
       if (this.mixer && this.playing) { this.mixer.update(dt); this.dirty = true; if (this.onTick) this.onTick(); }
       if (this.dirty) { this.dirty = false; this.renderer.render(this.scene, this.camera); this.labels.render(this.scene, this.camera); }
     };
@@ -66,13 +70,15 @@ class Viewer {
     this.labels.setSize(w, h);
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
+    this.scene.traverse((o) => { if (o.material && o.material.isLineMaterial) o.material.resolution.set(w, h); });
     this.redraw();
   }
   // Frames a bounding box from a direction (default: front, slightly above).
   frame(box, dir = new THREE.Vector3(0.8, 0.35, 1)) {
     const c = box.getCenter(new THREE.Vector3()), r = box.getSize(new THREE.Vector3()).length() / 2 || 1;
     this.radius = r;
-    const d = (r / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2))) * 1.05;
+    const halfV = THREE.MathUtils.degToRad(this.camera.fov / 2), halfH = Math.atan(Math.tan(halfV) * this.camera.aspect);
+    const d = (r / Math.sin(Math.min(halfV, halfH))) * 0.85;  // the bounding sphere, a little tighter
     this.camera.position.copy(c).addScaledVector(dir.clone().normalize(), d);
     this.camera.near = d / 100; this.camera.far = d * 10;
     this.camera.updateProjectionMatrix();
@@ -305,9 +311,14 @@ class Editor {
     try {
       const r = await postJSON(`/api/seed-loop?name=${encodeURIComponent(this.name)}`, body);
       if (ticket !== this.loopTicket) return;
+      const size = this.viewer.renderer.getSize(new THREE.Vector2());
       r.paths.forEach((p, i) => {
-        const g = new THREE.BufferGeometry().setAttribute('position', new THREE.Float32BufferAttribute(p, 3));
-        const line = new THREE.Line(g, new THREE.LineBasicMaterial({ color: SEED_COLOURS[i], depthTest: true }));
+        const g = new LineGeometry();
+        g.setPositions(p);
+        const mat = new LineMaterial({ color: SEED_COLOURS[i], linewidth: 3 });
+        mat.resolution.copy(size);
+        const line = new Line2(g, mat);
+        line.computeLineDistances();
         line.renderOrder = 1;
         this.loopLines.push(line);
         this.viewer.scene.add(line);
@@ -541,7 +552,7 @@ async function showRun() {
           v.mixer = new THREE.AnimationMixer(gltf.scene);
           v.mixer.clipAction(gltf.animations[0]).play();
           v.onTick = () => sliders.forEach((s, i) => { s.value = mesh.morphTargetInfluences[i]; });
-          play.onchange = () => { v.playing = play.checked; v.clock.getDelta(); v.redraw(); };
+          play.onchange = () => { v.playing = play.checked; v.redraw(); };
         } else play.disabled = true;
       }
     }
