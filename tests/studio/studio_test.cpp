@@ -389,7 +389,10 @@ TEST(StudioRun, RunsThePipelineOneRunAtATime) {
   const RunState s = studio.run_state();
   ASSERT_EQ(s.status, "done") << s.error << "\n" << s.log;
   ASSERT_EQ(s.stages.size(), 4u);
-  for (const auto& st : s.stages) EXPECT_EQ(st.exit_code, 0) << st.name;
+  for (const auto& st : s.stages) {
+    EXPECT_EQ(st.exit_code, 0) << st.name;
+    EXPECT_EQ(st.fraction, 1.0) << st.name;
+  }
   const fs::path run = fx.root / "runs" / "run-1";
   for (const char* f : {"run.json", "dissection/dissection.json", "dissection/sphere.chart.ply", "remesh-L2/egg.obj",
                         "bake/sphere.glb", "morph.glb"})
@@ -427,6 +430,17 @@ TEST(StudioRun, AFailedRunLeavesTheFolderAsItWas) {
   EXPECT_NE(s.error.find("qs-dissect: invalid input error"), std::string::npos) << s.error;
   EXPECT_EQ(snapshot(fx.tmp.path), before);
   EXPECT_FALSE(fs::exists(fx.root / "runs"));
+}
+
+TEST(StudioRun, RunsAreNeverWrittenThroughALink) {
+  Fixture fx;
+  fs::create_directory_symlink(fx.outside, fx.root / "runs");
+  Studio studio(fx.options());
+  const auto before = snapshot(fx.tmp.path);
+  const Response r = studio.handle(post("/api/run", {}, R"({"meshes": ["sphere.obj"]})"));
+  EXPECT_EQ(r.status, 409);
+  EXPECT_NE(error_of(r).find("symbolic link"), std::string::npos) << r.body;
+  EXPECT_EQ(snapshot(fx.tmp.path), before);
 }
 
 TEST(StudioRun, AnotherProcessRunningInTheFolderIsRefused) {

@@ -316,7 +316,7 @@ json state_json(const RunState& s) {
     json args = json::array();
     for (const auto& a : st.args) args.push_back(a);
     stages.push_back({{"name", st.name}, {"tool", st.tool}, {"args", args}, {"status", st.status},
-                      {"exit_code", st.exit_code}});
+                      {"exit_code", st.exit_code}, {"fraction", st.fraction}});
   }
   return json{{"name", s.name}, {"status", s.status}, {"meshes", s.meshes}, {"stages", stages},
               {"log", s.log}, {"error", s.error}};
@@ -675,6 +675,14 @@ Response Studio::start_run(const Request& r) {
     if (access((opt_.tools_dir / tool).c_str(), X_OK) != 0)
       throw HttpError(500, std::string(tool) + " not found in " + opt_.tools_dir.string() +
                                " (build it, or start qs-studio with --tools DIR)");
+  {
+    // Runs are written under FOLDER/runs: never through a link (it could point out of the folder).
+    std::error_code ec;
+    const fs::file_status st = fs::symlink_status(root_ / "runs", ec);
+    if (!ec && fs::exists(st) && (fs::is_symlink(st) || !fs::is_directory(st)))
+      throw HttpError(409, "'runs' in the studio's folder is a symbolic link or not a folder; the studio writes its "
+                           "runs only into a plain 'runs' folder (rename or remove it)");
+  }
   std::unique_lock lock(mutex_);
   if (state_.status == "running")
     throw HttpError(409, "a run (" + state_.name + ") is already going in this folder; wait until it ends");
@@ -757,13 +765,30 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       for (const auto& a : stages[i].args) cmd += " " + a;
       append(cmd + "\n");
       std::string stage_out;
+      size_t scanned = 0;
+      const std::string prefix = stages[i].tool + ": ";
       const int code = spawn_and_wait(argv, staging, [&](const std::string& s) {
         stage_out += s;
         append(s);
+        // Progress lines: "qs-dissect: quinary subdivision 53%".
+        for (size_t nl; (nl = stage_out.find('\n', scanned)) != std::string::npos; scanned = nl + 1) {
+          const std::string line = stage_out.substr(scanned, nl - scanned);
+          if (line.rfind(prefix, 0) != 0 || line.size() < 2 || line.back() != '%') continue;
+          size_t k = line.size() - 1;
+          while (k > 0 && (std::isdigit(static_cast<unsigned char>(line[k - 1])) || line[k - 1] == '.')) --k;
+          if (k == line.size() - 1) continue;
+          try {
+            const double f = std::stod(line.substr(k, line.size() - 1 - k)) / 100;
+            std::lock_guard lock(mutex_);
+            state_.stages[i].fraction = std::clamp(f, 0.0, 1.0);
+          } catch (const std::exception&) {
+          }
+        }
       });
       std::lock_guard lock(mutex_);
       state_.stages[i].exit_code = code;
       state_.stages[i].status = code == 0 ? "done" : "failed";
+      if (code == 0) state_.stages[i].fraction = 1;
       if (code != 0) {
         ok = false;
         // The tool's own error lines ("qs-dissect: invalid input error: ..."), else its last output.

@@ -75,6 +75,7 @@ struct RunStage {
   std::vector<std::string> args;
   std::string status = "waiting";  ///< waiting, running, done, failed
   int exit_code = -1;
+  double fraction = 0;  ///< of the running stage, from the tool's "<tool>: <what> NN%" lines (qs-dissect)
 };
 
 struct RunState {

@@ -437,9 +437,11 @@ async function pollRun() {
   clearTimeout(polling);
   const s = await api('/api/run');
   const ol = $('stages');
-  ol.replaceChildren(...s.stages.map((st) => el('li', { className: st.status, textContent: `${st.name}: ${st.status}` + (st.exit_code > 0 ? ` (exit ${st.exit_code})` : '') })));
-  const done = s.stages.filter((st) => st.status === 'done').length, running = s.stages.some((st) => st.status === 'running') ? 0.5 : 0;
-  $('progress').value = s.stages.length ? (done + running) / s.stages.length : 0;
+  ol.replaceChildren(...s.stages.map((st) => el('li', { className: st.status, textContent: `${st.name}: ${st.status}`
+    + (st.status === 'running' && st.fraction > 0 ? ` ${Math.round(100 * st.fraction)}%` : '') + (st.exit_code > 0 ? ` (exit ${st.exit_code})` : '') })));
+  // done stages count 1, the running one its reported fraction
+  const done = s.stages.reduce((a, st) => a + (st.status === 'done' ? 1 : st.status === 'running' ? st.fraction : 0), 0);
+  $('progress').value = s.stages.length ? done / s.stages.length : 0;
   $('log').textContent = s.log;
   $('log').scrollTop = 1e9;
   $('run-error').textContent = s.error;

@@ -1,7 +1,7 @@
 // qs-studio in a real browser: headless Chromium (software WebGL) driven by puppeteer-core, as
 // scripts/glb-view does. Registered with CTest (tests/CMakeLists.txt: studio_browser).
-//  1. Landmarks: on a copy of examples/spot_2k.obj without landmarks, places seed0..seed3 and a
-//     feature by clicks, drags the feature, renames and deletes another, saves, and checks that
+//  1. Landmarks: uploads examples/spot_2k.obj (and a file that is not a mesh, refused) into an
+//     empty folder through the page, places seed0..seed3 and a feature by clicks, drags the feature, renames and deletes another, saves, and checks that
 //     qs-dissect reads the saved <stem>.landmarks.json (exact face/bary references) unchanged.
 //  2. Runs: on a copy of the examples triple (with their landmark files) plus a mesh with a hole,
 //     checks the list's findings, runs dissect/remesh/bake/morph from the page, waits for the
@@ -103,11 +103,19 @@ try {
   // ---- 1. landmarks by clicks ----------------------------------------------------------------
   const a = path.join(tmp, 'a');
   fs.mkdirSync(a);
-  fs.copyFileSync(path.join(opt.examples, 'spot_2k.obj'), path.join(a, 'spot_2k.obj'));
   const ref = JSON.parse(fs.readFileSync(path.join(opt.examples, 'spot_2k.landmarks.json'), 'utf8'));
   const urlA = await startStudio(a);
   await page.goto(urlA, { waitUntil: 'load' });
   await page.waitForSelector('body[data-ready="1"]', { timeout: 30000 });
+  // the meshes come in through the page: a file that is not a mesh is refused, the OBJ is added
+  const junk = path.join(tmp, 'notes.obj');
+  fs.writeFileSync(junk, 'these are my notes, not a mesh\n');
+  await (await page.$('#upload')).uploadFile(junk);
+  await page.waitForFunction(() => /not added/.test(document.getElementById('upload-status').textContent), { timeout: 10000 });
+  check(!fs.existsSync(path.join(a, 'notes.obj')), `a non-mesh upload is refused: "${await page.$eval('#upload-status', (e) => e.textContent)}"`);
+  await (await page.$('#upload')).uploadFile(path.join(opt.examples, 'spot_2k.obj'));
+  await page.waitForSelector('#meshes li[data-mesh="spot_2k.obj"]', { timeout: 10000 });
+  check(fs.readFileSync(path.join(a, 'spot_2k.obj')).equals(fs.readFileSync(path.join(opt.examples, 'spot_2k.obj'))), 'spot_2k.obj uploaded through the page');
   const item = await page.$eval('#meshes li[data-mesh="spot_2k.obj"]', (li) => li.textContent);
   check(/ready/.test(item) && /no landmarks/.test(item), `mesh list: spot_2k.obj is ready, without landmarks ("${item.slice(0, 80)}...")`);
   await page.click('#meshes li[data-mesh="spot_2k.obj"] button.open');
