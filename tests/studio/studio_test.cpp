@@ -232,7 +232,7 @@ TEST(Studio, ServesThePageAndFolderFiles) {
   EXPECT_EQ(r.file, fs::canonical(fx.web / "index.html"));
   r = studio.handle(get("/node_modules/three/build/three.module.js"));
   EXPECT_EQ(r.status, 200);
-  EXPECT_EQ(r.content_type, "text/javascript");
+  EXPECT_EQ(r.content_type, "application/x-javascript");
   r = studio.handle(get("/files/sphere.obj", {{"download", "1"}}));
   EXPECT_EQ(r.status, 200);
   EXPECT_TRUE(r.attachment);
@@ -458,6 +458,8 @@ TEST(StudioRun, AnotherProcessRunningInTheFolderIsRefused) {
 
 TEST(StudioServer, HttpLimitsAndTraversal) {
   Fixture fx;
+  fs::create_directories(fx.web / "node_modules/three/build");
+  write_text(fx.web / "node_modules/three/build/three.module.js", std::string(200000, 'x'));
   Studio studio(fx.options());
   ServerOptions so;
   so.port = 0;
@@ -483,6 +485,16 @@ TEST(StudioServer, HttpLimitsAndTraversal) {
     EXPECT_LT(res->status, 500) << path;
     EXPECT_EQ(res->body.find("TOP-SECRET"), std::string::npos) << path << ": " << res->body;
   }
+  // Large scripts and JSON go out as they are: Debian's cpp-httplib would brotli-compress them at
+  // its slowest setting (seconds per megabyte) for a browser that accepts it.
+  auto js = cli.Get("/node_modules/three/build/three.module.js", {{"Accept-Encoding", "gzip, deflate, br"}});
+  ASSERT_TRUE(js);
+  EXPECT_EQ(js->status, 200);
+  EXPECT_FALSE(js->has_header("Content-Encoding")) << js->get_header_value("Content-Encoding");
+  EXPECT_EQ(js->body.size(), 200000u);
+  auto mesh = cli.Get("/api/mesh?path=sphere.obj", {{"Accept-Encoding", "gzip, deflate, br"}});
+  ASSERT_TRUE(mesh);
+  EXPECT_FALSE(mesh->has_header("Content-Encoding"));
   auto big = cli.Post("/api/upload?name=big.obj", std::string(3u << 20, 'v'), "application/octet-stream");
   if (big) {  // the server may also close the connection after refusing
     EXPECT_EQ(big->status, 413);

@@ -46,6 +46,7 @@ Server::Server(Studio& studio, ServerOptions options) : impl_(std::make_unique<I
   auto& http = impl_->http;
   http.new_task_queue = [n = impl_->opt.threads] { return new httplib::ThreadPool(static_cast<size_t>(n)); };
   http.set_payload_max_length(impl_->opt.max_request_bytes);
+  http.set_keep_alive_timeout(1);  // an idle browser connection gives its thread back soon
   auto handler = [this](const httplib::Request& in, httplib::Response& out) {
     Request r;
     r.method = in.method;

@@ -12,7 +12,9 @@ struct ServerOptions {
   std::string host = "127.0.0.1";  ///< listen address; anything else is reachable from the network
   int port = 8420;                 ///< 0: any free port
   size_t max_request_bytes = 256u << 20;  ///< larger bodies get 413 before they are read whole
-  int threads = 4;
+  /// Worker threads. A browser keeps up to 6 connections open (keep-alive) and each holds a
+  /// thread while open, so fewer threads than that stall page loads.
+  int threads = 16;
 };
 
 class Server {

@@ -52,7 +52,7 @@ struct Request {
 
 struct Response {
   int status = 200;
-  std::string content_type = "application/json";
+  std::string content_type = "application/json; charset=utf-8";  ///< not compressed by the server
   std::string body;
   std::filesystem::path file;  ///< when set, the body is this file's contents (served by the server)
   bool attachment = false;     ///< Content-Disposition: attachment (download links)

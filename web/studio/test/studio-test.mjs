@@ -37,8 +37,9 @@ try { puppeteer = (await import(path.join(webDir, 'node_modules/puppeteer-core/l
 const toolsDir = path.dirname(path.resolve(opt.studio));
 
 let failures = 0;
+const T0 = Date.now();
 const check = (ok, what) => {
-  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+  console.log(`${ok ? "ok  " : "FAIL"} ${what} [${((Date.now() - T0) / 1000).toFixed(1)} s]`);
   if (!ok) failures++;
   return ok;
 };
