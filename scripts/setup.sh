@@ -8,6 +8,7 @@ packages=(
   libcgal-dev libeigen3-dev libopenmesh-dev libopenimageio-dev
   libtinygltf-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libcpp-httplib-dev chromium
 )
 
 missing=()
@@ -29,9 +30,20 @@ install_validator() {
     echo "setup: warning: could not install gltf-validator; GLB validation will be skipped" >&2
 }
 
+# qs-studio's page: three.js (served locally, no CDN) and puppeteer-core (its browser tests).
+install_studio_web() {
+  local dir="$(cd "$(dirname "$0")/.." && pwd)/web/studio"
+  [ -f "$dir/node_modules/three/build/three.module.js" ] && [ -d "$dir/node_modules/puppeteer-core" ] && return 0
+  echo "setup: installing three.js and puppeteer-core (npm) into web/studio for qs-studio"
+  # Without the npm registry the studio serves a page that says what is missing; browser tests skip.
+  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null 2>&1) ||
+    echo "setup: warning: could not install web/studio's npm packages; qs-studio's page and browser tests will not work" >&2
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages already installed"
   install_validator
+  install_studio_web
   exit 0
 fi
 
@@ -46,4 +58,5 @@ export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -qq
 $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 install_validator
+install_studio_web
 echo "setup: done"
