@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
   app.add_option("--grid", grid, "Grid cells along the longest side of the common bounding box (default 150)")
       ->check(CLI::Range(8, 1024));
   app.add_option("--align", align, "none (default) or similarity: move and scale the target onto the source "
-                                   "(volume centroid and volume), frames travel from one placement to the other")
+                                   "(volume centroids, volumes, principal axes of inertia); frames travel from one placement to the other")
       ->check(CLI::IsMember({"none", "similarity"}));
   app.add_flag("--no-warp", no_warp, "The plain distance-field blend (1-t) d0 + t d1 (today the only method: "
                                      "the skeleton-guided warp is not built yet)");
@@ -183,6 +183,8 @@ int main(int argc, char** argv) {
                      {"exact_endpoints", exact_endpoints}, {"frame_format", format}}},
         {"grid", {{"dims", {g.dims[0], g.dims[1], g.dims[2]}}, {"spacing", g.spacing}, {"origin", vec_json(g.origin)}}},
         {"alignment", {{"scale", morph.target_to_source.scale},
+                       {"rotation", {morph.target_to_source.rotation.row(0).eval(), morph.target_to_source.rotation.row(1).eval(),
+                                     morph.target_to_source.rotation.row(2).eval()}},
                        {"target_centroid", vec_json(morph.target_to_source.from)},
                        {"source_centroid", vec_json(morph.target_to_source.to)}}},
         {"skeletons", nullptr},

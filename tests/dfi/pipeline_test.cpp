@@ -49,3 +49,23 @@ TEST(Pipeline, SimilarityAlignmentMovesFromSourceToTargetPlacement) {
   EXPECT_NEAR(box.max.y() - box.min.y(), 4.0, 0.1);
   EXPECT_LT(metro::metro(last, b).max, 2.0 * m.source_sdf.spacing);  // a morph-space voxel, scaled by 2
 }
+
+TEST(Pipeline, SimilarityAlignmentFindsTheRotationOfAnElongatedShape) {
+  const TriMesh a = shapes::ellipsoid(2.0, 1.0, 0.5, 3);
+  TriMesh b = a;  // a turned 90 degrees about z, scaled by 3 and moved
+  for (Vec3& p : b.positions) p = 3.0 * Vec3(-p.y(), p.x(), p.z()) + Vec3(1, 2, 3);
+  MorphOptions opt;
+  opt.grid = 32;
+  opt.align = Align::Similarity;
+  const PreparedMorph m = prepare_morph(a, b, opt);
+  // Target to source: undo the turn (up to the ellipsoid's own symmetries: x and y axes kept).
+  const Eigen::Matrix3d r = m.target_to_source.rotation;
+  EXPECT_NEAR(std::abs(r(0, 1)), 1.0, 1e-6);
+  EXPECT_NEAR(std::abs(r(1, 0)), 1.0, 1e-6);
+  EXPECT_NEAR(std::abs(r(2, 2)), 1.0, 1e-6);
+  // The blend of identical aligned shapes is that shape at every t (volume within 3%).
+  const double volume = 4.0 / 3.0 * M_PI * 2.0 * 1.0 * 0.5;
+  const MeshStats mid = mesh_stats(frame_mesh(m, blend_field(m, 0.5), 0.0));
+  EXPECT_NEAR(mid.volume, volume, 0.03 * volume);
+  EXPECT_LT(metro::metro(frame_mesh(m, blend_field(m, 1.0), 1.0), b).max, 3.0 * m.source_sdf.spacing);
+}

@@ -1,10 +1,12 @@
 #include "qs/dfi/pipeline.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "qs/core/error.h"
-#include "qs/mesh/validate.h"
+#include "qs/metro/metro.h"
 
 namespace qs::dfi {
 namespace {
@@ -25,12 +27,61 @@ Vec3 volume_centroid(const TriMesh& m, double& volume) {
   return v != 0 ? Vec3(o + c / v) : o;
 }
 
+// Principal axes of inertia (columns, ascending moments), a proper rotation.
+Eigen::Matrix3d principal_frame(const TriMesh& m, const Vec3& c) {
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  for (const Tri& t : m.faces) {
+    const Vec3 a = m.positions[t[0]] - c, b = m.positions[t[1]] - c, d = m.positions[t[2]] - c;
+    const double vol = a.dot(b.cross(d)) / 6.0;
+    const Vec3 sum = a + b + d;
+    second += vol / 20.0 * (a * a.transpose() + b * b.transpose() + d * d.transpose() + sum * sum.transpose());
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(second);
+  Eigen::Matrix3d e = eig.eigenvectors();
+  if (e.determinant() < 0) e.col(2) = -e.col(2);
+  return e;
+}
+
+// The 24 rotations that map the coordinate axes onto themselves, in a fixed order.
+std::vector<Eigen::Matrix3d> cube_rotations() {
+  std::vector<Eigen::Matrix3d> out;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& p : perms)
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+      for (int row = 0; row < 3; ++row) r(row, p[row]) = (signs >> row) & 1 ? -1.0 : 1.0;
+      if (r.determinant() > 0) out.push_back(r);
+    }
+  return out;
+}
+
+Eigen::Matrix3d best_rotation(const TriMesh& source, const Vec3& c0, const TriMesh& target, const Vec3& c1,
+                              double scale) {
+  const Eigen::Matrix3d e0 = principal_frame(source, c0), e1 = principal_frame(target, c1);
+  const metro::SurfaceDistance surface(source, "source");
+  const int stride = std::max(1, target.num_vertices() / 2000);
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d best_r = Eigen::Matrix3d::Identity();
+  for (const Eigen::Matrix3d& g : cube_rotations()) {
+    const Eigen::Matrix3d r = e0 * g * e1.transpose();
+    double sum = 0;
+    for (int v = 0; v < target.num_vertices(); v += stride)
+      sum += surface.distance(scale * (r * (target.positions[v] - c1)) + c0);
+    if (sum < best) {
+      best = sum;
+      best_r = r;
+    }
+  }
+  return best_r;
+}
+
 }  // namespace
 
 Vec3 placement(const Similarity& s, double t, const Vec3& y) {
   const double scale = (1 - t) + t * s.scale;
-  const Vec3 centre_to = s.to, centre_from = (1 - t) * s.to + t * s.from;
-  return centre_from + (y - centre_to) / scale;
+  const Eigen::Quaterniond q = Eigen::Quaterniond::Identity().slerp(t, Eigen::Quaterniond(s.rotation));
+  const Vec3 centre = (1 - t) * s.to + t * s.from;
+  return centre + q.conjugate() * (y - s.to) / scale;
 }
 
 PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options,
@@ -48,6 +99,7 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
     m.target_to_source.scale = std::cbrt(m.source_volume / m.target_volume);
     m.target_to_source.from = c1;
     m.target_to_source.to = c0;
+    m.target_to_source.rotation = best_rotation(source, c0, target, c1, m.target_to_source.scale);
   }
   TriMesh moved = target;
   for (Vec3& p : moved.positions) p = m.target_to_source.apply(p);

@@ -22,8 +22,11 @@ namespace qs::dfi {
 
 enum class Align {
   None,       ///< both shapes as given
-  Similarity  ///< the target translated (volume centroid) and uniformly scaled (volume) onto the
-              ///< source; the frames move from the source's placement to the target's
+  Similarity  ///< the target moved onto the source: volume centroids, a uniform scale that equals
+              ///< the volumes, and the rotation between the principal axes of inertia (of the 24
+              ///< that map one principal frame onto the other, the one whose target vertices lie
+              ///< closest to the source surface on average); frames travel from the source's
+              ///< placement to the target's (scale, rotation and centre interpolated)
 };
 
 struct MorphOptions {
@@ -34,11 +37,12 @@ struct MorphOptions {
   PolygonizeOptions polygonize;
 };
 
-/// A uniform scale s about the centroids: morph space y = s (x - from) + to.
+/// Target space to morph space: y = s R (x - from) + to.
 struct Similarity {
   double scale = 1;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Vec3 from = Vec3::Zero(), to = Vec3::Zero();
-  Vec3 apply(const Vec3& x) const { return scale * (x - from) + to; }
+  Vec3 apply(const Vec3& x) const { return scale * (rotation * (x - from)) + to; }
 };
 
 struct PreparedMorph {
