@@ -8,6 +8,7 @@ packages=(
   libcgal-dev libeigen3-dev libopenmesh-dev libopenimageio-dev
   libtinygltf-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  liblemon-dev
 )
 
 missing=()

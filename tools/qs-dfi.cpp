@@ -1,11 +1,12 @@
 // qs-dfi: morphs between two closed shapes of any genus by distance-field interpolation
-// (skeleton-guided DFI, ../shared/papers/skeleton-guided-dfi-metamorphosis.md). Writes
+// (skeleton-guided DFI, ../shared/papers/skeleton-guided-dfi-metamorphosis.md): skeletons, branch
+// matching, anchors, harmonic fields, per-part transport and a warp, or the plain blend. Writes
 // OUTDIR/frame_NNNN.<fmt> (connectivity differs per frame), OUTDIR/dfi.json and optionally a GLB
 // that plays the frames (one node per frame, scale animated in steps).
 //
 // Exit codes: 0 done, 1 usage, 2 invalid input (a mesh that is open, non-manifold, inconsistently
 // oriented, in several components, or encloses no volume; genus is reported, never rejected),
-// 3 i/o, 70 internal error.
+// 3 i/o, 4 solver (the warp still folds after smoothing), 70 internal error.
 
 #include <chrono>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "qs/gltf/sequence.h"
 #include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
+#include "qs/landmarks/landmarks.h"
 #include "qs/mesh/validate.h"
 #include "tool_main.h"
 
@@ -34,6 +36,7 @@ struct Shape {
   std::string file;
   qs::TriMesh mesh;
   qs::mesh::ValidationReport report;
+  qs::mesh::ValidationResult valid;
 };
 
 // Read and validate: closed, manifold, oriented, one component; any genus (reported).
@@ -48,8 +51,9 @@ Shape load(const std::string& file, const char* which) {
     throw qs::InvalidInput(std::string(which) + " mesh rejected (qs-dfi needs closed, manifold, consistently "
                            "oriented meshes of one component; any genus):\n" +
                            qs::mesh::format_report(file, valid.report));
-  s.mesh = std::move(valid.mesh);
+  s.mesh = valid.mesh;
   s.report = valid.report;
+  s.valid = std::move(valid);
   return s;
 }
 
@@ -63,20 +67,34 @@ std::string frame_stem(int f, int frames) {
 
 nlohmann::ordered_json vec_json(const qs::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
+// A skeleton as JSON, its nodes mapped by `place` (morph space -> the shape's own coordinates).
+template <class Place>
+nlohmann::ordered_json skeleton_json(const qs::dfi::Skeleton& s, const std::vector<qs::dfi::Branch>& branches,
+                                     Place place) {
+  nlohmann::ordered_json nodes = nlohmann::ordered_json::array(), edges = nlohmann::ordered_json::array(),
+                         br = nlohmann::ordered_json::array();
+  for (const qs::Vec3& p : s.nodes) nodes.push_back(vec_json(place(p)));
+  for (const auto& e : s.edges) edges.push_back({e[0], e[1]});
+  for (const auto& b : branches) br.push_back({{"a", b.a}, {"b", b.b}, {"nodes", b.nodes.size()}, {"length", b.length}});
+  return {{"nodes", nodes}, {"edges", edges}, {"branches", br}};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Morphs between two closed shapes of any genus by distance-field interpolation: the\n"
-               "signed distance fields of both shapes on one grid, blended frame by frame and\n"
+  CLI::App app{"Morphs between two closed shapes of any genus by skeleton-guided distance-field\n"
+               "interpolation: the signed distance fields of both shapes on one grid, warped toward\n"
+               "each other along a skeleton-guided voxel correspondence, blended frame by frame and\n"
                "polygonized (marching tetrahedra: closed, manifold, outward, no self-intersections).\n"
                "Writes OUTDIR/frame_NNNN.<fmt>, OUTDIR/dfi.json and optionally a GLB.\n"
-               "Exit codes: 0 done, 1 usage, 2 invalid input, 3 i/o, 70 internal error.",
+               "Exit codes: 0 done, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal error.",
                "qs-dfi"};
   std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none";
   std::optional<std::string> glb;
   int frames = 11, grid = 150, threads = 0, band = 3;
   double fps = 12;
-  bool no_warp = false, exact_endpoints = false, quiet = false;
+  bool no_warp = false, exact_endpoints = false, quiet = false, global_transport = false;
+  int anchors_per_branch = 3, emd_voxels = 1500;
   app.add_option("SOURCE", source_file, "Source mesh (.obj .off .ply .stl), closed, any genus")->required();
   app.add_option("TARGET", target_file, "Target mesh, closed, any genus")->required();
   app.add_option("--frames", frames, "Frames K, from t = 0 to t = 1 inclusive (default 11)")
@@ -86,8 +104,18 @@ int main(int argc, char** argv) {
   app.add_option("--align", align, "none (default) or similarity: move and scale the target onto the source "
                                    "(volume centroids, volumes, principal axes of inertia); frames travel from one placement to the other")
       ->check(CLI::IsMember({"none", "similarity"}));
-  app.add_flag("--no-warp", no_warp, "The plain distance-field blend (1-t) d0 + t d1 (today the only method: "
-                                     "the skeleton-guided warp is not built yet)");
+  app.add_flag("--no-warp", no_warp, "The plain distance-field blend (1-t) d0 + t d1 (the ablation); default: "
+                                     "the skeleton-guided warp");
+  app.add_flag("--global-transport", global_transport, "One transport over all interior voxels instead of one "
+                                                       "per matched part (the ablation)");
+  std::vector<std::string> landmark_files;
+  app.add_option("--landmarks", landmark_files, "Two landmark files (.json or .pp, as qs-dissect reads them), "
+                                                "source then target: features of the same name force skeleton "
+                                                "matches")->expected(2);
+  app.add_option("--anchors-per-branch", anchors_per_branch, "Anchors sampled inside each matched branch "
+                                                             "(default 3)")->check(CLI::Range(0, 50));
+  app.add_option("--emd-voxels", emd_voxels, "Interior voxels per shape for the correspondence (default 1500)")
+      ->check(CLI::Range(50, 20000));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
   app.add_option("-o,--outdir", outdir, "Output folder (default dfi-out; created)");
   app.add_option("--format", format, "Frame format: obj (default) or ply")->check(CLI::IsMember({"obj", "ply"}));
@@ -100,9 +128,6 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
-    if (!no_warp)
-      throw qs::UsageError("the skeleton-guided warp is not built yet; pass --no-warp for the plain "
-                           "distance-field blend (README, qs-dfi)");
     const auto t_start = Clock::now();
     const Shape source = load(source_file, "source");
     const Shape target = load(target_file, "target");
@@ -112,6 +137,20 @@ int main(int argc, char** argv) {
     opt.align = align == "similarity" ? qs::dfi::Align::Similarity : qs::dfi::Align::None;
     opt.sdf.band = band;
     opt.sdf.threads = threads;
+    opt.warp = !no_warp;
+    opt.part_transport = !global_transport;
+    opt.anchors_per_branch = anchors_per_branch;
+    opt.emd_voxels = emd_voxels;
+    if (!landmark_files.empty()) {
+      const auto la = qs::landmarks::read_landmarks(landmark_files[0], source.valid);
+      const auto lb = qs::landmarks::read_landmarks(landmark_files[1], target.valid);
+      for (const auto& fa : la.features)
+        for (const auto& fb : lb.features)
+          if (fa.name == fb.name) opt.landmarks.push_back({fa.name, fa.position, fb.position});
+      if (opt.landmarks.empty())
+        throw qs::InvalidInput(landmark_files[0] + " and " + landmark_files[1] +
+                               ": no feature name in common; name the landmarks that should match alike");
+    }
     auto say = [&](const std::string& m) {
       if (!quiet) std::cerr << "qs-dfi: " << m << "\n";
     };
@@ -123,7 +162,8 @@ int main(int argc, char** argv) {
     {
       std::ostringstream m;
       m << "grid " << morph.source_sdf.dims[0] << " x " << morph.source_sdf.dims[1] << " x "
-        << morph.source_sdf.dims[2] << " (spacing " << morph.source_sdf.spacing << "), distance fields in "
+        << morph.source_sdf.dims[2] << " (spacing " << morph.source_sdf.spacing << "), distance fields"
+        << (morph.warp ? " and correspondence" : "") << " in "
         << std::fixed << std::setprecision(2) << prep_s << " s";
       say(m.str());
     }
@@ -142,7 +182,7 @@ int main(int argc, char** argv) {
         mesh = f == 0 ? source.mesh : target.mesh;
         exact = true;
       } else {
-        mesh = qs::dfi::frame_mesh(morph, qs::dfi::blend_field(morph, t), t, opt.polygonize);
+        mesh = qs::dfi::frame_mesh(morph, qs::dfi::blend_field(morph, t, threads), t, opt.polygonize);
       }
       const qs::dfi::MeshStats st = qs::dfi::mesh_stats(mesh);
       if (!exact && !st.closed_manifold)
@@ -176,7 +216,7 @@ int main(int argc, char** argv) {
     nlohmann::ordered_json report{
         {"format", "qs-dfi"},
         {"version", 1},
-        {"method", "blend"},
+        {"method", morph.warp ? (global_transport ? "warp-global-transport" : "warp") : "blend"},
         {"source", shape_json(source, morph.source_volume)},
         {"target", shape_json(target, morph.target_volume)},
         {"options", {{"frames", frames}, {"grid", grid}, {"align", align}, {"band", band},
@@ -190,7 +230,41 @@ int main(int argc, char** argv) {
         {"skeletons", nullptr},
         {"matches", nullptr},
         {"anchors", nullptr},
+        {"correspondence", nullptr},
         {"frames", frames_json}};
+    if (morph.warp) {
+      const auto to_target = [&](const qs::Vec3& p) { return qs::dfi::placement(morph.target_to_source, 1.0, p); };
+      const auto same = [](const qs::Vec3& p) { return p; };
+      report["skeletons"] = {{"source", skeleton_json(morph.source_skeleton, morph.source_branches, same)},
+                             {"target", skeleton_json(morph.target_skeleton, morph.target_branches, to_target)}};
+      nlohmann::ordered_json nodes = nlohmann::ordered_json::array(), branches = nlohmann::ordered_json::array(),
+                             anchors = nlohmann::ordered_json::array();
+      for (const auto& n : morph.matching.nodes)
+        nodes.push_back({{"source", n.source}, {"target", n.target}, {"forced", n.forced}, {"name", n.name}});
+      for (const auto& b : morph.matching.branches)
+        branches.push_back({{"source", b.source}, {"target", b.target}, {"reversed", b.reversed}});
+      for (const auto& a : morph.anchors) anchors.push_back({{"source", vec_json(a.source)}, {"target", vec_json(to_target(a.target))}});
+      report["matches"] = {{"nodes", nodes}, {"branches", branches}};
+      report["anchors"] = anchors;
+      report["correspondence"] = {{"transport", global_transport ? "global" : "per part"},
+                                  {"grid_cells", morph.emd_cells},
+                                  {"source_voxels", morph.source_voxels},
+                                  {"target_voxels", morph.target_voxels},
+                                  {"parts", morph.parts},
+                                  {"cost", morph.transport_cost},
+                                  {"harmonic_agreement", morph.harmonic_agreement},
+                                  {"folds", {{"source_min_det", morph.source_folds.min_det},
+                                             {"target_min_det", morph.target_folds.min_det},
+                                             {"source_smoothing_steps", morph.source_folds.smoothing_steps},
+                                             {"target_smoothing_steps", morph.target_folds.smoothing_steps}}}};
+      std::ostringstream m;
+      m << "skeletons " << morph.source_skeleton.nodes.size() << " / " << morph.target_skeleton.nodes.size()
+        << " nodes, " << morph.matching.nodes.size() << " node and " << morph.matching.branches.size()
+        << " branch matches, " << morph.anchors.size() << " anchors, " << morph.parts << " part(s), "
+        << morph.source_voxels << " / " << morph.target_voxels << " voxels, fold check min det "
+        << std::min(morph.source_folds.min_det, morph.target_folds.min_det);
+      say(m.str());
+    }
     if (glb) {
       qs::gltf::SequenceOptions so;
       so.seconds_per_frame = 1.0 / fps;

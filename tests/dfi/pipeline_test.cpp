@@ -15,6 +15,7 @@ TEST(Pipeline, SphereToTorusFramesAreClosedAndEndpointsWithinAVoxel) {
   const TriMesh torus = shapes::torus(64, 24);
   MorphOptions opt;
   opt.grid = 40;
+  opt.warp = false;  // the plain blend (the warped morph is tested in stages_test)
   const PreparedMorph m = prepare_morph(sphere, torus, opt);
   const int frames = 7;
   for (int f = 0; f < frames; ++f) {
@@ -39,6 +40,7 @@ TEST(Pipeline, SimilarityAlignmentMovesFromSourceToTargetPlacement) {
   for (Vec3& p : b.positions) p = 2.0 * p + Vec3(5, 0, 0);
   MorphOptions opt;
   opt.grid = 24;
+  opt.warp = false;
   opt.align = Align::Similarity;
   const PreparedMorph m = prepare_morph(a, b, opt);
   EXPECT_NEAR(m.target_to_source.scale, 0.5, 1e-6);
@@ -56,6 +58,7 @@ TEST(Pipeline, SimilarityAlignmentFindsTheRotationOfAnElongatedShape) {
   for (Vec3& p : b.positions) p = 3.0 * Vec3(-p.y(), p.x(), p.z()) + Vec3(1, 2, 3);
   MorphOptions opt;
   opt.grid = 32;
+  opt.warp = false;
   opt.align = Align::Similarity;
   const PreparedMorph m = prepare_morph(a, b, opt);
   // Target to source: undo the turn (up to the ellipsoid's own symmetries: x and y axes kept).

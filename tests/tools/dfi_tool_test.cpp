@@ -65,7 +65,7 @@ TEST_F(DfiTool, SphereToTorusWritesFramesJsonAndGlb) {
   }
 }
 
-TEST_F(DfiTool, RejectsOpenMeshesSeveralComponentsAndAMissingMethod) {
+TEST_F(DfiTool, RejectsOpenMeshesSeveralComponentsAndBadOptions) {
   const std::string sphere = write("sphere.obj", qs::shapes::icosphere(2));
   const std::string disk = write("disk.obj", qs::shapes::open_disk(3));
   const std::string two = write("two.obj", qs::shapes::two_components());
@@ -75,11 +75,26 @@ TEST_F(DfiTool, RejectsOpenMeshesSeveralComponentsAndAMissingMethod) {
   r = run_tool("qs-dfi", two + " " + sphere + " --no-warp -o " + (dir_ / "o").string());
   EXPECT_EQ(r.exit, 2) << r.out;
   EXPECT_THAT(r.out, HasSubstr("components"));
-  r = run_tool("qs-dfi", sphere + " " + sphere + " -o " + (dir_ / "o").string());
-  EXPECT_EQ(r.exit, 1) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("--no-warp"));
+  r = run_tool("qs-dfi", sphere + " " + sphere + " --landmarks " + sphere + " -o " + (dir_ / "o").string());
+  EXPECT_EQ(r.exit, 1) << r.out;  // --landmarks takes two files
   r = run_tool("qs-dfi", sphere + " " + (dir_ / "missing.obj").string() + " --no-warp");
   EXPECT_EQ(r.exit, 3) << r.out;
   r = run_tool("qs-dfi", sphere + " " + sphere + " --no-warp --grid 2");
   EXPECT_EQ(r.exit, 1) << r.out;
+}
+
+TEST_F(DfiTool, WarpReportsSkeletonsMatchesAnchorsAndFolds) {
+  const std::string a = write("a.obj", qs::shapes::ellipsoid(1.6, 0.6, 0.5, 3));
+  const std::string b = write("b.off", qs::shapes::torus(48, 16));
+  const fs::path out = dir_ / "w";
+  const RunResult r = run_tool("qs-dfi", a + " " + b + " --frames 3 --grid 24 --emd-voxels 300 -q -o " + out.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(out / "dfi.json"));
+  EXPECT_EQ(j["method"], "warp");
+  EXPECT_GT(j["skeletons"]["source"]["nodes"].size(), 1u);
+  EXPECT_GT(j["skeletons"]["target"]["edges"].size(), 1u);
+  EXPECT_GE(j["anchors"].size(), 1u);
+  EXPECT_GT(j["correspondence"]["folds"]["source_min_det"].get<double>(), 0);
+  EXPECT_GT(j["correspondence"]["source_voxels"].get<int>(), 50);
+  for (const auto& f : j["frames"]) EXPECT_GT(f["volume"].get<double>(), 0);
 }

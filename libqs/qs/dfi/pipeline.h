@@ -6,8 +6,11 @@
 //                  signed distance fields of both shapes on it.
 //   morph_frame:   the field of frame t, polygonized, mapped back along the interpolated alignment.
 //
-// What is implemented today is the plain blend d_t = (1 - t) d_0 + t d_1 (the paper's baseline,
-// `--no-warp`); see README "qs-dfi" for the stages of the skeleton-guided warp and their state.
+// With the warp (the default), prepare_morph also builds the paper's correspondence: curve
+// skeletons of both shapes, branch matching, anchors along matched branches, harmonic fields on
+// the interior voxels of a coarse grid, the transport per matched part (or globally, the
+// ablation), and from it a displacement field per shape, checked for folds. Frame t then blends
+// the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
 
 #include <string>
 #include <vector>
@@ -15,8 +18,12 @@
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/dfi/grid.h"
+#include "qs/dfi/harmonic.h"
+#include "qs/dfi/matching.h"
 #include "qs/dfi/polygonize.h"
 #include "qs/dfi/sdf.h"
+#include "qs/dfi/skeleton.h"
+#include "qs/dfi/warp.h"
 
 namespace qs::dfi {
 
@@ -35,6 +42,21 @@ struct MorphOptions {
   Align align = Align::None;
   SdfOptions sdf;          ///< band and threads
   PolygonizeOptions polygonize;
+  bool warp = true;              ///< the skeleton-guided warp; false: the plain blend
+  bool part_transport = true;    ///< transport per matched part (the paper); false: one global solve
+  int anchors_per_branch = 3;    ///< interior anchors sampled on each matched branch
+  double prune_fraction = 0.08;  ///< skeleton spurs shorter than this times the source's bounding-box
+                                 ///< diagonal are pruned (prune_skeleton)
+  int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
+  double position_weight = 0.1;  ///< weight of the voxel distance (per bounding-box diagonal) added to
+                                 ///< the harmonic-vector distance in the transport cost (breaks ties)
+  /// Named landmarks forcing skeleton matches: the skeleton nodes nearest to these points (source
+  /// coordinates, target coordinates) are matched first.
+  struct Landmark {
+    std::string name;
+    Vec3 source, target;
+  };
+  std::vector<Landmark> landmarks;
 };
 
 /// Target space to morph space: y = s R (x - from) + to.
@@ -49,6 +71,19 @@ struct PreparedMorph {
   Similarity target_to_source;  ///< identity when Align::None
   Grid source_sdf, target_sdf;  ///< on the same samples, in morph (source) space
   double source_volume = 0, target_volume = 0;  ///< of the input meshes, in their own units
+  // The correspondence (only with options.warp), everything in morph space.
+  bool warp = false;
+  Skeleton source_skeleton, target_skeleton;
+  std::vector<Branch> source_branches, target_branches;
+  SkeletonMatching matching;
+  std::vector<AnchorPair> anchors;     ///< the ones kept (distinct voxels on both sides)
+  int emd_cells = 0;                   ///< coarse grid cells along the longest side
+  int source_voxels = 0, target_voxels = 0, parts = 0;
+  double transport_cost = 0;           ///< sum over parts of the optimal cost (mass-weighted)
+  double harmonic_agreement = 0;       ///< fraction of source voxel mass whose partners' harmonic
+                                       ///< vectors are within 0.002 * #anchors (the paper's figure 10)
+  Displacement source_warp, target_warp;
+  FoldCheck source_folds, target_folds;
 };
 
 /// \pre both meshes closed, manifold, outward oriented, one component (qs::mesh::validate with
@@ -56,8 +91,9 @@ struct PreparedMorph {
 PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options = {},
                             const Context& ctx = {});
 
-/// The plain blend's field at t in [0, 1]: (1 - t) d_0 + t d_1.
-Grid blend_field(const PreparedMorph& morph, double t);
+/// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
+/// morph has a warp. Boundary samples are kept outside (>= one spacing).
+Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
 
 /// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the
 /// source's at 0, the target's at 1, interpolated in between).
