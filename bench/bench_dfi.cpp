@@ -1,11 +1,13 @@
-// qs-dfi benchmark (issue 16): for each pair of ../shared/meshes, the distance fields (the part of
-// the correspondence built so far) and every frame at a 150^3 grid (targets: correspondence < 60 s,
-// < 10 s per frame on a 2-core machine), endpoints against the inputs (Hausdorff in voxels), the
+// qs-dfi benchmark (issue 16): for each pair of ../shared/meshes and each method (the
+// skeleton-guided warp with per-part transport, the same with one global transport, the plain
+// blend), the correspondence (distance fields, skeletons, matching, harmonic fields, transport,
+// warp) and every frame at a 150^3 grid (targets: correspondence < 60 s, < 10 s per frame on a
+// 2-core machine), endpoints against the inputs (Hausdorff in voxels), the
 // topology of every frame, the middle frame's volume against the endpoints' mean (in morph space),
 // the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
 // and whether 1 and 2 threads give the same bytes.
 //
-// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [pair ...]   (pairs: sphere-torus,
+// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
 // horse-knot, spot-eight, femur-elephant, horse-camel, cat-koala; default all)
 #include <algorithm>
 #include <chrono>
@@ -51,11 +53,13 @@ TriMesh load(const std::string& name) {
 int main(int argc, char** argv) {
   int grid = 150, frames = 11;
   bool smoothness = false;
+  std::string methods = "warp,global,blend";
   std::vector<std::string> wanted;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--smoothness")) smoothness = true;
+    else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
     else wanted.push_back(argv[i]);
   }
   const std::vector<Pair> pairs = {{"sphere-torus", "sphere", "torus"},
@@ -64,9 +68,9 @@ int main(int argc, char** argv) {
                                    {"femur-elephant", "femur.off", "elephant_12k.obj"},
                                    {"horse-camel", "horse_5k.obj", "camel_4k_fixed.obj"},
                                    {"cat-koala", "cat_16k.obj", "koala_7k.obj"}};
-  std::printf("dfi benchmark: plain blend (--no-warp), --align similarity, grid %d, %d frames, %u hardware threads\n",
+  std::printf("dfi benchmark: methods %s, --align similarity, grid %d, %d frames, %u hardware threads\n", methods.c_str(),
               grid, frames, std::thread::hardware_concurrency());
-  std::printf("%-15s %9s %8s %8s %8s %9s %14s %10s %8s  %s\n", "pair", "fields s", "frame s", "max fr s",
+  std::printf("%-15s %-7s %9s %8s %8s %8s %9s %14s %10s %8s  %s\n", "pair", "method", "corr. s", "frame s", "max fr s",
               "ends vox", "1 comp", "mid vol/mean", "smooth", "threads", "genus per frame");
   for (const Pair& p : pairs) {
     if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), p.name) == wanted.end()) continue;
@@ -78,9 +82,13 @@ int main(int argc, char** argv) {
       std::printf("%-15s skipped: %s\n", p.name.c_str(), e.what());
       continue;
     }
+    for (const std::string method : {"warp", "global", "blend"}) {
+    if (methods.find(method) == std::string::npos) continue;
     dfi::MorphOptions opt;
     opt.grid = grid;
     opt.align = dfi::Align::Similarity;
+    opt.warp = method != "blend";
+    opt.part_transport = method == "warp";
     auto t0 = Clock::now();
     const dfi::PreparedMorph m = dfi::prepare_morph(a, b, opt);
     const double fields_s = since(t0);
@@ -92,13 +100,15 @@ int main(int argc, char** argv) {
       const double t = f / (frames - 1.0);
       t0 = Clock::now();
       const TriMesh morph_space = dfi::polygonize(dfi::blend_field(m, t));
-      const TriMesh mesh = dfi::frame_mesh(m, dfi::blend_field(m, t), t);
-      const double s = since(t0) / 2;  // two polygonizations above; one is what qs-dfi does
+      TriMesh mesh = morph_space;  // what qs-dfi writes: the frame at its placement
+      for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, q);
+      const double s = since(t0);
       total += s;
       worst = std::max(worst, s);
       const dfi::MeshStats st = dfi::mesh_stats(mesh);
       one_component += st.components == 1;
-      genera += (f ? "," : "") + std::to_string(st.genus);
+      if (f) genera += ',';
+      genera += std::to_string(st.genus);
       if (2 * f == frames - 1) mid_volume = dfi::mesh_stats(morph_space).volume;
       if (f == 0 || f == frames - 1) {
         const double d = metro::metro(mesh, f == 0 ? a : b).max;
@@ -119,17 +129,19 @@ int main(int argc, char** argv) {
       std::snprintf(buf, sizeof buf, "%.2f", *std::max_element(d.begin(), d.end()) / sorted[sorted.size() / 2]);
       smooth = buf;
     }
-    // Determinism: the source field on 1 and 2 threads.
+    // Determinism: the source field and the middle frame's field on 1 and 2 threads.
     dfi::SdfOptions one = opt.sdf, two = opt.sdf;
     one.threads = 1;
     two.threads = 2;
-    const bool same = dfi::signed_distance(a, m.source_sdf, one).values == dfi::signed_distance(a, m.source_sdf, two).values;
+    const bool same = dfi::signed_distance(a, m.source_sdf, one).values == dfi::signed_distance(a, m.source_sdf, two).values &&
+                      dfi::blend_field(m, 0.5, 1).values == dfi::blend_field(m, 0.5, 2).values;
     char mid[32];
     std::snprintf(mid, sizeof mid, "%.3f", mid_volume / mean_end);
-    std::printf("%-15s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), fields_s,
+    std::printf("%-15s %-7s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), method.c_str(), fields_s,
                 total / frames, worst, end_vox, one_component, frames, mid, smooth.c_str(), same ? "same" : "DIFFER",
                 genera.c_str());
     std::fflush(stdout);
+    }
   }
   return 0;
 }
