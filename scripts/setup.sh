@@ -9,6 +9,7 @@ packages=(
   libtinygltf-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcpp-httplib-dev chromium
+  liblemon-dev
 )
 
 missing=()

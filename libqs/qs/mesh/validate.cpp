@@ -497,7 +497,11 @@ ValidationResult validate(const TriMesh& input, const ValidateOptions& options) 
                 "mesh has " + std::to_string(num_parts) +
                     " components (first faces: " + format_ids(components, false) +
                     "); qs needs one connected surface (split the parts into separate files)");
-  if (genus_problem.count) add_problem(report, "genus", S::Fatal, genus_problem, genus_text);
+  if (genus_problem.count) {
+    if (options.allow_any_genus)  // reported, not rejected (qs-dfi)
+      genus_text = genus_text.substr(0, genus_text.find(';')) + "; accepted (any genus allowed)";
+    add_problem(report, "genus", options.allow_any_genus ? S::Note : S::Fatal, genus_problem, genus_text);
+  }
   if (unreferenced.count)
     add_problem(report, "unreferenced_vertices", S::Note, unreferenced,
                 "unreferenced vertices: " + std::to_string(unreferenced.count) +

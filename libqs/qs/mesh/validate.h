@@ -30,6 +30,7 @@
 //                            count: the number of parts; ids: the smallest face id of each part.
 //   genus                    closed, manifold, oriented, but not a sphere: count = genus (one
 //                            part), or the number of parts with a non-zero genus. ids: none.
+//                            A Note instead when ValidateOptions::allow_any_genus is set.
 //   Note (fixed in the output)
 //   unreferenced_vertices    vertices used by no face (faces with an invalid index aside);
 //                            dropped and the rest renumbered in order (see vertex_map).
@@ -81,12 +82,17 @@ struct ValidationReport {
   double signed_volume = 0;                ///< after any flip; 0 unless closed, manifold, oriented
                                            ///< and finite
   std::vector<Problem> problems;
-  bool accepted = false;                   ///< closed, manifold, one component, genus 0, finite
+  bool accepted = false;                   ///< closed, manifold, one component, genus 0 (any genus
+                                           ///< with allow_any_genus), finite
 };
 
 struct ValidateOptions {
   double tiny_angle_degrees = 1.0;  ///< below this, a Warning is reported (never a rejection)
   double zero_area_relative = 1e-12;  ///< area <= this * bbox_diagonal^2 counts as zero (Warning)
+  /// When true, a closed surface of genus > 0 is accepted: "genus" becomes a Note (still reported,
+  /// with the genus in report.genus) instead of Fatal. Only qs-dfi sets it; the default keeps
+  /// every other tool's genus-0 requirement.
+  bool allow_any_genus = false;
 };
 
 struct ValidationResult {

@@ -1,0 +1,147 @@
+// qs-dfi benchmark (issue 16): for each pair of ../shared/meshes and each method (the
+// skeleton-guided warp with per-part transport, the same with one global transport, the plain
+// blend), the correspondence (distance fields, skeletons, matching, harmonic fields, transport,
+// warp) and every frame at a 150^3 grid (targets: correspondence < 60 s, < 10 s per frame on a
+// 2-core machine), endpoints against the inputs (Hausdorff in voxels), the
+// topology of every frame, the middle frame's volume against the endpoints' mean (in morph space),
+// the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
+// and whether 1 and 2 threads give the same bytes.
+//
+// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
+// horse-knot, spot-eight, femur-elephant, horse-camel, cat-koala; default all)
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "qs/core/error.h"
+#include "qs/dfi/pipeline.h"
+#include "qs/io/read_mesh.h"
+#include "qs/mesh/validate.h"
+#include "qs/metro/metro.h"
+#include "qs/shapes/shapes.h"
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using namespace qs;
+
+namespace {
+
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+struct Pair {
+  std::string name, a, b;  // mesh files under ../shared/meshes, or "sphere" / "torus"
+};
+
+TriMesh load(const std::string& name) {
+  if (name == "sphere") return shapes::icosphere(4);
+  if (name == "torus") return shapes::torus(128, 48);
+  const fs::path file = fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes" / name;
+  mesh::ValidateOptions vo;
+  vo.allow_any_genus = true;
+  auto v = mesh::validate(io::read_mesh(file).mesh, vo);
+  if (!v.report.accepted) throw InvalidInput(name + ": rejected");
+  return v.mesh;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int grid = 150, frames = 11;
+  bool smoothness = false;
+  std::string methods = "warp,global,blend";
+  std::vector<std::string> wanted;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--smoothness")) smoothness = true;
+    else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
+    else wanted.push_back(argv[i]);
+  }
+  const std::vector<Pair> pairs = {{"sphere-torus", "sphere", "torus"},
+                                   {"horse-knot", "horse_5k.obj", "knot1.off"},
+                                   {"spot-eight", "spot_2k.obj", "eight.off"},
+                                   {"femur-elephant", "femur.off", "elephant_12k.obj"},
+                                   {"horse-camel", "horse_5k.obj", "camel_4k_fixed.obj"},
+                                   {"cat-koala", "cat_16k.obj", "koala_7k.obj"}};
+  std::printf("dfi benchmark: methods %s, --align similarity, grid %d, %d frames, %u hardware threads\n", methods.c_str(),
+              grid, frames, std::thread::hardware_concurrency());
+  std::printf("%-15s %-7s %9s %8s %8s %8s %9s %14s %10s %8s  %s\n", "pair", "method", "corr. s", "frame s", "max fr s",
+              "ends vox", "1 comp", "mid vol/mean", "smooth", "threads", "genus per frame");
+  for (const Pair& p : pairs) {
+    if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), p.name) == wanted.end()) continue;
+    TriMesh a, b;
+    try {
+      a = load(p.a);
+      b = load(p.b);
+    } catch (const std::exception& e) {
+      std::printf("%-15s skipped: %s\n", p.name.c_str(), e.what());
+      continue;
+    }
+    for (const std::string method : {"warp", "global", "blend"}) {
+    if (methods.find(method) == std::string::npos) continue;
+    dfi::MorphOptions opt;
+    opt.grid = grid;
+    opt.align = dfi::Align::Similarity;
+    opt.warp = method != "blend";
+    opt.part_transport = method == "warp";
+    auto t0 = Clock::now();
+    const dfi::PreparedMorph m = dfi::prepare_morph(a, b, opt);
+    const double fields_s = since(t0);
+    double total = 0, worst = 0, end_vox = 0, mid_volume = 0;
+    int one_component = 0;
+    std::string genera;
+    std::vector<TriMesh> seq;
+    for (int f = 0; f < frames; ++f) {
+      const double t = f / (frames - 1.0);
+      t0 = Clock::now();
+      const TriMesh morph_space = dfi::polygonize(dfi::blend_field(m, t));
+      TriMesh mesh = morph_space;  // what qs-dfi writes: the frame at its placement
+      for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, q);
+      const double s = since(t0);
+      total += s;
+      worst = std::max(worst, s);
+      const dfi::MeshStats st = dfi::mesh_stats(mesh);
+      one_component += st.components == 1;
+      if (f) genera += ',';
+      genera += std::to_string(st.genus);
+      if (2 * f == frames - 1) mid_volume = dfi::mesh_stats(morph_space).volume;
+      if (f == 0 || f == frames - 1) {
+        const double d = metro::metro(mesh, f == 0 ? a : b).max;
+        const double voxel = f == 0 ? m.source_sdf.spacing : m.source_sdf.spacing / m.target_to_source.scale;
+        end_vox = std::max(end_vox, d / voxel);
+      }
+      if (smoothness) seq.push_back(morph_space);
+    }
+    // Volumes in morph space: the target's is scaled to the source's by the alignment.
+    const double mean_end = 0.5 * (m.source_volume + m.target_volume * std::pow(m.target_to_source.scale, 3));
+    std::string smooth = "-";
+    if (smoothness) {
+      std::vector<double> d;
+      for (size_t f = 1; f < seq.size(); ++f) d.push_back(metro::metro(seq[f - 1], seq[f]).max);
+      std::vector<double> sorted = d;
+      std::sort(sorted.begin(), sorted.end());
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.2f", *std::max_element(d.begin(), d.end()) / sorted[sorted.size() / 2]);
+      smooth = buf;
+    }
+    // Determinism: the source field and the middle frame's field on 1 and 2 threads.
+    dfi::SdfOptions one = opt.sdf, two = opt.sdf;
+    one.threads = 1;
+    two.threads = 2;
+    const bool same = dfi::signed_distance(a, m.source_sdf, one).values == dfi::signed_distance(a, m.source_sdf, two).values &&
+                      dfi::blend_field(m, 0.5, 1).values == dfi::blend_field(m, 0.5, 2).values;
+    char mid[32];
+    std::snprintf(mid, sizeof mid, "%.3f", mid_volume / mean_end);
+    std::printf("%-15s %-7s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), method.c_str(), fields_s,
+                total / frames, worst, end_vox, one_component, frames, mid, smooth.c_str(), same ? "same" : "DIFFER",
+                genera.c_str());
+    std::fflush(stdout);
+    }
+  }
+  return 0;
+}

@@ -1,0 +1,305 @@
+#include "qs/dfi/pipeline.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "qs/core/error.h"
+#include "qs/dfi/transport.h"
+#include "qs/metro/metro.h"
+
+namespace qs::dfi {
+namespace {
+
+// Volume centroid of a closed outward mesh (signed tetrahedra about the bounding-box centre).
+Vec3 volume_centroid(const TriMesh& m, double& volume) {
+  const Box3 box = bounding_box(m.positions);
+  const Vec3 o = 0.5 * (box.min + box.max);
+  Vec3 c = Vec3::Zero();
+  double v = 0;
+  for (const Tri& t : m.faces) {
+    const Vec3 a = m.positions[t[0]] - o, b = m.positions[t[1]] - o, d = m.positions[t[2]] - o;
+    const double vol = a.dot(b.cross(d)) / 6.0;
+    v += vol;
+    c += vol * (a + b + d) / 4.0;
+  }
+  volume = v;
+  return v != 0 ? Vec3(o + c / v) : o;
+}
+
+// Principal axes of inertia (columns, ascending moments), a proper rotation.
+Eigen::Matrix3d principal_frame(const TriMesh& m, const Vec3& c) {
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  for (const Tri& t : m.faces) {
+    const Vec3 a = m.positions[t[0]] - c, b = m.positions[t[1]] - c, d = m.positions[t[2]] - c;
+    const double vol = a.dot(b.cross(d)) / 6.0;
+    const Vec3 sum = a + b + d;
+    second += vol / 20.0 * (a * a.transpose() + b * b.transpose() + d * d.transpose() + sum * sum.transpose());
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(second);
+  Eigen::Matrix3d e = eig.eigenvectors();
+  if (e.determinant() < 0) e.col(2) = -e.col(2);
+  return e;
+}
+
+// The 24 rotations that map the coordinate axes onto themselves, in a fixed order.
+std::vector<Eigen::Matrix3d> cube_rotations() {
+  std::vector<Eigen::Matrix3d> out;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& p : perms)
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+      for (int row = 0; row < 3; ++row) r(row, p[row]) = (signs >> row) & 1 ? -1.0 : 1.0;
+      if (r.determinant() > 0) out.push_back(r);
+    }
+  return out;
+}
+
+Eigen::Matrix3d best_rotation(const TriMesh& source, const Vec3& c0, const TriMesh& target, const Vec3& c1,
+                              double scale) {
+  const Eigen::Matrix3d e0 = principal_frame(source, c0), e1 = principal_frame(target, c1);
+  const metro::SurfaceDistance surface(source, "source");
+  const int stride = std::max(1, target.num_vertices() / 2000);
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d best_r = Eigen::Matrix3d::Identity();
+  for (const Eigen::Matrix3d& g : cube_rotations()) {
+    const Eigen::Matrix3d r = e0 * g * e1.transpose();
+    double sum = 0;
+    for (int v = 0; v < target.num_vertices(); v += stride)
+      sum += surface.distance(scale * (r * (target.positions[v] - c1)) + c0);
+    if (sum < best) {
+      best = sum;
+      best_r = r;
+    }
+  }
+  return best_r;
+}
+
+// Distance from p to a branch's polyline.
+double branch_distance(const Skeleton& s, const Branch& b, const Vec3& p) {
+  double best = (s.nodes[b.nodes[0]] - p).norm();
+  for (size_t k = 1; k < b.nodes.size(); ++k) {
+    const Vec3 a = s.nodes[b.nodes[k - 1]], c = s.nodes[b.nodes[k]];
+    const Vec3 ac = c - a;
+    const double l2 = ac.squaredNorm();
+    const double u = l2 > 0 ? std::clamp((p - a).dot(ac) / l2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + u * ac - p).norm());
+  }
+  return best;
+}
+
+// Part label per voxel: the matched branch pair whose branch (on this side) is nearest.
+std::vector<int> part_labels(const VoxelSet& v, const Skeleton& s, const std::vector<Branch>& branches,
+                             const std::vector<BranchPair>& pairs, bool source_side) {
+  std::vector<int> label(v.sample.size(), 0);
+  if (pairs.empty()) return label;
+  for (size_t i = 0; i < v.sample.size(); ++i) {
+    const Vec3 p = v.position(static_cast<int>(i));
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t q = 0; q < pairs.size(); ++q) {
+      const Branch& b = branches[source_side ? pairs[q].source : pairs[q].target];
+      const double d = branch_distance(s, b, p);
+      if (d < best) {
+        best = d;
+        label[i] = static_cast<int>(q);
+      }
+    }
+  }
+  return label;
+}
+
+void build_correspondence(PreparedMorph& m, const TriMesh& source, const TriMesh& moved, const MorphOptions& o,
+                          const Context& ctx) {
+  if (o.anchors_per_branch < 0 || o.emd_voxels < 50 || !(o.position_weight >= 0) || !(o.prune_fraction >= 0))
+    throw InvalidInput("correspondence options out of range: anchors_per_branch >= 0, emd_voxels >= 50, "
+                       "position_weight >= 0, prune_fraction >= 0");
+  m.warp = true;
+  ctx.report("skeletons", 0.0);
+  const double diagonal = bounding_box(source.positions).diagonal();
+  m.source_skeleton = curve_skeleton(source);
+  m.target_skeleton = curve_skeleton(moved);
+  prune_skeleton(m.source_skeleton, o.prune_fraction * diagonal);
+  prune_skeleton(m.target_skeleton, o.prune_fraction * diagonal);
+  m.source_branches = skeleton_branches(m.source_skeleton);
+  m.target_branches = skeleton_branches(m.target_skeleton);
+  ctx.report("skeletons", 1.0);
+  std::vector<NodePair> forced;
+  for (const auto& lm : o.landmarks)
+    forced.push_back({nearest_node(m.source_skeleton, lm.source),
+                      nearest_node(m.target_skeleton, m.target_to_source.apply(lm.target)), true, lm.name});
+  m.matching = match_skeletons(m.source_skeleton, m.source_branches, m.target_skeleton, m.target_branches, forced,
+                               diagonal);
+  std::vector<AnchorPair> anchors = sample_anchors(m.source_skeleton, m.source_branches, m.target_skeleton,
+                                                   m.target_branches, m.matching, o.anchors_per_branch);
+  // The coarse grid: about emd_voxels interior voxels for the larger shape.
+  const Box3 box{m.source_sdf.origin, m.source_sdf.origin + m.source_sdf.spacing * Vec3(m.source_sdf.dims[0] - 1,
+                                                                                      m.source_sdf.dims[1] - 1,
+                                                                                      m.source_sdf.dims[2] - 1)};
+  auto coarse = [&](int cells) { return grid_over(box, cells, 1); };
+  int cells = 40;
+  VoxelSet v0 = interior_voxels(m.source_sdf, coarse(cells)), v1 = interior_voxels(m.target_sdf, coarse(cells));
+  const double most = static_cast<double>(std::max(v0.sample.size(), v1.sample.size()));
+  if (most > 0) {
+    cells = std::clamp(static_cast<int>(cells * std::cbrt(o.emd_voxels / most)), 8, 200);
+    v0 = interior_voxels(m.source_sdf, coarse(cells));
+    v1 = interior_voxels(m.target_sdf, coarse(cells));
+  }
+  if (v0.sample.empty() || v1.sample.empty())
+    throw InvalidInput("a shape has no interior voxel on the correspondence grid (" + std::to_string(cells) +
+                       " cells); it is too thin for it");
+  m.emd_cells = cells;
+  m.source_voxels = static_cast<int>(v0.sample.size());
+  m.target_voxels = static_cast<int>(v1.sample.size());
+  // Anchor voxels, distinct on both sides; without any, the volume centroids.
+  if (anchors.empty()) anchors.push_back({m.target_to_source.to, m.target_to_source.to});
+  std::vector<int> a0, a1;
+  std::vector<char> taken0(v0.sample.size(), 0), taken1(v1.sample.size(), 0);
+  for (const AnchorPair& a : anchors) {
+    const int p = nearest_voxel(v0, a.source), q = nearest_voxel(v1, a.target);
+    if (taken0[p] || taken1[q]) continue;
+    taken0[p] = taken1[q] = 1;
+    a0.push_back(p);
+    a1.push_back(q);
+    m.anchors.push_back(a);
+  }
+  ctx.report("harmonic fields", 0.0);
+  const Eigen::MatrixXd h0 = harmonic_fields(v0, a0), h1 = harmonic_fields(v1, a1);
+  ctx.report("transport", 0.0);
+  const std::vector<int> l0 = part_labels(v0, m.source_skeleton, m.source_branches, m.matching.branches, true);
+  const std::vector<int> l1 = part_labels(v1, m.target_skeleton, m.target_branches, m.matching.branches, false);
+  int parts = o.part_transport ? std::max(1, static_cast<int>(m.matching.branches.size())) : 1;
+  std::vector<std::vector<int>> members0(parts), members1(parts);
+  for (size_t i = 0; i < l0.size(); ++i) members0[o.part_transport ? l0[i] : 0].push_back(static_cast<int>(i));
+  for (size_t j = 0; j < l1.size(); ++j) members1[o.part_transport ? l1[j] : 0].push_back(static_cast<int>(j));
+  // A part empty on one side hands its voxels to the largest part of that side.
+  auto largest = [](const std::vector<std::vector<int>>& mem) {
+    size_t best = 0;
+    for (size_t q = 1; q < mem.size(); ++q)
+      if (mem[q].size() > mem[best].size()) best = q;
+    return best;
+  };
+  for (int q = 0; q < parts; ++q)
+    if (members0[q].empty() != members1[q].empty()) {
+      auto& mem = members0[q].empty() ? members1 : members0;
+      auto& other = members0[q].empty() ? members0 : members1;
+      size_t dst = largest(other);
+      auto& moving = mem[q];
+      std::vector<int>& into = mem[dst];
+      into.insert(into.end(), moving.begin(), moving.end());
+      std::sort(into.begin(), into.end());
+      moving.clear();
+    }
+  std::vector<Vec3> dest0(v0.sample.size(), Vec3::Zero()), dest1(v1.sample.size(), Vec3::Zero());
+  std::vector<double> w0(v0.sample.size(), 0), w1(v1.sample.size(), 0);
+  const double threshold = 0.002 * static_cast<double>(a0.size());
+  double agree = 0;
+  m.parts = 0;
+  for (int q = 0; q < parts; ++q) {
+    const auto& s0 = members0[q];
+    const auto& s1 = members1[q];
+    if (s0.empty() || s1.empty()) continue;
+    ++m.parts;
+    Eigen::MatrixXd cost(s0.size(), s1.size());
+    for (size_t i = 0; i < s0.size(); ++i)
+      for (size_t j = 0; j < s1.size(); ++j)
+        cost(i, j) = (h0.row(s0[i]) - h1.row(s1[j])).norm() +
+                     o.position_weight * (v0.position(s0[i]) - v1.position(s1[j])).norm() / diagonal;
+    const TransportResult r = solve_transport(cost);
+    const double part_mass = static_cast<double>(s0.size()) / v0.sample.size();
+    m.transport_cost += part_mass * r.cost;
+    for (const Flow& f : r.flows) {
+      const int i = s0[f.from], j = s1[f.to];
+      dest0[i] += f.mass * v1.position(j);
+      w0[i] += f.mass;
+      dest1[j] += f.mass * v0.position(i);
+      w1[j] += f.mass;
+      if ((h0.row(i) - h1.row(j)).norm() <= threshold) agree += part_mass * f.mass;
+    }
+    ctx.report("transport", (q + 1.0) / parts);
+  }
+  m.harmonic_agreement = agree;
+  for (size_t i = 0; i < dest0.size(); ++i) dest0[i] = w0[i] > 0 ? Vec3(dest0[i] / w0[i]) : v0.position(static_cast<int>(i));
+  for (size_t j = 0; j < dest1.size(); ++j) dest1[j] = w1[j] > 0 ? Vec3(dest1[j] / w1[j]) : v1.position(static_cast<int>(j));
+  ctx.report("warp", 0.0);
+  m.source_warp = extend_displacement(v0, dest0);
+  m.target_warp = extend_displacement(v1, dest1);
+  m.source_folds = remove_folds(m.source_warp);
+  m.target_folds = remove_folds(m.target_warp);
+  if (m.source_folds.min_det <= 0 || m.target_folds.min_det <= 0)
+    throw SolverError("warp: the displacement still folds after " +
+                      std::to_string(std::max(m.source_folds.smoothing_steps, m.target_folds.smoothing_steps)) +
+                      " smoothing steps (min det " + std::to_string(std::min(m.source_folds.min_det, m.target_folds.min_det)) + ")");
+  ctx.report("warp", 1.0);
+}
+
+}  // namespace
+
+Vec3 placement(const Similarity& s, double t, const Vec3& y) {
+  const double scale = (1 - t) + t * s.scale;
+  const Eigen::Quaterniond q = Eigen::Quaterniond::Identity().slerp(t, Eigen::Quaterniond(s.rotation));
+  const Vec3 centre = (1 - t) * s.to + t * s.from;
+  return centre + q.conjugate() * (y - s.to) / scale;
+}
+
+PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options,
+                            const Context& ctx) {
+  if (options.grid < 8 || options.grid > 1024)
+    throw InvalidInput("grid is " + std::to_string(options.grid) + " cells; expected 8 to 1024");
+  if (options.pad < 2) throw InvalidInput("pad is " + std::to_string(options.pad) + " cells; expected at least 2");
+  PreparedMorph m;
+  const Vec3 c0 = volume_centroid(source, m.source_volume);
+  const Vec3 c1 = volume_centroid(target, m.target_volume);
+  if (!(m.source_volume > 0) || !(m.target_volume > 0))
+    throw InvalidInput("a shape encloses no volume (source " + std::to_string(m.source_volume) + ", target " +
+                       std::to_string(m.target_volume) + ")");
+  if (options.align == Align::Similarity) {
+    m.target_to_source.scale = std::cbrt(m.source_volume / m.target_volume);
+    m.target_to_source.from = c1;
+    m.target_to_source.to = c0;
+    m.target_to_source.rotation = best_rotation(source, c0, target, c1, m.target_to_source.scale);
+  }
+  TriMesh moved = target;
+  for (Vec3& p : moved.positions) p = m.target_to_source.apply(p);
+  Box3 box = bounding_box(source.positions);
+  const Box3 b1 = bounding_box(moved.positions);
+  box.min = box.min.cwiseMin(b1.min);
+  box.max = box.max.cwiseMax(b1.max);
+  const Grid domain = grid_over(box, options.grid, options.pad);
+  ctx.report("distance fields", 0.0);
+  m.source_sdf = signed_distance(source, domain, options.sdf, ctx.without_progress());
+  ctx.report("distance fields", 0.5);
+  m.target_sdf = signed_distance(moved, domain, options.sdf, ctx.without_progress());
+  ctx.report("distance fields", 1.0);
+  if (options.warp) build_correspondence(m, source, moved, options, ctx);
+  return m;
+}
+
+Grid blend_field(const PreparedMorph& m, double t, int threads) {
+  Grid g = m.source_sdf;
+  if (m.warp) {
+    const Grid a = warped_field(m.source_sdf, m.source_warp, t, threads);
+    const Grid b = warped_field(m.target_sdf, m.target_warp, 1 - t, threads);
+    for (size_t i = 0; i < g.values.size(); ++i)
+      g.values[i] = static_cast<float>((1 - t) * a.values[i] + t * b.values[i]);
+  } else {
+    for (size_t i = 0; i < g.values.size(); ++i)
+      g.values[i] = static_cast<float>((1 - t) * m.source_sdf.values[i] + t * m.target_sdf.values[i]);
+  }
+  const float floor = static_cast<float>(g.spacing);
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i)
+        if (i == 0 || j == 0 || k == 0 || i == g.dims[0] - 1 || j == g.dims[1] - 1 || k == g.dims[2] - 1)
+          g.values[g.index(i, j, k)] = std::max(g.values[g.index(i, j, k)], floor);
+  return g;
+}
+
+TriMesh frame_mesh(const PreparedMorph& m, const Grid& field, double t, const PolygonizeOptions& options) {
+  TriMesh mesh = polygonize(field, options);
+  for (Vec3& p : mesh.positions) p = placement(m.target_to_source, t, p);
+  return mesh;
+}
+
+}  // namespace qs::dfi

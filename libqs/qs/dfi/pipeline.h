@@ -1,0 +1,105 @@
+#pragma once
+// Distance-field interpolation (DFI) morphs between two closed shapes of any genus: the stages
+// chained (skeleton-guided DFI, ../shared/papers/skeleton-guided-dfi-metamorphosis.md).
+//
+//   prepare_morph: align the target to the source (optional similarity), one grid over both,
+//                  signed distance fields of both shapes on it.
+//   morph_frame:   the field of frame t, polygonized, mapped back along the interpolated alignment.
+//
+// With the warp (the default), prepare_morph also builds the paper's correspondence: curve
+// skeletons of both shapes, branch matching, anchors along matched branches, harmonic fields on
+// the interior voxels of a coarse grid, the transport per matched part (or globally, the
+// ablation), and from it a displacement field per shape, checked for folds. Frame t then blends
+// the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
+
+#include <string>
+#include <vector>
+
+#include "qs/core/context.h"
+#include "qs/core/mesh.h"
+#include "qs/dfi/grid.h"
+#include "qs/dfi/harmonic.h"
+#include "qs/dfi/matching.h"
+#include "qs/dfi/polygonize.h"
+#include "qs/dfi/sdf.h"
+#include "qs/dfi/skeleton.h"
+#include "qs/dfi/warp.h"
+
+namespace qs::dfi {
+
+enum class Align {
+  None,       ///< both shapes as given
+  Similarity  ///< the target moved onto the source: volume centroids, a uniform scale that equals
+              ///< the volumes, and the rotation between the principal axes of inertia (of the 24
+              ///< that map one principal frame onto the other, the one whose target vertices lie
+              ///< closest to the source surface on average); frames travel from the source's
+              ///< placement to the target's (scale, rotation and centre interpolated)
+};
+
+struct MorphOptions {
+  int grid = 150;          ///< cells along the longest side of the common bounding box
+  int pad = 3;             ///< empty cells around it
+  Align align = Align::None;
+  SdfOptions sdf;          ///< band and threads
+  PolygonizeOptions polygonize;
+  bool warp = true;              ///< the skeleton-guided warp; false: the plain blend
+  bool part_transport = true;    ///< transport per matched part (the paper); false: one global solve
+  int anchors_per_branch = 3;    ///< interior anchors sampled on each matched branch
+  double prune_fraction = 0.08;  ///< skeleton spurs shorter than this times the source's bounding-box
+                                 ///< diagonal are pruned (prune_skeleton)
+  int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
+  double position_weight = 0.1;  ///< weight of the voxel distance (per bounding-box diagonal) added to
+                                 ///< the harmonic-vector distance in the transport cost (breaks ties)
+  /// Named landmarks forcing skeleton matches: the skeleton nodes nearest to these points (source
+  /// coordinates, target coordinates) are matched first.
+  struct Landmark {
+    std::string name;
+    Vec3 source, target;
+  };
+  std::vector<Landmark> landmarks;
+};
+
+/// Target space to morph space: y = s R (x - from) + to.
+struct Similarity {
+  double scale = 1;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+  Vec3 apply(const Vec3& x) const { return scale * (rotation * (x - from)) + to; }
+};
+
+struct PreparedMorph {
+  Similarity target_to_source;  ///< identity when Align::None
+  Grid source_sdf, target_sdf;  ///< on the same samples, in morph (source) space
+  double source_volume = 0, target_volume = 0;  ///< of the input meshes, in their own units
+  // The correspondence (only with options.warp), everything in morph space.
+  bool warp = false;
+  Skeleton source_skeleton, target_skeleton;
+  std::vector<Branch> source_branches, target_branches;
+  SkeletonMatching matching;
+  std::vector<AnchorPair> anchors;     ///< the ones kept (distinct voxels on both sides)
+  int emd_cells = 0;                   ///< coarse grid cells along the longest side
+  int source_voxels = 0, target_voxels = 0, parts = 0;
+  double transport_cost = 0;           ///< sum over parts of the optimal cost (mass-weighted)
+  double harmonic_agreement = 0;       ///< fraction of source voxel mass whose partners' harmonic
+                                       ///< vectors are within 0.002 * #anchors (the paper's figure 10)
+  Displacement source_warp, target_warp;
+  FoldCheck source_folds, target_folds;
+};
+
+/// \pre both meshes closed, manifold, outward oriented, one component (qs::mesh::validate with
+/// allow_any_genus). \throws InvalidInput for options out of range.
+PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options = {},
+                            const Context& ctx = {});
+
+/// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
+/// morph has a warp. Boundary samples are kept outside (>= one spacing).
+Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
+
+/// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the
+/// source's at 0, the target's at 1, interpolated in between).
+TriMesh frame_mesh(const PreparedMorph& morph, const Grid& field, double t, const PolygonizeOptions& options = {});
+
+/// The similarity's inverse interpolated at t (identity at 0): morph space -> output space.
+Vec3 placement(const Similarity& s, double t, const Vec3& y);
+
+}  // namespace qs::dfi
