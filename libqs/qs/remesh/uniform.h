@@ -36,8 +36,24 @@ namespace qs::remesh {
 /// vertex and face counts to 2^31 - 1). At least kMaxAdaptiveLevel.
 inline constexpr int kMaxUniformLevel = 12;
 
+/// How each grid cell is cut into two triangles.
+enum class DiagonalRule {
+  /// The fixed symmetric pattern above: the connectivity depends on the patch list and the level
+  /// only.
+  Pattern,
+  /// Per cell, the diagonal whose two triangles have the larger smallest angle, taking the worst
+  /// mesh of the set (the max-min angle choice, like a Delaunay flip), so that one choice serves
+  /// every mesh and the set still shares one face list. Ties keep the pattern's diagonal. The four
+  /// corner cells of every patch keep the pattern's diagonal (through the patch corner: a
+  /// valence-2 base vertex is never isolated); every other cell touches at most one patch side, so
+  /// its diagonal is an edge of no other cell. The connectivity then depends on the geometry too
+  /// (identical for the meshes of one set, not across separately remeshed sets).
+  BestAngle,
+};
+
 struct UniformOptions {
   bool quads = false;  ///< also fill SemiRegularConnectivity::quads with the grid cells
+  DiagonalRule diagonals = DiagonalRule::Pattern;  ///< how cells are cut (quads are not affected)
 };
 
 /// Vertex numbering of the uniform level-n grid of a base topology (semi_regular.h's order),
