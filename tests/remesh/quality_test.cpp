@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "qs/core/error.h"
+#include "qs/remesh/base_topology.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 #include "remesh_checks.h"
@@ -187,4 +188,47 @@ TEST(DensitySpread, RemeshOfASphereIsFairlyEven) {
   EXPECT_LT(c.spread, 8);
   // Vertex density ~ cells per unit area (a cell is two faces, one vertex).
   EXPECT_NEAR(v.p50 / c.p50, 1.0, 0.3);
+}
+
+TEST(BestAngleDiagonals, ClosedManifoldNeverWorseAndOneFaceListForASet) {
+  using qs::remesh::DiagonalRule;
+  qs::remesh::UniformOptions best;
+  best.diagonals = DiagonalRule::BestAngle;
+  // Two seed patches (base vertices of valence 2) and a star blob's many patches (valence 3-5).
+  for (const auto* d : {&qs::remesh_test::sphere_dissection(), &qs::remesh_test::star_dissection()}) {
+    for (int level = 0; level <= 4; ++level) {
+      SCOPED_TRACE("level " + std::to_string(level) + ", " + std::to_string(d->chart.patches.size()) + " patches");
+      const auto pattern = qs::remesh::remesh_uniform(d->chart, level);
+      const auto chosen = qs::remesh::remesh_uniform(d->chart, level, best);
+      EXPECT_EQ(chosen.positions, pattern.positions);
+      EXPECT_EQ(chosen.connectivity.vertex_uv, pattern.connectivity.vertex_uv);
+      ASSERT_EQ(chosen.connectivity.faces.size(), pattern.connectivity.faces.size());
+      EXPECT_EQ(qs::remesh_test::expect_closed_manifold(chosen.connectivity.faces, chosen.connectivity.num_vertices()),
+                2);
+      // Per cell (faces 2k, 2k+1): the worst smallest angle never drops.
+      const auto ap = qs::remesh::smallest_angle_stats(pattern.mesh());
+      const auto ac = qs::remesh::smallest_angle_stats(chosen.mesh());
+      EXPECT_GE(ac.median, ap.median - 1e-9);
+      EXPECT_LE(ac.under_20, ap.under_20 + 1e-12);
+      const auto& pf = pattern.connectivity.faces;
+      const auto& cf = chosen.connectivity.faces;
+      auto worst = [](const qs::TriMesh& m, size_t k) {
+        qs::TriMesh cell{m.positions, {m.faces[k], m.faces[k + 1]}};
+        return qs::remesh::smallest_angle_stats(cell).min;
+      };
+      const qs::TriMesh mp = pattern.mesh(), mc = chosen.mesh();
+      for (size_t k = 0; k + 1 < pf.size(); k += 2)
+        if (pf[k] != cf[k]) EXPECT_GT(worst(mc, k), worst(mp, k) - 1e-9) << "cell " << k / 2;
+    }
+  }
+  // A set: one decision per cell for all meshes, so they share the face list.
+  const auto sphere = qs::shapes::icosphere(3);
+  const auto ellipsoid = qs::shapes::ellipsoid(1.8, 1, 0.6, 3);
+  const auto seeds = qs::remesh_test::equator_seeds(sphere);
+  qs::dissect::DissectOptions o;
+  o.max_patch_area = 0.2;
+  const auto set = qs::dissect::dissect_set({{&sphere, seeds, {}, "s"}, {&ellipsoid, seeds, {}, "e"}}, o);
+  const auto r = qs::remesh::remesh_uniform({set.meshes[0].chart, set.meshes[1].chart}, 3, best);
+  EXPECT_EQ(qs::remesh_test::expect_closed_manifold(r.connectivity.faces, r.connectivity.num_vertices()), 2);
+  for (int m = 0; m < 2; ++m) qs::remesh_test::expect_valid_sphere(r.mesh(m), "set mesh " + std::to_string(m));
 }

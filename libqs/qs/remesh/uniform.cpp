@@ -147,13 +147,26 @@ double sin_smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 /// DiagonalRule::BestAngle: re-cuts the cells of a uniform connectivity (faces 2k, 2k+1 are cell
 /// k, patch by patch, row by row, as uniform_connectivity emits them).
-void choose_best_angle_diagonals(SemiRegularConnectivity& c, const std::vector<std::vector<Vec3>>& positions) {
+void choose_best_angle_diagonals(const BaseTopology& topology, SemiRegularConnectivity& c,
+                                 const std::vector<std::vector<Vec3>>& positions) {
   const int n = 1 << c.level;
-  if (c.level < 2) return;  // every cell is a corner cell
+  if (c.level < 1) return;
   for (int p = 0; p < c.num_patches; ++p)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        if ((i == 0 || i == n - 1) && (j == 0 || j == n - 1)) continue;
+        if ((i == 0 || i == n - 1) && (j == 0 || j == n - 1)) {
+          // A corner cell: its other diagonal joins the two side samples next to the patch
+          // corner, which another patch joins too only when the corner has valence 2 (the two
+          // patches share both sides). Keep the pattern's diagonal there.
+          const int k = j == 0 ? (i == 0 ? 0 : 1) : (i == 0 ? 3 : 2);
+          if (n == 1 || topology.valence[topology.quads[p][k]] < 3) continue;
+          if (n == 2) {
+            // Level 1: every cell touches two corners' sides; require all four corners free.
+            bool free = true;
+            for (int q = 0; q < 4; ++q) free = free && topology.valence[topology.quads[p][q]] >= 3;
+            if (!free) continue;
+          }
+        }
         const size_t k = (static_cast<size_t>(p) * n + j) * n + i;
         Tri& f0 = c.faces[2 * k];
         Tri& f1 = c.faces[2 * k + 1];
@@ -185,7 +198,7 @@ SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const Uniform
   out.positions = uniform_positions(sampler, out.connectivity, context);
   if (options.diagonals == DiagonalRule::BestAngle) {
     std::vector<std::vector<Vec3>> one{std::move(out.positions)};
-    choose_best_angle_diagonals(out.connectivity, one);
+    choose_best_angle_diagonals(sampler.topology(), out.connectivity, one);
     out.positions = std::move(one[0]);
   }
   return out;
@@ -225,7 +238,8 @@ SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, 
     context.report("remesh", static_cast<double>(m) / samplers.size());
     out.positions.push_back(uniform_positions(samplers[m], out.connectivity, context));
   }
-  if (options.diagonals == DiagonalRule::BestAngle) choose_best_angle_diagonals(out.connectivity, out.positions);
+  if (options.diagonals == DiagonalRule::BestAngle)
+    choose_best_angle_diagonals(samplers[0].topology(), out.connectivity, out.positions);
   context.report("remesh", 1.0);
   return out;
 }

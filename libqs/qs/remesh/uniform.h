@@ -43,11 +43,13 @@ enum class DiagonalRule {
   Pattern,
   /// Per cell, the diagonal whose two triangles have the larger smallest angle, taking the worst
   /// mesh of the set (the max-min angle choice, like a Delaunay flip), so that one choice serves
-  /// every mesh and the set still shares one face list. Ties keep the pattern's diagonal. The four
-  /// corner cells of every patch keep the pattern's diagonal (through the patch corner: a
-  /// valence-2 base vertex is never isolated); every other cell touches at most one patch side, so
-  /// its diagonal is an edge of no other cell. The connectivity then depends on the geometry too
-  /// (identical for the meshes of one set, not across separately remeshed sets).
+  /// every mesh and the set still shares one face list. Ties keep the pattern's diagonal. A corner
+  /// cell of a patch whose corner is a base vertex of valence 2 keeps the pattern's diagonal
+  /// (through the corner, which is then never isolated); at a corner of valence >= 3 the other
+  /// diagonal joins two side samples that no other patch joins, and a cell that is no corner cell
+  /// touches at most one patch side, so a chosen diagonal is an edge of no other cell. The
+  /// connectivity then depends on the geometry too (identical for the meshes of one set, not
+  /// across separately remeshed sets).
   BestAngle,
 };
 
