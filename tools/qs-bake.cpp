@@ -27,6 +27,7 @@
 #include "qs/dissect/dissection_json.h"
 #include "qs/gltf/glb.h"
 #include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/quality.h"
 #include "qs/remesh/remesh_io.h"
 #include "tool_main.h"
 
@@ -184,9 +185,15 @@ int main(int argc, char** argv) {
                                   {"glb_vertices", r.mesh.num_vertices()},
                                   {"glb_faces", r.mesh.num_faces()},
                                   {"glb_normal_texture", opt.space == qs::bake::NormalSpace::Tangent}};
+      // Texels per unit of surface area: (S-1)^2 per unit square of each patch, carried onto the
+      // surface by the chart's maps; area-weighted 5th-95th percentiles.
+      const qs::remesh::DensitySpread td = qs::remesh::chart_density(ds.meshes[i].dissection.chart, size - 1);
+      j["texel_density"] = {{"p5", td.p5}, {"p50", td.p50}, {"p95", td.p95}, {"spread", td.spread}};
       std::ostringstream line;
       line << std::fixed << std::setprecision(3) << "  " << stem << ": bake " << bs << " s, GLB " << r.mesh.num_vertices()
            << " vertices (" << c.num_vertices() << " before the per-patch split)";
+      line << std::setprecision(3) << std::defaultfloat << "; texels per unit area, 5th-95th percentile: " << td.p5
+           << " .. " << td.p95 << " (spread " << td.spread << "x)" << std::fixed;
       if (samples > 0) {
         qs::bake::ShadingCheckOptions co;
         co.samples = samples;

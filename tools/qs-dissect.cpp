@@ -86,8 +86,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 50));
   app.add_option("--max-area", opt.max_patch_area,
-                 "Also split every patch larger than this fraction of its mesh's area (0: off; evens out remesh "
-                 "sampling, e.g. 0.08)")
+                 "Also split every patch larger than this fraction of its mesh's area (0: off, fewer patches; "
+                 "evens out remesh sampling)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--split-stretch", opt.split_stretch_rounds,

@@ -17,6 +17,7 @@
 #include "qs/io/write_mesh.h"
 #include "qs/metro/metro.h"
 #include "qs/remesh/adaptive.h"
+#include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 #include "tool_main.h"
 
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
   int level = -1;
   double eps = 0;
   bool quads = false, quiet = false, no_metro = false;
+  long metro_samples = 20000;
   qs::remesh::AdaptiveOptions aopt;
   app.add_option("dissection", folder, "A qs-dissect output folder (dissection.json + charts)")->required();
   auto* lvl = app.add_option("--level", level, "Uniform level n: (2^n+1)^2 samples per patch")
@@ -65,7 +67,18 @@ int main(int argc, char** argv) {
   app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));
   app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
   app.add_flag("--quads", quads, "Uniform: write the grid cells as quads (OBJ only)");
+  std::string diagonals = "angle";
+  app.add_option("--diagonals", diagonals,
+                 "Uniform: cut each grid cell along the diagonal with the larger smallest angle over the set (angle) "
+                 "or by the fixed symmetric pattern (pattern: the face list depends on the patches and level only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"angle", "pattern"}));
   app.add_flag("--no-metro", no_metro, "Skip the error measurement against the originals");
+  app.add_option("--metro-samples", metro_samples,
+                 "Error measurement: surface samples per direction (0: qs-metro's full count, max(100000, 2 x the "
+                 "larger face count))")
+      ->capture_default_str()
+      ->check(CLI::Range(0L, 1000000000L));
   app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/remesh-L<n> or remesh-adaptive)");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
@@ -83,6 +96,7 @@ int main(int argc, char** argv) {
     if (level >= 0) {
       qs::remesh::UniformOptions uo;
       uo.quads = quads;
+      uo.diagonals = diagonals == "angle" ? qs::remesh::DiagonalRule::BestAngle : qs::remesh::DiagonalRule::Pattern;
       set = qs::remesh::remesh_uniform(charts, level, uo, ctx);
     } else {
       aopt.epsilon = eps;
@@ -108,7 +122,7 @@ int main(int argc, char** argv) {
          << ": " << c.num_vertices() << " vertices, " << c.num_faces() << " faces, " << c.num_patches
          << " patches, the same for all " << in.meshes.size() << " meshes\n";
     nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
-    double metro_seconds = 0;
+    double metro_seconds = 0, quality_seconds = 0;
     for (size_t i = 0; i < in.meshes.size(); ++i) {
       const auto& dm = in.meshes[i];
       const std::string out_name = stem_of_chart(dm.chart_file) + "." + format;
@@ -121,7 +135,10 @@ int main(int argc, char** argv) {
         const auto tm = Clock::now();
         // A = the original (the chart: the input's surface with cut vertices added), B = the remesh;
         // percentages of A's bounding-box diagonal.
-        const qs::metro::MetroResult r = qs::metro::metro(dm.dissection.chart.mesh, mesh);
+        qs::metro::MetroOptions mo;
+        if (metro_samples > 0) mo.face_samples = metro_samples;
+        mo.sample_vertices_b = false;  // the remesh's vertices are points of the chart: distance 0
+        const qs::metro::MetroResult r = qs::metro::metro(dm.dissection.chart.mesh, mesh, mo);
         metro_seconds += std::chrono::duration<double>(Clock::now() - tm).count();
         const double diag = r.diagonal;
         auto pct = [&](double x) { return 100.0 * x / diag; };
@@ -131,10 +148,29 @@ int main(int argc, char** argv) {
                       {"rms_percent", pct(r.rms)},
                       {"max_percent", pct(r.max)},
                       {"original_to_remesh_mean_percent", pct(r.a_to_b.mean)},
-                      {"remesh_to_original_mean_percent", pct(r.b_to_a.mean)}};
+                      {"remesh_to_original_mean_percent", pct(r.b_to_a.mean)},
+                      {"samples_per_direction", r.a_to_b.samples}};
         text << ": error mean " << pct(r.mean) << "%, rms " << pct(r.rms) << "%, max " << pct(r.max)
-             << "% of the original's diagonal";
+             << "% of the original's diagonal (" << r.a_to_b.samples << " samples per direction)";
       }
+      const auto tq = Clock::now();
+      const qs::remesh::AngleStats angles = qs::remesh::smallest_angle_stats(mesh);
+      const qs::remesh::DensitySpread density = qs::remesh::vertex_density(mesh);
+      quality_seconds += std::chrono::duration<double>(Clock::now() - tq).count();
+      j["angles"] = {{"faces", angles.faces},
+                     {"under_5_deg", angles.under_5},
+                     {"under_10_deg", angles.under_10},
+                     {"under_20_deg", angles.under_20},
+                     {"median_deg", angles.median},
+                     {"min_deg", angles.min}};
+      j["vertex_density"] = {{"p5", density.p5},
+                             {"p50", density.p50},
+                             {"p95", density.p95},
+                             {"spread", density.spread}};  // null when infinite (p5 = 0)
+      text << "\n    triangles: smallest angle median " << angles.median << " deg, min " << angles.min
+           << " deg; under 5 / 10 / 20 deg: " << 100 * angles.under_5 << "% / " << 100 * angles.under_10 << "% / "
+           << 100 * angles.under_20 << "%\n    vertices per unit area, 5th-95th percentile over the surface: "
+           << density.p5 << " .. " << density.p95 << " (spread " << density.spread << "x)";
       text << "\n";
       meshes.push_back(j);
     }
@@ -154,6 +190,7 @@ int main(int argc, char** argv) {
                                   {"mode", level >= 0 ? "uniform" : "adaptive"},
                                   {"level", c.level},
                                   {"quads", quads},
+                                  {"diagonals", level >= 0 ? diagonals : std::string("templates")},
                                   {"vertices", c.num_vertices()},
                                   {"faces", c.num_faces()},
                                   {"base_vertices", c.num_base_vertices},
@@ -169,7 +206,8 @@ int main(int argc, char** argv) {
       std::cout << text.str() << "  wrote " << in.meshes.size() << " meshes and remesh.json to " << outdir << "\n"
                 << std::fixed << std::setprecision(3) << "  time: load " << std::chrono::duration<double>(t1 - t0).count()
                 << " s, remesh " << std::chrono::duration<double>(t2 - t1).count() << " s, metro " << metro_seconds
-                << " s, write " << std::chrono::duration<double>(t3 - t2).count() - metro_seconds << " s\n";
+                << " s, quality " << quality_seconds << " s, write "
+                << std::chrono::duration<double>(t3 - t2).count() - metro_seconds - quality_seconds << " s\n";
     }
     return 0;
   });

@@ -42,6 +42,8 @@ Fixture make(const qs::TriMesh& mesh, double tau, int level, int max_depth = 6) 
   qs::dissect::DissectOptions o;
   o.tau = tau;
   o.max_depth = max_depth;
+  o.max_patch_area = 0;      // patches by stretch alone, mean-value maps: the fixtures' designs
+  o.stretch_iterations = 0;
   f.input_vertices = mesh.num_vertices();
   f.dissection = qs::dissect::dissect(mesh, std::nullopt, o);
   f.remesh = qs::remesh::remesh_uniform(f.dissection.chart, level);

@@ -90,6 +90,7 @@ TEST(DissectSet, DeformedPairGetsOneBaseDomainAndAlignedFeatures) {
   MeshToDissect mb{&b, ma.seeds, features_at(b, dirs), "b"};
   qs::dissect::DissectOptions o;
   o.tau = 1.1;  // forces splits
+  o.max_patch_area = 0;  // by stretch alone
   const DissectionSet s = qs::dissect::dissect_set({ma, mb}, o);
   EXPECT_GT(s.meshes[0].chart.patches.size(), 2u);
   expect_common_structure(s, {a.num_faces(), b.num_faces()});
@@ -126,6 +127,7 @@ TEST(DissectSet, UnionTreeHoldsEverySplitOfTheMeshThatNeedsThem) {
   const auto star = qs::shapes::star_blob(4, 1.5, 4);
   qs::dissect::DissectOptions o;
   o.tau = 1.6;
+  o.max_patch_area = 0;  // by stretch alone
   const auto seeds_smooth = equator_seeds(smooth), seeds_star = equator_seeds(star);
   const auto alone = qs::dissect::dissect(star, seeds_star, o);
   const auto alone_smooth = qs::dissect::dissect(smooth, seeds_smooth, o);

@@ -26,10 +26,13 @@ using ::testing::HasSubstr;
 using qs::testing::check_dissection;
 
 TEST(Dissect, SmoothShapeNeedsOnlyTheSeedPatches) {
+  // The stretch rule alone (no area cap, which is on by default).
   const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
-  const auto d = qs::dissect::dissect(m, std::nullopt);
+  qs::dissect::DissectOptions o;
+  o.max_patch_area = 0;
+  const auto d = qs::dissect::dissect(m, std::nullopt, o);
   EXPECT_EQ(d.chart.patches.size(), 2u);
-  EXPECT_LE(d.max_stretch, qs::dissect::DissectOptions().tau);
+  EXPECT_LE(d.max_stretch, o.tau);
   check_dissection(d, m.num_faces());
 }
 
@@ -178,7 +181,9 @@ TEST(CutMesh, SplitsKeepTheHalfEdgeStructureConsistent) {
 TEST(DissectionFolder, ReadsBackWhatWasWrittenIncludingAnInfiniteStretch) {
   const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
   qs::dissect::DissectedMesh dm;
-  dm.dissection = qs::dissect::dissect(m, std::nullopt);
+  qs::dissect::DissectOptions two_patches;
+  two_patches.max_patch_area = 0;
+  dm.dissection = qs::dissect::dissect(m, std::nullopt, two_patches);
   dm.dissection.chart.patches[1].stretch = std::numeric_limits<double>::infinity();  // a folded leaf
   dm.file = "e.obj";
   dm.chart_file = "e.chart.ply";
@@ -239,6 +244,7 @@ TEST(Dissect, StretchMinimizedLeavesKeepEveryInvariantAndLowerStretch) {
   const auto m = qs::shapes::star_blob(4, 1.5, 4);
   qs::dissect::DissectOptions o;
   o.tau = 1.4;
+  o.stretch_iterations = 0;
   const auto plain = qs::dissect::dissect(m, std::nullopt, o);
   o.stretch_iterations = 6;
   const auto d = qs::dissect::dissect(m, std::nullopt, o);

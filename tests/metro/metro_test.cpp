@@ -185,6 +185,17 @@ TEST(Metro, SampleCountsAndIgnoredVertices) {
   r = metro(a, b, o);
   EXPECT_EQ(r.a_to_b.vertex_samples, 0);
   EXPECT_EQ(r.b_to_a.vertex_samples, 0);
+  // B's vertices alone can be left out (a remesh's lie on the original); the surface samples and
+  // so the mean and RMS do not change.
+  o.sample_vertices = true;
+  const MetroResult all = metro(a, b, o);
+  o.sample_vertices_b = false;
+  r = metro(a, b, o);
+  EXPECT_EQ(r.a_to_b.vertex_samples, 162);
+  EXPECT_EQ(r.b_to_a.vertex_samples, 0);
+  EXPECT_EQ(r.mean, all.mean);
+  EXPECT_EQ(r.rms, all.rms);
+  EXPECT_LE(r.max, all.max);
 }
 
 TEST(Metro, SurfaceDistanceMatchesBruteForce) {

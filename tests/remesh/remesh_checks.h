@@ -106,7 +106,9 @@ inline std::array<int, 4> equator_seeds(const qs::TriMesh& m) {
 inline const qs::dissect::Dissection& sphere_dissection() {
   static const auto d = [] {
     const auto m = qs::shapes::icosphere(4);
-    return qs::dissect::dissect(m, equator_seeds(m));
+    qs::dissect::DissectOptions o;
+    o.max_patch_area = 0;  // the two seed patches (no area cap)
+    return qs::dissect::dissect(m, equator_seeds(m), o);
   }();
   return d;
 }

@@ -321,7 +321,9 @@ TEST(UniformRemesh, SphereAndEllipsoidWithTheSameSeedsShareTheirConnectivity) {
   const auto sphere = qs::shapes::icosphere(3);
   const auto ellipsoid = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
   const auto seeds = equator_seeds(sphere);
-  const auto a = qs::dissect::dissect(sphere, seeds), b = qs::dissect::dissect(ellipsoid, seeds);
+  qs::dissect::DissectOptions o;
+  o.max_patch_area = 0;  // the two seed patches (no area cap)
+  const auto a = qs::dissect::dissect(sphere, seeds, o), b = qs::dissect::dissect(ellipsoid, seeds, o);
   ASSERT_EQ(a.chart.patches.size(), 2u);
   ASSERT_EQ(b.chart.patches.size(), 2u);
   for (int level = 0; level <= 4; ++level) {

@@ -606,7 +606,7 @@ MetroResult metro(const TriMesh& a, const TriMesh& b, const MetroOptions& option
   MetroResult res;
   const std::uint64_t seed = splitmix64(options.seed);
   res.a_to_b = measure(sa, tree_b, n, options.sample_vertices, splitmix64(seed ^ 0xA), threads, ctx, "metro A -> B");
-  res.b_to_a = measure(sb, tree_a, n, options.sample_vertices, splitmix64(seed ^ 0xB), threads, ctx, "metro B -> A");
+  res.b_to_a = measure(sb, tree_a, n, options.sample_vertices && options.sample_vertices_b, splitmix64(seed ^ 0xB), threads, ctx, "metro B -> A");
   res.max = std::max(res.a_to_b.max, res.b_to_a.max);
   res.mean = 0.5 * (res.a_to_b.mean + res.b_to_a.mean);
   res.rms = std::sqrt(0.5 * (res.a_to_b.rms * res.a_to_b.rms + res.b_to_a.rms * res.b_to_a.rms));

@@ -36,6 +36,10 @@ struct MetroOptions {
   double samples_per_face = 2.0;  ///< for the automatic count. \pre finite and >= 0
   long min_samples = 100000;      ///< for the automatic count. \pre >= 1
   bool sample_vertices = true;    ///< also measure at every used vertex (maximum only)
+  /// With sample_vertices: B's vertices too. Turn off when they lie on A's surface by
+  /// construction (a remesh sampled on A: their distances are 0 up to rounding), which saves
+  /// one query per vertex of B; B -> A then reports vertex_samples = 0.
+  bool sample_vertices_b = true;
   std::uint64_t seed = 1;         ///< same seed, same samples, same numbers
   /// Worker threads; 0 = std::thread::hardware_concurrency(). Does not change the results.
   int threads = 0;

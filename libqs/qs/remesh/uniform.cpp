@@ -1,6 +1,8 @@
 #include "qs/remesh/uniform.h"
 
+#include <algorithm>
 #include <climits>
+#include <cmath>
 #include <string>
 
 #include "qs/core/error.h"
@@ -129,6 +131,63 @@ std::vector<Vec3> uniform_positions(const ChartSampler& sampler, const SemiRegul
   return positions;
 }
 
+/// sin of the smallest angle of triangle (a, b, c): the angle opposite the shortest edge (at most
+/// 60 degrees, where sin is increasing). 0 for a degenerate triangle.
+double sin_smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, bc = c - b, ca = a - c;
+  const double lab = ab.squaredNorm(), lbc = bc.squaredNorm(), lca = ca.squaredNorm();
+  const double twice_area = ab.cross(ca).norm();
+  // The smallest angle is at the vertex opposite the shortest edge; its sides are the other two.
+  double denom2;
+  if (lab <= lbc && lab <= lca) denom2 = lbc * lca;       // opposite ab: at c
+  else if (lbc <= lca) denom2 = lab * lca;                // opposite bc: at a
+  else denom2 = lab * lbc;                                // opposite ca: at b
+  return denom2 > 0 ? twice_area / std::sqrt(denom2) : 0.0;
+}
+
+/// DiagonalRule::BestAngle: re-cuts the cells of a uniform connectivity (faces 2k, 2k+1 are cell
+/// k, patch by patch, row by row, as uniform_connectivity emits them).
+void choose_best_angle_diagonals(const BaseTopology& topology, SemiRegularConnectivity& c,
+                                 const std::vector<std::vector<Vec3>>& positions) {
+  const int n = 1 << c.level;
+  if (c.level < 1) return;
+  for (int p = 0; p < c.num_patches; ++p)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        if ((i == 0 || i == n - 1) && (j == 0 || j == n - 1)) {
+          // A corner cell: its other diagonal joins the two side samples next to the patch
+          // corner, which another patch joins too only when the corner has valence 2 (the two
+          // patches share both sides). Keep the pattern's diagonal there.
+          const int k = j == 0 ? (i == 0 ? 0 : 1) : (i == 0 ? 3 : 2);
+          if (n == 1 || topology.valence[topology.quads[p][k]] < 3) continue;
+          if (n == 2) {
+            // Level 1: every cell touches two corners' sides; require all four corners free.
+            bool free = true;
+            for (int q = 0; q < 4; ++q) free = free && topology.valence[topology.quads[p][q]] >= 3;
+            if (!free) continue;
+          }
+        }
+        const size_t k = (static_cast<size_t>(p) * n + j) * n + i;
+        Tri& f0 = c.faces[2 * k];
+        Tri& f1 = c.faces[2 * k + 1];
+        const bool diag02 = (2 * i < n) == (2 * j < n);
+        // Recover the cell's corners from the pattern's two faces.
+        const int v00 = f0[0], v10 = f0[1];
+        const int v11 = diag02 ? f0[2] : f1[1], v01 = diag02 ? f1[2] : f0[2];
+        double keep = 1e300, other = 1e300;
+        for (const auto& x : positions) {
+          const Vec3 &a = x[v00], &b = x[v10], &cc = x[v11], &d = x[v01];
+          const double q02 = std::min(sin_smallest_angle(a, b, cc), sin_smallest_angle(a, cc, d));
+          const double q13 = std::min(sin_smallest_angle(a, b, d), sin_smallest_angle(b, cc, d));
+          keep = std::min(keep, diag02 ? q02 : q13);
+          other = std::min(other, diag02 ? q13 : q02);
+        }
+        if (!(other > keep)) continue;
+        if (diag02) f0 = {v00, v10, v01}, f1 = {v10, v11, v01};
+        else f0 = {v00, v10, v11}, f1 = {v00, v11, v01};
+      }
+}
+
 }  // namespace
 
 SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const UniformOptions& options,
@@ -137,6 +196,11 @@ SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const Uniform
   SemiRegular out;
   out.connectivity = uniform_connectivity(sampler.topology(), level, options);
   out.positions = uniform_positions(sampler, out.connectivity, context);
+  if (options.diagonals == DiagonalRule::BestAngle) {
+    std::vector<std::vector<Vec3>> one{std::move(out.positions)};
+    choose_best_angle_diagonals(sampler.topology(), out.connectivity, one);
+    out.positions = std::move(one[0]);
+  }
   return out;
 }
 
@@ -174,6 +238,8 @@ SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, 
     context.report("remesh", static_cast<double>(m) / samplers.size());
     out.positions.push_back(uniform_positions(samplers[m], out.connectivity, context));
   }
+  if (options.diagonals == DiagonalRule::BestAngle)
+    choose_best_angle_diagonals(samplers[0].topology(), out.connectivity, out.positions);
   context.report("remesh", 1.0);
   return out;
 }

@@ -36,8 +36,26 @@ namespace qs::remesh {
 /// vertex and face counts to 2^31 - 1). At least kMaxAdaptiveLevel.
 inline constexpr int kMaxUniformLevel = 12;
 
+/// How each grid cell is cut into two triangles.
+enum class DiagonalRule {
+  /// The fixed symmetric pattern above: the connectivity depends on the patch list and the level
+  /// only.
+  Pattern,
+  /// Per cell, the diagonal whose two triangles have the larger smallest angle, taking the worst
+  /// mesh of the set (the max-min angle choice, like a Delaunay flip), so that one choice serves
+  /// every mesh and the set still shares one face list. Ties keep the pattern's diagonal. A corner
+  /// cell of a patch whose corner is a base vertex of valence 2 keeps the pattern's diagonal
+  /// (through the corner, which is then never isolated); at a corner of valence >= 3 the other
+  /// diagonal joins two side samples that no other patch joins, and a cell that is no corner cell
+  /// touches at most one patch side, so a chosen diagonal is an edge of no other cell. The
+  /// connectivity then depends on the geometry too (identical for the meshes of one set, not
+  /// across separately remeshed sets).
+  BestAngle,
+};
+
 struct UniformOptions {
   bool quads = false;  ///< also fill SemiRegularConnectivity::quads with the grid cells
+  DiagonalRule diagonals = DiagonalRule::Pattern;  ///< how cells are cut (quads are not affected)
 };
 
 /// Vertex numbering of the uniform level-n grid of a base topology (semi_regular.h's order),

@@ -1,0 +1,166 @@
+// Benchmark that chose the default dissection options (issue 13): for every closed genus-0 mesh of
+// a folder and every candidate option set, the patches, the dissection time, the level-5 uniform
+// remesh's mean error (Metro two-sided, % of the original's bounding-box diagonal, 20000 samples
+// per direction as qs-remesh measures it), the level-4 remesh's smallest-angle shares and median,
+// the level-5 remesh's vertex-density spread (p95 / p5 over the surface) and the texel-density
+// spread of a normal-map atlas (chart density, p95 / p5).
+//   usage: qs-bench-defaults [MESH_DIR] [CANDIDATES] [MESH_FILTER]
+//   MESH_DIR default ../shared/meshes; CANDIDATES a comma-separated list of candidate names (default
+//   all; "default" is DissectOptions{} as compiled); MESH_FILTER a substring of the file names.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "qs/core/error.h"
+#include "qs/dissect/dissection.h"
+#include "qs/io/read_mesh.h"
+#include "qs/mesh/validate.h"
+#include "qs/metro/metro.h"
+#include "qs/remesh/quality.h"
+#include "qs/remesh/uniform.h"
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+struct Candidate {
+  std::string name;
+  qs::dissect::DissectOptions options;
+};
+
+qs::dissect::DissectOptions make(double tau, double max_area, int stretch_iterations, int split_stretch) {
+  qs::dissect::DissectOptions o;
+  o.tau = tau;
+  o.max_patch_area = max_area;
+  o.stretch_iterations = stretch_iterations;
+  o.split_stretch_rounds = split_stretch;
+  return o;
+}
+
+std::vector<Candidate> candidates() {
+  return {
+      {"default", qs::dissect::DissectOptions{}},
+      {"old", make(3, 0, 0, 0)},             // the defaults before issue 13
+      {"recipe", make(3, 0.15, 0, 0)},       // the README's remeshing recipe before issue 13
+      {"a15s10", make(3, 0.15, 10, 0)},
+      {"a10s10", make(3, 0.10, 10, 0)},
+      {"a15s10x3", make(3, 0.15, 10, 3)},
+      {"t2a15s10", make(2, 0.15, 10, 0)},
+      {"t2.5a10s10", make(2.5, 0.10, 10, 0)},
+  };
+}
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string x; std::getline(in, x, ',');)
+    if (!x.empty()) out.push_back(x);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const fs::path dir = argc > 1 ? argv[1] : QS_SOURCE_DIR "/../shared/meshes";
+  const std::vector<std::string> wanted = argc > 2 ? split_list(argv[2]) : std::vector<std::string>{};
+  const std::string filter = argc > 3 ? argv[3] : "";
+  if (!fs::is_directory(dir)) {
+    std::fprintf(stderr, "qs-bench-defaults: %s is not a folder of meshes\n", dir.string().c_str());
+    return 3;
+  }
+  std::vector<Candidate> cands;
+  for (const auto& c : candidates())
+    if (wanted.empty() || std::find(wanted.begin(), wanted.end(), c.name) != wanted.end()) cands.push_back(c);
+  if (cands.empty()) {
+    std::fprintf(stderr, "qs-bench-defaults: no candidate named in %s; known:", argv[2]);
+    for (const auto& c : candidates()) std::fprintf(stderr, " %s", c.name.c_str());
+    std::fprintf(stderr, "\n");
+    return 1;
+  }
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string ext = e.path().extension().string();
+    if ((ext == ".obj" || ext == ".off" || ext == ".ply") &&
+        e.path().filename().string().find(filter) != std::string::npos)
+      files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::printf("candidates (tau, max patch area, leaf stretch rounds, split-stretch rounds):\n");
+  for (const auto& c : cands)
+    std::printf("  %-12s tau %.2f, max-area %.3g, optimize-stretch %d, split-stretch %d\n", c.name.c_str(),
+                c.options.tau, c.options.max_patch_area, c.options.stretch_iterations, c.options.split_stretch_rounds);
+  std::printf("\nerr5 = level-5 mean error (%% of diagonal); <5/<10/<20 = %% of level-4 faces with a smallest angle "
+              "under 5/10/20 deg, med = median (deg); vsp = level-5 vertex-density spread p95/p5; tsp = texel-density "
+              "spread p95/p5; time = dissection s\n\n");
+  std::printf("%-22s %-12s %6s %8s %6s %6s %6s %6s %7s %7s %7s\n", "mesh", "candidate", "patch", "err5_%", "<5",
+              "<10", "<20", "med", "vsp", "tsp", "time_s");
+  struct Sum {
+    int meshes = 0;
+    double err = 0, u10 = 0, med = 0, time = 0;
+    double worst_vsp = 0, worst_tsp = 0, worst_u10 = 0, worst_med = 90;
+  };
+  std::map<std::string, Sum> sums;
+  for (const auto& f : files) {
+    qs::TriMesh mesh;
+    try {
+      const auto v = qs::mesh::validate(qs::io::read_mesh(f).mesh);
+      if (!v.report.accepted) continue;  // not closed genus 0: qs does not take it
+      mesh = v.mesh;
+    } catch (const qs::Error&) {
+      continue;
+    }
+    for (const auto& c : cands) {
+      try {
+        const auto t0 = Clock::now();
+        const auto d = qs::dissect::dissect(mesh, std::nullopt, c.options);
+        const double time = seconds_since(t0);
+        qs::remesh::UniformOptions uo;  // as qs-remesh cuts the cells
+        uo.diagonals = qs::remesh::DiagonalRule::BestAngle;
+        const auto r4 = qs::remesh::remesh_uniform(d.chart, 4, uo);
+        const auto a = qs::remesh::smallest_angle_stats(r4.mesh());
+        const auto r5 = qs::remesh::remesh_uniform(d.chart, 5, uo);
+        qs::metro::MetroOptions mo;
+        mo.face_samples = 20000;
+        mo.sample_vertices_b = false;
+        const auto e = qs::metro::metro(d.chart.mesh, r5.mesh(), mo);
+        const double err = 100 * e.mean / e.diagonal;
+        const auto vd = qs::remesh::vertex_density(r5.mesh());
+        const auto td = qs::remesh::chart_density(d.chart, 255);
+        std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
+                    c.name.c_str(), d.chart.patches.size(), err, 100 * a.under_5, 100 * a.under_10, 100 * a.under_20,
+                    a.median, vd.spread, td.spread, time);
+        std::fflush(stdout);
+        Sum& s = sums[c.name];
+        ++s.meshes;
+        s.err += err, s.u10 += 100 * a.under_10, s.med += a.median, s.time += time;
+        s.worst_vsp = std::max(s.worst_vsp, vd.spread);
+        s.worst_tsp = std::max(s.worst_tsp, td.spread);
+        s.worst_u10 = std::max(s.worst_u10, 100 * a.under_10);
+        s.worst_med = std::min(s.worst_med, a.median);
+      } catch (const qs::Error& e) {
+        std::printf("%-22s %-12s error: %s\n", f.filename().c_str(), c.name.c_str(), e.what());
+      }
+    }
+  }
+  std::printf("\nsummary over the meshes: mean of err5, mean and worst <10, mean and worst median angle, worst vsp, "
+              "worst tsp, total dissection time\n");
+  std::printf("%-12s %6s %8s %7s %7s %6s %6s %8s %8s %8s\n", "candidate", "meshes", "err5_%", "<10", "<10max", "med",
+              "medmin", "vsp_max", "tsp_max", "time_s");
+  for (const auto& c : cands) {
+    const Sum& s = sums[c.name];
+    if (s.meshes == 0) continue;
+    std::printf("%-12s %6d %8.4f %7.2f %7.2f %6.1f %6.1f %8.2f %8.2f %8.2f\n", c.name.c_str(), s.meshes,
+                s.err / s.meshes, s.u10 / s.meshes, s.worst_u10, s.med / s.meshes, s.worst_med, s.worst_vsp,
+                s.worst_tsp, s.time);
+  }
+  return 0;
+}

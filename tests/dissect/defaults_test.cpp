@@ -1,0 +1,60 @@
+// The default dissection options (issue 13: chosen by qs-bench-defaults, table in the README) and
+// the patch counts the README documents for them.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "qs/dissect/dissection.h"
+#include "qs/io/read_mesh.h"
+#include "qs/mesh/validate.h"
+#include "qs/shapes/shapes.h"
+
+namespace {
+
+qs::TriMesh example(const char* name) {
+  const auto r = qs::io::read_mesh(std::filesystem::path(QS_SOURCE_DIR) / "examples" / name);
+  const auto v = qs::mesh::validate(r.mesh);
+  EXPECT_TRUE(v.report.accepted) << name;
+  return v.mesh;
+}
+
+}  // namespace
+
+TEST(DissectDefaults, AreTheDocumentedOnes) {
+  const qs::dissect::DissectOptions o;
+  EXPECT_EQ(o.tau, 3.0);
+  EXPECT_EQ(o.max_patch_area, 0.15);
+  EXPECT_EQ(o.stretch_iterations, 10);
+  EXPECT_EQ(o.split_stretch_rounds, 0);
+  EXPECT_EQ(o.max_depth, 6);
+  EXPECT_EQ(o.min_faces_to_split, 150);
+}
+
+TEST(DissectDefaults, SmoothShapeGetsAreaCappedPatches) {
+  // The stretch rule alone leaves an ellipsoid in its 2 seed patches (each half the surface); the
+  // default area cap splits both once: 10 patches, none over 15% of the area.
+  const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
+  const auto d = qs::dissect::dissect(m, std::nullopt);
+  EXPECT_EQ(d.chart.patches.size(), 10u);
+  std::vector<double> area(d.chart.patches.size(), 0.0);
+  double total = 0;
+  for (int f = 0; f < d.chart.mesh.num_faces(); ++f) {
+    const double a = qs::face_area(d.chart.mesh, f);
+    area[d.chart.face_patch[f]] += a;
+    total += a;
+  }
+  for (size_t p = 0; p < area.size(); ++p) EXPECT_LE(area[p], 0.15 * total) << d.chart.patches[p].name;
+  qs::dissect::DissectOptions stretch_only;
+  stretch_only.max_patch_area = 0;
+  EXPECT_EQ(qs::dissect::dissect(m, std::nullopt, stretch_only).chart.patches.size(), 2u);
+}
+
+TEST(DissectDefaults, ExampleMeshesGetTheDocumentedPatchCounts) {
+  // README, "Default options": spot_2k 22 patches, fish_blub_2k 46 (automatic seeds, alone).
+  const auto spot = qs::dissect::dissect(example("spot_2k.obj"), std::nullopt);
+  EXPECT_EQ(spot.chart.patches.size(), 22u);
+  EXPECT_LE(spot.max_stretch, 3.0);
+  const auto fish = qs::dissect::dissect(example("fish_blub_2k.obj"), std::nullopt);
+  EXPECT_EQ(fish.chart.patches.size(), 46u);
+  EXPECT_LE(fish.max_stretch, 3.0);
+}
