@@ -467,6 +467,13 @@ TEST(StudioServer, HttpLimitsAndTraversal) {
   Server server(studio, so);
   const int port = server.bind();
   std::thread t([&] { server.listen(); });
+  {
+    // a second server on the same port fails instead of sharing it
+    ServerOptions again = so;
+    again.port = port;
+    Server second(studio, again);
+    EXPECT_THROW(second.bind(), qs::IoError);
+  }
   httplib::Client cli("127.0.0.1", port);
   cli.set_connection_timeout(5);
   const auto before = snapshot(fx.tmp.path);
