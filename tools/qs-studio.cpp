@@ -70,6 +70,10 @@ int main(int argc, char** argv) {
     opt.max_request_bytes = so.max_upload_bytes;
 
     // SIGINT/SIGTERM end the server from a thread of their own (httplib's stop is not signal-safe).
+    // (A shell starting us in the background may have set them to be ignored: a blocked, ignored
+    // signal is discarded, and sigwait would never see it.)
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
     sigset_t sigs;
     sigemptyset(&sigs);
     sigaddset(&sigs, SIGINT);
@@ -94,7 +98,7 @@ int main(int argc, char** argv) {
       int sig = 0;
       sigwait(&sigs, &sig);
       stopping = true;
-      if (!quiet) std::cout << "qs-studio: stopping (waiting for a run in progress)\n" << std::flush;
+      if (!quiet) std::cout << "qs-studio: stopping\n" << std::flush;
       server.stop();
     });
     server.listen();

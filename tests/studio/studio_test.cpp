@@ -393,6 +393,12 @@ TEST(StudioRun, RunsThePipelineOneRunAtATime) {
     EXPECT_EQ(st.exit_code, 0) << st.name;
     EXPECT_EQ(st.fraction, 1.0) << st.name;
   }
+  // the log holds each command and the tools' lines, without the progress lines (they are the fractions)
+  EXPECT_NE(s.log.find("$ qs-dissect ../../sphere.obj ../../egg.obj -o dissection"), std::string::npos) << s.log;
+  EXPECT_NE(s.log.find("$ qs-morph remesh-L2 --path sphere,egg,sphere"), std::string::npos) << s.log;
+  std::istringstream lines(s.log);
+  for (std::string line; std::getline(lines, line);)
+    EXPECT_FALSE(line.rfind("qs-dissect: ", 0) == 0 && !line.empty() && line.back() == '%') << line;
   const fs::path run = fx.root / "runs" / "run-1";
   for (const char* f : {"run.json", "dissection/dissection.json", "dissection/sphere.chart.ply", "remesh-L2/egg.obj",
                         "bake/sphere.glb", "morph.glb"})
@@ -467,6 +473,13 @@ TEST(StudioServer, HttpLimitsAndTraversal) {
   Server server(studio, so);
   const int port = server.bind();
   std::thread t([&] { server.listen(); });
+  {
+    // a second server on the same port fails instead of sharing it
+    ServerOptions again = so;
+    again.port = port;
+    Server second(studio, again);
+    EXPECT_THROW(second.bind(), qs::IoError);
+  }
   httplib::Client cli("127.0.0.1", port);
   cli.set_connection_timeout(5);
   const auto before = snapshot(fx.tmp.path);

@@ -1,6 +1,7 @@
 #include "qs/studio/server.h"
 
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <fstream>
 #include <sstream>
@@ -47,6 +48,12 @@ Server::Server(Studio& studio, ServerOptions options) : impl_(std::make_unique<I
   http.new_task_queue = [n = impl_->opt.threads] { return new httplib::ThreadPool(static_cast<size_t>(n)); };
   http.set_payload_max_length(impl_->opt.max_request_bytes);
   http.set_keep_alive_timeout(1);  // an idle browser connection gives its thread back soon
+  // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, which lets a second server bind
+  // the same port and share its connections instead of failing.
+  http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   auto handler = [this](const httplib::Request& in, httplib::Response& out) {
     Request r;
     r.method = in.method;

@@ -773,22 +773,26 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       const std::string prefix = stages[i].tool + ": ";
       const int code = spawn_and_wait(argv, staging, [&](const std::string& s) {
         stage_out += s;
-        append(s);
-        // Progress lines: "qs-dissect: quinary subdivision 53%".
+        // Whole lines go to the log, except progress lines ("qs-dissect: quinary subdivision
+        // 53%"), which set the stage's fraction instead.
         for (size_t nl; (nl = stage_out.find('\n', scanned)) != std::string::npos; scanned = nl + 1) {
           const std::string line = stage_out.substr(scanned, nl - scanned);
-          if (line.rfind(prefix, 0) != 0 || line.size() < 2 || line.back() != '%') continue;
-          size_t k = line.size() - 1;
+          size_t k = line.empty() ? 0 : line.size() - 1;
           while (k > 0 && (std::isdigit(static_cast<unsigned char>(line[k - 1])) || line[k - 1] == '.')) --k;
-          if (k == line.size() - 1) continue;
+          if (line.rfind(prefix, 0) != 0 || line.back() != '%' || k == line.size() - 1) {
+            append(line + "\n");
+            continue;
+          }
           try {
             const double f = std::stod(line.substr(k, line.size() - 1 - k)) / 100;
             std::lock_guard lock(mutex_);
             state_.stages[i].fraction = std::clamp(f, 0.0, 1.0);
           } catch (const std::exception&) {
+            append(line + "\n");
           }
         }
       });
+      if (scanned < stage_out.size()) append(stage_out.substr(scanned) + "\n");  // a last line without '\n'
       std::lock_guard lock(mutex_);
       state_.stages[i].exit_code = code;
       state_.stages[i].status = code == 0 ? "done" : "failed";

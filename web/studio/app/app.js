@@ -237,6 +237,7 @@ class Editor {
     });
     canvas.addEventListener('pointerup', (ev) => {
       if (drag) {
+        this.unsaved = true;
         this.say(`moved ${drag}`);
         drag = null;
         this.viewer.controls.enabled = true;
@@ -251,6 +252,7 @@ class Editor {
       if (!hit) return;
       const ref = this.hitToRef(hit);
       this.set(name, ref.face, ref.bary);
+      this.unsaved = true;
       this.say(`placed ${name} on face ${ref.face}`);
       this.advance();
       this.changed();
@@ -276,7 +278,7 @@ class Editor {
       const rename = el('input', { value: name, title: 'rename' });
       rename.onchange = () => this.rename(name, rename.value.trim());
       const del = el('button', { textContent: 'delete', className: 'delete' });
-      del.onclick = () => { this.landmarks.delete(name); this.say(`deleted ${name}`); this.changed(); };
+      del.onclick = () => { this.landmarks.delete(name); this.unsaved = true; this.say(`deleted ${name}`); this.changed(); };
       const li = el('li', {}, el('span', { className: 'swatch', style: `background:${colour}` }), rename,
         el('span', { className: 'hint', textContent: `face ${l.face} (${l.bary.map((x) => x.toFixed(3)).join(', ')})` }), del);
       li.dataset.name = name;
@@ -292,6 +294,7 @@ class Editor {
     const l = this.landmarks.get(from);
     this.landmarks.delete(from);
     this.set(to, l.face, l.bary);
+    this.unsaved = true;
     this.say(`renamed ${from} to ${to}`);
     this.changed();
   }
@@ -337,6 +340,7 @@ class Editor {
     if (seedCount !== 0 && seedCount !== 4) { this.say(`place all four seeds or none (${seedCount} placed)`, true); return; }
     try {
       const r = await postJSON(`/api/landmarks?name=${encodeURIComponent(this.name)}`, body);
+      this.unsaved = false;
       this.say(`saved ${r.file}: ${r.seeds} seeds, ${r.features} features`);
       this.saved = r.file;
       loadMeshes();
@@ -424,8 +428,9 @@ let polling = null;
 $('run-btn').onclick = async () => {
   $('run-error').textContent = '';
   if (!ticked.length) { $('run-error').textContent = 'tick the meshes to run first'; return; }
-  const unsaved = editors.filter((e) => ticked.includes(e.name) && e.dirtySince);
-  void unsaved;
+  // The tools read the landmark files: edits still only in the page would be silently left out.
+  const unsaved = editors.filter((e) => ticked.includes(e.name) && e.unsaved).map((e) => e.name);
+  if (unsaved.length) { $('run-error').textContent = `save the landmarks of ${unsaved.join(', ')} first (the run reads the saved files)`; return; }
   try {
     await postJSON('/api/run', { meshes: ticked, level: +$('level').value, bake_size: +$('bake-size').value, max_area: +$('max-area').value || 0 });
     pollRun();

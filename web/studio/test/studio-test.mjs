@@ -253,6 +253,11 @@ try {
   check(['left_ear', 'nose', 'right_ear', 'tail'].every((n) => options.includes(n)), `feature names offered: ${options.join(', ')}`);
   await sleep(300);
   await shot(page, 'studio_side_by_side.png', 'main');
+  // an edit not saved yet: the run refuses to start rather than run on the old file
+  await placeAt('chin', 300);
+  await page.click('#run-btn');
+  const unsavedMsg = await page.$eval('#run-error', (e) => e.textContent);
+  check(/save the landmarks of spot_2k\.obj first/.test(unsavedMsg) && snapshot(b) === beforeFail, `a run with unsaved landmark edits is refused: "${unsavedMsg}"`);
   for (const l of logs) console.log(`     ${l}`);
   check(!logs.some((l) => l.startsWith('[pageerror]')), 'no script errors in the page');
 } catch (e) {
