@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   int threads = 0;
   double sliver = 1.0;
   bool quiet = false, fan = false;
-  app.add_option("dissection", folder, "A qs-dissect output folder of two meshes")->required();
+  app.add_option("dissection", folder, "A qs-dissect output folder of two meshes (of more with --pair)")->required();
   app.add_option("--pair", pair, "For a dissection of more than two meshes: the two to merge, by chart stem, "
                                  "A,B (A is the shape at t = 0)");
   app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/merge)");
