@@ -166,22 +166,23 @@ struct PatchResult {
   std::exception_ptr error;
 };
 
+// The smallest corner angle (degrees): the one opposite the shortest side.
 double min_angle_degrees(const Vec2& p, const Vec2& q, const Vec2& r) {
-  auto angle = [](const Vec2& o, const Vec2& a, const Vec2& b) {
-    const Vec2 u = a - o, v = b - o;
-    return std::atan2(std::abs(cross2(u, v)), u.dot(v));
-  };
-  const double m = std::min({angle(p, q, r), angle(q, r, p), angle(r, p, q)});
-  return m * 180.0 / M_PI;
+  const double a = (q - r).squaredNorm(), b = (r - p).squaredNorm(), c = (p - q).squaredNorm();
+  const Vec2 &o = a <= b && a <= c ? p : b <= c ? q : r;
+  const Vec2 &x = a <= b && a <= c ? q : b <= c ? r : p;
+  const Vec2 &y = a <= b && a <= c ? r : b <= c ? p : q;
+  const Vec2 u = x - o, v = y - o;
+  return std::atan2(std::abs(cross2(u, v)), u.dot(v)) * (180.0 / M_PI);
 }
 
 double min_angle_degrees(const Vec3& p, const Vec3& q, const Vec3& r) {
-  auto angle = [](const Vec3& o, const Vec3& a, const Vec3& b) {
-    const Vec3 u = a - o, v = b - o;
-    return std::atan2(u.cross(v).norm(), u.dot(v));
-  };
-  const double m = std::min({angle(p, q, r), angle(q, r, p), angle(r, p, q)});
-  return m * 180.0 / M_PI;
+  const double a = (q - r).squaredNorm(), b = (r - p).squaredNorm(), c = (p - q).squaredNorm();
+  const Vec3 &o = a <= b && a <= c ? p : b <= c ? q : r;
+  const Vec3 &x = a <= b && a <= c ? q : b <= c ? r : p;
+  const Vec3 &y = a <= b && a <= c ? r : b <= c ? p : q;
+  const Vec3 u = x - o, v = y - o;
+  return std::atan2(u.cross(v).norm(), u.dot(v)) * (180.0 / M_PI);
 }
 
 Vec3 lerp(const Vec3& a, const Vec3& b, double t) { return (1 - t) * a + t * b; }
@@ -245,6 +246,10 @@ class PatchMerger {
   PatchResult run() {
     // Candidate A faces per B face: a uniform grid over the A faces' boxes.
     const int na = static_cast<int>(a_.local.size());
+    const size_t guess = 2 * (a_.local.size() + b_.local.size());  // merged vertices: about 2x the faces
+    index_.reserve(guess);
+    result_.vertices.reserve(guess);
+    result_.faces.reserve(2 * guess);
     const int g = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(na))), 1, 1024);
     auto cell = [g](double x) { return std::clamp(static_cast<int>(x * g), 0, g - 1); };
     std::vector<std::array<double, 4>> abox(na);
