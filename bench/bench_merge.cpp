@@ -156,13 +156,13 @@ int main(int argc, char** argv) {
       const qs::merge::Merged self = qs::merge::merge_charts(a, a);
       const double self_cpu = cpu_seconds() - c0;
       std::printf("  exact: A bitwise %s, B bitwise %s, off parent planes A %.1e B %.1e, area rel. diff A %.2e B %.2e; min angle uv %.2e deg; thin "
-                  "faces %d/%d, normals off %d/%d, not CCW in rounded uv %d; self-merge of A %s the chart (%.3f s cpu)\n",
+                  "faces %d/%d, normals off %d/%d, not CCW in rounded uv %d, side points moved %d; self-merge of A %s the chart (%.3f s cpu)\n",
                   bitwise(a, m.vertex_a, m.positions_a) ? "yes" : "NO", bitwise(b, m.vertex_b, m.positions_b) ? "yes" : "NO",
                   off_parent_plane(a, m.face_parent_a, m.positions_a, m.faces),
                   off_parent_plane(b, m.face_parent_b, m.positions_b, m.faces),
                   std::abs(area(m.positions_a, m.faces) - area_a) / area_a,
                   std::abs(area(m.positions_b, m.faces) - area_b) / area_b, st.min_angle_uv, st.thin_faces_a,
-                  st.thin_faces_b, st.normal_disagreements_a, st.normal_disagreements_b, flat_in_rounded_uv(m),
+                  st.thin_faces_b, st.normal_disagreements_a, st.normal_disagreements_b, flat_in_rounded_uv(m), st.side_points_moved,
                   self_merge_is_chart(a, self) ? "is" : "is NOT", self_cpu);
     } catch (const qs::Error& e) {
       std::fprintf(stderr, "%s: %s\n", argv[i], e.what());

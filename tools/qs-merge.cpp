@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   int threads = 0;
   double sliver = 1.0;
   bool quiet = false, fan = false;
-  app.add_option("dissection", folder, "A qs-dissect output folder of two meshes")->required();
+  app.add_option("dissection", folder, "A qs-dissect output folder of two meshes (of more with --pair)")->required();
   app.add_option("--pair", pair, "For a dissection of more than two meshes: the two to merge, by chart stem, "
                                  "A,B (A is the shape at t = 0)");
   app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/merge)");
@@ -154,6 +154,7 @@ int main(int argc, char** argv) {
                     {"a_vertices_on_b_edges", st.a_on_b_edge},
                     {"b_vertices_on_a_edges", st.b_on_a_edge},
                     {"overlay_polygons", st.overlay_polygons},
+                    {"side_points_moved", st.side_points_moved},
                     {"triangulation", fan ? "fan" : "max_min_uv_angle"},
                     {"sliver_degrees", sliver},
                     {"slivers", {{"uv", st.slivers_uv}, {"a", st.slivers_a}, {"b", st.slivers_b}}},
@@ -172,7 +173,8 @@ int main(int argc, char** argv) {
                 << " faces (" << ratio << " x the inputs), " << st.patches << " patches\n"
                 << "  vertices: " << st.vertices_from_a << " from A, " << st.vertices_from_b << " from B ("
                 << st.coincident_vertices << " both), " << st.crossings << " edge crossings, " << st.a_on_b_edge
-                << " A on a B edge, " << st.b_on_a_edge << " B on an A edge\n"
+                << " A on a B edge, " << st.b_on_a_edge << " B on an A edge; " << st.side_points_moved
+                << " B side points re-placed in their second patch\n"
                 << "  slivers (< " << sliver << " deg): " << st.slivers_uv << " in uv, " << st.slivers_a << " at t=0, "
                 << st.slivers_b << " at t=1 (inputs: " << st.input_slivers_a << ", " << st.input_slivers_b
                 << "); too thin for a normal: " << st.thin_faces_a << ", " << st.thin_faces_b

@@ -166,22 +166,23 @@ struct PatchResult {
   std::exception_ptr error;
 };
 
+// The smallest corner angle (degrees): the one opposite the shortest side.
 double min_angle_degrees(const Vec2& p, const Vec2& q, const Vec2& r) {
-  auto angle = [](const Vec2& o, const Vec2& a, const Vec2& b) {
-    const Vec2 u = a - o, v = b - o;
-    return std::atan2(std::abs(cross2(u, v)), u.dot(v));
-  };
-  const double m = std::min({angle(p, q, r), angle(q, r, p), angle(r, p, q)});
-  return m * 180.0 / M_PI;
+  const double a = (q - r).squaredNorm(), b = (r - p).squaredNorm(), c = (p - q).squaredNorm();
+  const Vec2 &o = a <= b && a <= c ? p : b <= c ? q : r;
+  const Vec2 &x = a <= b && a <= c ? q : b <= c ? r : p;
+  const Vec2 &y = a <= b && a <= c ? r : b <= c ? p : q;
+  const Vec2 u = x - o, v = y - o;
+  return std::atan2(std::abs(cross2(u, v)), u.dot(v)) * (180.0 / M_PI);
 }
 
 double min_angle_degrees(const Vec3& p, const Vec3& q, const Vec3& r) {
-  auto angle = [](const Vec3& o, const Vec3& a, const Vec3& b) {
-    const Vec3 u = a - o, v = b - o;
-    return std::atan2(u.cross(v).norm(), u.dot(v));
-  };
-  const double m = std::min({angle(p, q, r), angle(q, r, p), angle(r, p, q)});
-  return m * 180.0 / M_PI;
+  const double a = (q - r).squaredNorm(), b = (r - p).squaredNorm(), c = (p - q).squaredNorm();
+  const Vec3 &o = a <= b && a <= c ? p : b <= c ? q : r;
+  const Vec3 &x = a <= b && a <= c ? q : b <= c ? r : p;
+  const Vec3 &y = a <= b && a <= c ? r : b <= c ? p : q;
+  const Vec3 u = x - o, v = y - o;
+  return std::atan2(u.cross(v).norm(), u.dot(v)) * (180.0 / M_PI);
 }
 
 Vec3 lerp(const Vec3& a, const Vec3& b, double t) { return (1 - t) * a + t * b; }
@@ -245,6 +246,10 @@ class PatchMerger {
   PatchResult run() {
     // Candidate A faces per B face: a uniform grid over the A faces' boxes.
     const int na = static_cast<int>(a_.local.size());
+    const size_t guess = 2 * (a_.local.size() + b_.local.size());  // merged vertices: about 2x the faces
+    index_.reserve(guess);
+    result_.vertices.reserve(guess);
+    result_.faces.reserve(2 * guess);
     const int g = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(na))), 1, 1024);
     auto cell = [g](double x) { return std::clamp(static_cast<int>(x * g), 0, g - 1); };
     std::vector<std::array<double, 4>> abox(na);
@@ -514,6 +519,116 @@ class PatchMerger {
   std::unordered_map<Key, int, KeyHash> index_;
 };
 
+// ---- Patch sides: one order for both patches ---------------------------------------------------
+
+// The side of the unit square a border point lies on (0: v = 0, 1: u = 1, 2: v = 1, 3: u = 0), or
+// -1 for a corner or an interior point.
+int side_of(const Vec2& uv) {
+  const int n = (uv.y() == 0) + (uv.x() == 1) + (uv.y() == 1) + (uv.x() == 0);
+  if (n != 1) return -1;
+  return uv.y() == 0 ? 0 : uv.x() == 1 ? 1 : uv.y() == 1 ? 2 : 3;
+}
+
+// The coordinate along side s that increases counter-clockwise around the patch (exact).
+double ccw_key(const Vec2& uv, int s) { return s == 0 ? uv.x() : s == 1 ? uv.y() : s == 2 ? -uv.x() : -uv.y(); }
+
+// Where a chart vertex on a patch side sits: the patch and side of its lowest patch ("owner") and
+// of the other one, with keys that increase the same way along the side in both.
+struct SidePoint {
+  int vertex;
+  int p, sp, q, sq;
+  double key_p, key_q;
+  Vec2 uv_q;
+};
+
+// Side points (not corners) of a chart that are in exactly two patches.
+std::vector<SidePoint> side_points(const dissect::Chart& c) {
+  std::unordered_map<int, std::vector<std::pair<int, Vec2>>> uses;
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Vec2& uv = c.face_uv[f][k];
+      if (side_of(uv) < 0) continue;
+      auto& u = uses[c.mesh.faces[f][k]];
+      if (std::none_of(u.begin(), u.end(), [&](const auto& x) { return x.first == c.face_patch[f]; }))
+        u.push_back({c.face_patch[f], uv});
+    }
+  std::vector<SidePoint> out;
+  for (auto& [v, u] : uses) {
+    if (u.size() != 2) continue;
+    if (u[1].first < u[0].first) std::swap(u[0], u[1]);
+    const int sp = side_of(u[0].second), sq = side_of(u[1].second);
+    if (sp < 0 || sq < 0) continue;
+    // Both patches are counter-clockwise: they run along their common side in opposite directions.
+    out.push_back({v, u[0].first, sp, u[1].first, sq, ccw_key(u[0].second, sp), -ccw_key(u[1].second, sq), u[1].second});
+  }
+  std::sort(out.begin(), out.end(), [](const SidePoint& x, const SidePoint& y) {
+    return std::tie(x.p, x.sp, x.q, x.sq, x.key_p, x.vertex) < std::tie(y.p, y.sp, y.q, y.sq, y.key_p, y.vertex);
+  });
+  return out;
+}
+
+// Makes B's side points keep, in the second patch of each side, the place among A's side points
+// that they have in the first (lower-index) patch: equal to the same A point, or strictly between
+// the same two. The two patches compute a side's parameter separately, so a B point can tie with
+// an A point in one and miss it by a rounding in the other (coinciding vertices: a mesh against
+// itself refined, shared seeds and cut lines). Only B's uv in the second patch move, by a few
+// units in the last place; positions never move. Returns the number of B points moved.
+int reconcile_sides(const dissect::Chart& a, dissect::Chart& b) {
+  const std::vector<SidePoint> sa = side_points(a), sb = side_points(b);
+  auto group = [](const SidePoint& x) { return std::array<int, 4>{x.p, x.sp, x.q, x.sq}; };
+  std::unordered_map<int, std::vector<std::pair<int, int>>> wedges;  // B vertex -> (face, corner) in its q
+  int moved = 0;
+  size_t ia = 0;
+  for (size_t ib = 0; ib < sb.size();) {
+    size_t jb = ib;
+    while (jb < sb.size() && group(sb[jb]) == group(sb[ib])) ++jb;
+    while (ia < sa.size() && group(sa[ia]) < group(sb[ib])) ++ia;
+    size_t ja = ia;
+    while (ja < sa.size() && group(sa[ja]) == group(sb[ib])) ++ja;
+    // A's points on this side, by key in the first patch (their keys in the second follow).
+    for (size_t k = ib; k < jb; ++k) {
+      const SidePoint& x = sb[k];
+      const auto lo = std::lower_bound(sa.begin() + ia, sa.begin() + ja, x.key_p,
+                                       [](const SidePoint& s, double key) { return s.key_p < key; });
+      double want_lo = -std::numeric_limits<double>::infinity(), want_hi = std::numeric_limits<double>::infinity();
+      bool tie = false;
+      if (lo != sa.begin() + ja && lo->key_p == x.key_p) {
+        tie = true;
+        want_lo = want_hi = lo->key_q;
+      } else {
+        if (lo != sa.begin() + ia) want_lo = std::prev(lo)->key_q;
+        if (lo != sa.begin() + ja) want_hi = lo->key_q;
+      }
+      const bool ok = tie ? x.key_q == want_lo : (x.key_q > want_lo && x.key_q < want_hi);
+      if (ok) continue;
+      double key = tie ? want_lo : x.key_q;
+      if (!tie) {
+        if (!(key > want_lo)) key = std::nextafter(want_lo, want_hi);
+        if (!(key < want_hi)) key = std::nextafter(want_hi, want_lo);
+        if (!(key > want_lo && key < want_hi))
+          throw SolverError("mesh B's chart vertex " + std::to_string(x.vertex) + " lies between two of mesh A's on "
+                            "the side of patches " + std::to_string(x.p) + " and " + std::to_string(x.q) +
+                            " in one and cannot be put between them in the other (no double in between)");
+      }
+      // Back from the key to the uv in the second patch: key = -ccw_key(uv, sq).
+      Vec2 uv = x.uv_q;
+      const double c = -key;
+      if (x.sq == 0) uv.x() = c;
+      else if (x.sq == 1) uv.y() = c;
+      else if (x.sq == 2) uv.x() = -c;
+      else uv.y() = -c;
+      if (wedges.empty())
+        for (int f = 0; f < b.mesh.num_faces(); ++f)
+          for (int k2 = 0; k2 < 3; ++k2) wedges[b.mesh.faces[f][k2]].push_back({f, k2});
+      for (const auto& [f, k2] : wedges[x.vertex])
+        if (b.face_patch[f] == x.q) b.face_uv[f][k2] = uv;
+      ++moved;
+    }
+    ib = jb;
+  }
+  return moved;
+}
+
 int patch_count(const dissect::Chart& chart) {
   int n = static_cast<int>(chart.patches.size());
   for (int p : chart.face_patch) n = std::max(n, p + 1);
@@ -539,6 +654,9 @@ Merged merge_charts(const dissect::Chart& a, const dissect::Chart& b, const Merg
       if (a.patches[p].name != b.patches[p].name)
         throw InvalidInput("patch " + std::to_string(p) + " is '" + a.patches[p].name + "' in mesh A and '" +
                            b.patches[p].name + "' in mesh B; qs-merge needs two charts of one dissection");
+  // B's chart with its side points put in the same order among A's from both patches of a side.
+  dissect::Chart b_sides = b;
+  const int side_points_moved = reconcile_sides(a, b_sides);
   const auto by_a = faces_by_patch(a, patches), by_b = faces_by_patch(b, patches);
 
   std::vector<PatchResult> results(patches);
@@ -548,8 +666,8 @@ Merged merge_charts(const dissect::Chart& a, const dissect::Chart& b, const Merg
       try {
         context.check_cancel();
         const PatchMesh pa = build_patch(a, by_a[p], p, "mesh A");
-        const PatchMesh pb = build_patch(b, by_b[p], p, "mesh B");
-        results[p] = PatchMerger(a, b, pa, pb, options).run();
+        const PatchMesh pb = build_patch(b_sides, by_b[p], p, "mesh B");
+        results[p] = PatchMerger(a, b_sides, pa, pb, options).run();
       } catch (...) {
         results[p].error = std::current_exception();
       }
@@ -572,6 +690,7 @@ Merged merge_charts(const dissect::Chart& a, const dissect::Chart& b, const Merg
   Merged m;
   auto& st = m.stats;
   st.patches = patches;
+  st.side_points_moved = side_points_moved;
   st.input_faces_a = a.mesh.num_faces();
   st.input_faces_b = b.mesh.num_faces();
   std::unordered_map<Key, int, KeyHash> global;

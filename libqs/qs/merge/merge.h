@@ -43,7 +43,10 @@ struct MergeStats {
   int coincident_vertices = 0;                   ///< ... that are both (corners, features, ...)
   int crossings = 0;                             ///< proper crossings of an A edge and a B edge
   int a_on_b_edge = 0, b_on_a_edge = 0;          ///< a vertex on the other mesh's edge
-  int overlay_polygons = 0;                      ///< non-empty A triangle x B triangle overlaps
+  int overlay_polygons = 0;
+  /// B side points whose uv in the second patch of their side was moved (by a few units in the
+  /// last place) to keep the place among A's side points they have in the first.
+  int side_points_moved = 0;                      ///< non-empty A triangle x B triangle overlaps
   int slivers_uv = 0, slivers_a = 0, slivers_b = 0;  ///< faces below sliver_degrees
   int input_slivers_a = 0, input_slivers_b = 0;  ///< chart faces below it in 3D, for comparison
   /// Faces with less than 1e-12 of their parent A (B) face's area at t = 0 (t = 1): exact in uv
@@ -78,9 +81,11 @@ struct Merged {
 void check_chart_uv(const dissect::Chart& chart, const std::string& name);
 
 /// Merges the charts of two meshes of one dissection (same patch list, same base domain).
-/// \throws InvalidInput (from check_chart_uv, or charts whose patches differ); SolverError when
-/// the two meshes' points on a patch side cannot be ordered the same way from both patches (their
-/// uv differ by less than the rounding of the side parameter) or the merged mesh is not closed.
+/// The order of A's and B's points along a patch side is decided in the side's lower-index patch;
+/// B's uv in the other patch are moved by a few ulps where they disagree (stats.side_points_moved).
+/// \throws InvalidInput (from check_chart_uv, or charts whose patches differ); SolverError when a
+/// B side point cannot be put between the same two A points in both patches (no double between
+/// them) or the merged mesh is not closed.
 Merged merge_charts(const dissect::Chart& a, const dissect::Chart& b, const MergeOptions& options = {},
                     const Context& context = {});
 
