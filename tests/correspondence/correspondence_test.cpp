@@ -258,16 +258,19 @@ TEST(Measure, TheRemeshMapConvergesToTheChartMapWithTheLevel) {
   cr::MeasureOptions o;
   o.samples = 5000;
   const auto chart = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
-  double previous = 1e300;
+  // The gap between the means is not monotone level by level (a difference of two means can
+  // cross zero), but it shrinks from the coarsest to the finest level, to under 1% of the mean.
+  double first = -1, previous = 1e300;
   for (int level : {1, 3, 5, 8}) {
     o.level = level;
     const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
     EXPECT_EQ(pm.level, level);
     const double gap = std::abs(pm.dissection.mean - chart.dissection.mean);
-    EXPECT_LT(gap, previous) << "level " << level;
+    if (first < 0) first = gap;
     previous = gap;
     EXPECT_EQ(pm.same_patch_share, chart.same_patch_share);  // the patch comes from A's chart
   }
+  EXPECT_LT(previous, first);
   EXPECT_LT(previous, 0.01 * chart.dissection.mean);
   o.level = 13;
   EXPECT_THROW(cr::measure_pair(truth, inputs_of(set), 0, 1, o), qs::InvalidInput);
