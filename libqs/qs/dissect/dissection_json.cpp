@@ -183,7 +183,7 @@ struct Reader {
 LoadedDissection read_dissection(const std::filesystem::path& folder) {
   const std::filesystem::path path = folder / "dissection.json";
   if (!std::filesystem::is_directory(folder))
-    throw IoError(json_strict::printable(folder.string()) + ": no such folder (expected a qs-dissect output folder)");
+    throw IoError(json_strict::printable(folder.string()) + ": no such folder (expected a qs-dissect output folder with dissection.json)");
   const nlohmann::json doc = json_strict::parse(
       json_strict::read_text_file(path, "dissection.json (is " + json_strict::printable(folder.string()) +
                                             " a qs-dissect output folder?)"),

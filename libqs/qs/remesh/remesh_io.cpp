@@ -40,7 +40,7 @@ std::string string_field(const nlohmann::json& doc, const char* name, const fs::
 LoadedRemesh read_remesh(const fs::path& folder) {
   const fs::path path = folder / "remesh.json";
   if (!fs::is_directory(folder))
-    throw IoError(json_strict::printable(folder.string()) + ": no such folder (expected a qs-remesh output folder)");
+    throw IoError(json_strict::printable(folder.string()) + ": no such folder (expected a qs-remesh output folder with remesh.json)");
   const nlohmann::json doc = json_strict::parse(
       json_strict::read_text_file(path, "remesh.json (is " + json_strict::printable(folder.string()) +
                                             " a qs-remesh output folder?)"),
