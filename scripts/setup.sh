@@ -8,6 +8,7 @@ packages=(
   libcgal-dev libeigen3-dev libopenmesh-dev libopenimageio-dev
   libtinygltf-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang-16 libclang-rt-16-dev  # libFuzzer, ASan and UBSan for scripts/fuzz.sh (clang 14 lacks C++20 binding captures)
 )
 
 missing=()
