@@ -169,6 +169,15 @@ TEST_F(RobustTool, NonUtf8BytesNeverMakeAnInternalError) {
   const RunResult j = run_tool("qs-inspect", "--json '" + odd.string() + "'");
   EXPECT_EQ(j.exit, 0) << j.out;
   EXPECT_NO_THROW((void)nlohmann::json::parse(j.out));
+  // A PLY element name that is not UTF-8, under --json.
+  const std::string ply = text("weird.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 4\nproperty list uchar int vertex_indices\n"
+                               "element w\xe9ird 1\nproperty int a\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                               "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n5\n");
+  const RunResult p = run_tool("qs-inspect", "--json " + ply);
+  EXPECT_EQ(p.exit, 0) << p.out;
+  EXPECT_NO_THROW((void)nlohmann::json::parse(p.out));
   // A landmark file whose parse error quotes a non-UTF-8 byte.
   expect_clean_failure(
       run_tool("qs-inspect", "--json " + ball + " --landmarks " + text("bad.json", "{\"features\": \xff}")), 2, "");
