@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcpp-httplib-dev chromium
   liblemon-dev
+  clang-16 libclang-rt-16-dev  # libFuzzer, ASan and UBSan for scripts/fuzz.sh (clang 14 lacks C++20 binding captures)
 )
 
 missing=()

@@ -24,11 +24,14 @@
 #include "qs/bake/image_io.h"
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
+#include "qs/core/output_folder.h"
 #include "qs/dissect/dissection_json.h"
 #include "qs/gltf/glb.h"
 #include "qs/remesh/chart_sampler.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/remesh_io.h"
+#include "resource_limits.h"
 #include "tool_main.h"
 
 namespace fs = std::filesystem;
@@ -71,6 +74,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> formats;
   int size = 256, gutter = 4, samples = 100000;
   bool quiet = false;
+  double max_memory = qs::tools::kDefaultMaxMemoryGiB;
   app.add_option("remesh", folder, "A qs-remesh output folder (remesh.json + meshes)")->required();
   app.add_option("--size", size, "Tile size S: texels per patch side")->capture_default_str()->check(CLI::Range(2, 16384));
   app.add_option("--space", space, "Normal space")->capture_default_str()->check(CLI::IsMember({"tangent", "object"}));
@@ -88,6 +92,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 100000000));
   app.add_option("-o,--output", outdir, "Output folder (default: <remesh>/bake-<size>)");
+  qs::tools::add_max_memory_option(app, max_memory);
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
@@ -132,14 +137,31 @@ int main(int argc, char** argv) {
       samplers.push_back(std::make_unique<qs::remesh::ChartSampler>(dm.dissection.chart));
       check_positions(*samplers.back(), c, rm.set.positions[i], (fs::path(folder) / rm.outputs[i]).string());
     }
+    // The atlas, estimated before it is made: per texel the float normal and its coverage, the 8-bit
+    // copy, the encoded PNG (and 16-bit / EXR copies), about 48 bytes; one mesh at a time.
+    {
+      const double tiles = static_cast<double>(c.num_patches);
+      const double columns = std::ceil(std::sqrt(tiles)), rows = std::ceil(tiles / std::max(columns, 1.0));
+      const double side = static_cast<double>(size) + 2.0 * gutter;
+      const double texels = columns * side * rows * side;
+      qs::tools::check_memory(texels * 48, max_memory,
+                              "--size " + std::to_string(size) + " (an atlas of about " +
+                                  std::to_string(static_cast<long long>(texels / 1e6)) + " M texels for " +
+                                  std::to_string(c.num_patches) + " patches)");
+    }
     const qs::bake::AtlasLayout layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
     const double load_seconds = seconds_since(t0);
 
     if (outdir.empty()) outdir = (fs::path(folder) / ("bake-" + std::to_string(size))).string();
-    std::error_code ec;
-    fs::create_directories(outdir, ec);
-    if (!fs::is_directory(outdir))
-      throw qs::IoError(outdir + ": cannot create the output folder" + (ec ? " (" + ec.message() + ")" : std::string()));
+    std::vector<fs::path> input_paths = {fs::path(folder) / "remesh.json", dfolder / "dissection.json"};
+    for (const auto& o : rm.outputs) input_paths.push_back(fs::path(folder) / o);
+    for (const auto& m : ds.meshes) input_paths.push_back(dfolder / m.chart_file);
+    for (const auto& stem : rm.stems)
+      for (const std::string suffix : {"_normal.png", "_normal16.png", "_normal.exr", ".glb"})
+        qs::check_not_an_input(fs::path(outdir) / (stem + suffix), input_paths, "-o");
+    qs::check_not_an_input(fs::path(outdir) / "bake.json", input_paths, "-o");
+    qs::OutputFolder out_folder(outdir);
+    const fs::path staging = out_folder.staging();
 
     if (!quiet)
       std::cout << "bake " << rm.outputs.size() << " meshes, " << c.num_patches << " patches, " << size << " x " << size
@@ -167,14 +189,14 @@ int main(int argc, char** argv) {
       const qs::bake::Rgb8Image img8 = qs::bake::quantize8(r.atlas);
       const std::vector<unsigned char> png8 = qs::bake::encode_png8(img8);
       nlohmann::ordered_json files = {{"png8", stem + qs::bake::file_suffix(qs::bake::ImageFormat::Png8)}};
-      write_bytes(fs::path(outdir) / files["png8"].get<std::string>(), png8);
+      write_bytes(staging / files["png8"].get<std::string>(), png8);
       for (auto f : extra) {
         const std::string name = stem + qs::bake::file_suffix(f);
-        write_bytes(fs::path(outdir) / name, qs::bake::encode_image(r.atlas, f));
+        write_bytes(staging / name, qs::bake::encode_image(r.atlas, f));
         files[qs::bake::to_string(f)] = name;
       }
       const qs::gltf::Mesh g = qs::bake::to_gltf_mesh(r, png8, stem);
-      qs::gltf::write_glb(fs::path(outdir) / (stem + ".glb"), g);
+      qs::gltf::write_glb(staging / (stem + ".glb"), g);
       write_seconds += seconds_since(t);
       t = Clock::now();
       nlohmann::ordered_json j = {{"remesh", rm.outputs[i]},
@@ -253,7 +275,8 @@ int main(int argc, char** argv) {
           {"texcoord", "s = (x + 0.5 + u*(S-1)) / width, t = (y + 0.5 + (1-v)*(S-1)) / height"},
           {"patches", patches}}},
         {"meshes", meshes}};
-    qs::write_file_atomically(fs::path(outdir) / "bake.json", doc.dump(1) + "\n");
+    qs::write_file_atomically(staging / "bake.json", qs::json_strict::dump(doc, 1) + "\n");
+    out_folder.commit();
     if (!quiet)
       std::cout << "  wrote " << rm.outputs.size() << " maps + GLBs and bake.json to " << outdir << "\n  time: load "
                 << load_seconds << " s, bake " << bake_seconds << " s, encode + write " << write_seconds << " s, check "

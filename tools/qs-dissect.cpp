@@ -15,6 +15,7 @@
 
 #include "mesh_input.h"
 #include "qs/core/atomic_file.h"
+#include "qs/core/output_folder.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/dissect/dissection.h"
 #include "qs/dissect/dissection_json.h"
@@ -102,7 +103,15 @@ int main(int argc, char** argv) {
     if (!landmark_files.empty() && landmark_files.size() != meshes.size())
       throw qs::UsageError("--landmarks got " + std::to_string(landmark_files.size()) + " files for " +
                            std::to_string(meshes.size()) + " meshes; give one per mesh, in the same order");
+    if (std::isnan(opt.tau) || std::isnan(opt.max_patch_area))
+      throw qs::UsageError(std::string(std::isnan(opt.tau) ? "--tau" : "--max-area") + " must be a number, not nan");
     if (outdir.empty()) outdir = default_outdir(meshes);
+    // No output may replace an input: the report file, or the folder's files.
+    std::vector<fs::path> input_paths(meshes.begin(), meshes.end());
+    input_paths.insert(input_paths.end(), landmark_files.begin(), landmark_files.end());
+    if (!report_file.empty()) qs::check_not_an_input(report_file, input_paths, "--report");
+    // Checked (and staged) before the work, so that a bad -o fails at once; written on success only.
+    qs::OutputFolder folder(outdir);
     const auto t0 = std::chrono::steady_clock::now();
     std::ostringstream text;
     std::vector<qs::tools::MeshInput> inputs;
@@ -217,9 +226,12 @@ int main(int argc, char** argv) {
            << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events
            << " warp flip events, max stretch " << std::setprecision(4) << result.max_stretch << "\n";
 
-    fs::create_directories(outdir);
-    for (const auto& dm : out) qs::dissect::write_chart_ply(fs::path(outdir) / dm.chart_file, dm.dissection.chart);
-    qs::write_file_atomically(fs::path(outdir) / "dissection.json", qs::dissect::dissection_to_json(out, opt, false));
+    for (const auto& dm : out) {
+      qs::check_not_an_input(fs::path(outdir) / dm.chart_file, input_paths, "-o");
+      qs::dissect::write_chart_ply(folder.staging() / dm.chart_file, dm.dissection.chart);
+    }
+    qs::check_not_an_input(fs::path(outdir) / "dissection.json", input_paths, "-o");
+    qs::write_file_atomically(folder.staging() / "dissection.json", qs::dissect::dissection_to_json(out, opt, false));
     const auto t3 = std::chrono::steady_clock::now();
     text << "  wrote " << (fs::path(outdir) / "dissection.json").string() << " and " << out.size() << " chart file"
          << (out.size() > 1 ? "s" : "") << "\n";
@@ -235,11 +247,30 @@ int main(int argc, char** argv) {
         full << "  " << dm.file << " " << p.name << ": " << p.faces << " faces, stretch " << p.stretch
              << ", flipped " << p.flipped_faces << "\n";
     if (!report_file.empty()) qs::write_file_atomically(report_file, full.str());
-    if (flipped > 0)
+    if (flipped > 0) {
+      // The folder is written (the report refers to it); the advice depends on why splitting stopped.
+      folder.commit();
+      bool split_failed = false, limits = false;
+      for (const auto& dm : out)
+        for (const auto& p : dm.dissection.chart.patches)
+          if (p.flipped_faces + p.zero_area_faces > 0) {
+            split_failed |= p.stop == qs::dissect::StopReason::SplitFailed || p.stop == qs::dissect::StopReason::NoProgress;
+            limits |= p.stop == qs::dissect::StopReason::MaxDepth || p.stop == qs::dissect::StopReason::TooFewFaces;
+          }
+      std::string advice;
+      if (limits) advice = "try a larger --max-depth or a smaller --min-faces";
+      if (split_failed)
+        advice += std::string(advice.empty() ? "" : "; ") +
+                  "a split failed (see its reason above): try other seeds, --relax, or a cleaner mesh";
+      if (out.size() > 1)
+        advice += std::string(advice.empty() ? "" : "; ") +
+                  "check that the landmarks correspond (features in the same order around each other on every "
+                  "mesh, seeds at the same places)";
+      if (advice.empty()) advice = "see the report above";
       throw qs::SolverError(std::to_string(flipped) + " uv faces stay flipped or of zero area after splitting, " +
-                            "local refinement and repair: " + folded.str() +
-                            "check that the landmarks correspond (features in the same order around each other on "
-                            "every mesh, seeds at the same places)");
+                            "local refinement and repair: " + folded.str() + advice);
+    }
+    folder.commit();
     return 0;
   });
 }

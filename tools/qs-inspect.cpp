@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
       if (as_json) all.push_back(std::move(o.json));
       else std::cout << o.text << (i + 1 < meshes.size() ? "\n" : "");
     }
-    if (as_json) std::cout << all.dump(2) << "\n";
+    if (as_json) std::cout << all.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
     return code;
   });
 }

@@ -23,6 +23,7 @@
 #include "qs/correspondence/correspondence.h"
 #include "qs/dissect/dissection_json.h"
 #include "qs/core/error.h"
+#include "qs/core/output_folder.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
@@ -279,8 +280,17 @@ int main(int argc, char** argv) {
   app.add_flag("--no-vertices", no_vertices, "Do not measure at the vertices (surface samples only)");
   app.add_flag("--json", as_json, "Print a JSON object instead of text");
   app.add_option("-o,--output", output, "Write the report to this file instead of stdout");
+  long max_samples = 100000000;
+  app.add_option("--max-samples", max_samples,
+                 "Refuse a --samples count above this up front (the run time grows linearly with it)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 
   return qs::tools::run_tool(app, argc, argv, [&] {
+    if (samples > max_samples)
+      throw qs::UsageError("--samples " + std::to_string(samples) + " is more than --max-samples " +
+                           std::to_string(max_samples) + " (the time grows linearly with the count); raise "
+                           "--max-samples to allow it");
     if (correspondence) {
       if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
       if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
@@ -289,6 +299,7 @@ int main(int argc, char** argv) {
     if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
     if (level != 0) throw qs::UsageError("--level needs --correspondence");
     if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");
+    if (output) qs::check_not_an_input(*output, {file_a, file_b}, "-o");
     const Input a = load(file_a, "A");
     const Input b = load(file_b, "B");
     qs::metro::MetroOptions opt;
@@ -301,7 +312,7 @@ int main(int argc, char** argv) {
     } catch (const qs::InvalidInput& e) {  // the library names the meshes "A" and "B"
       throw qs::InvalidInput(std::string(e.what()) + " (A = " + a.file + ", B = " + b.file + ")");
     }
-    const std::string report = as_json ? json_report(a, b, r, seed).dump(2) + "\n" : text_report(a, b, r);
+    const std::string report = as_json ? json_report(a, b, r, seed).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n" : text_report(a, b, r);
     if (output) qs::write_file_atomically(*output, report);
     else std::cout << report;
     return 0;

@@ -20,6 +20,8 @@
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
+#include "qs/core/output_folder.h"
 #include "qs/gltf/glb.h"
 #include "qs/morph/blend.h"
 #include "qs/morph/frame_maps.h"
@@ -189,7 +191,26 @@ int main(int argc, char** argv) {
                       {"align", align}};
 
     const bool write_folder = frames > 0 || have_weights;
-    if (write_folder) make_folder(outdir);
+    // No output replaces an input; the folder is staged and moved into place at the very end, after
+    // the GLB, so that a failure anywhere leaves both as they were.
+    std::vector<fs::path> input_paths = {fs::path(folder) / "remesh.json"};
+    for (const auto& o : in.outputs) input_paths.push_back(fs::path(folder) / o);
+    if (!bake.empty()) {
+      input_paths.push_back(fs::path(bake) / "bake.json");
+      for (const auto& s : names)
+        for (const std::string suffix : {".glb", "_normal.png"}) input_paths.push_back(fs::path(bake) / (s + suffix));
+    }
+    if (!glb.empty()) qs::check_not_an_input(glb, input_paths, "--glb");
+    std::optional<qs::OutputFolder> out_folder;
+    if (write_folder) {
+      for (int f = 0; f < frames; ++f)
+        qs::check_not_an_input(fs::path(outdir) / (frame_stem(f, frames) + "." + ext), input_paths, "-o");
+      qs::check_not_an_input(fs::path(outdir) / "morph.json", input_paths, "-o");
+      if (!glb.empty() && fs::weakly_canonical(fs::absolute(glb)) == fs::weakly_canonical(fs::absolute(fs::path(outdir) / "morph.json")))
+        throw qs::UsageError("--glb " + glb + " is the morph.json this run writes; name the GLB otherwise");
+      out_folder.emplace(outdir);
+    }
+    const fs::path staging = write_folder ? out_folder->staging() : fs::path();
     if (frames > 0) {
       const std::vector<qs::morph::PathFrame> pf = qs::morph::path_frames(n, stops, frames);
       std::vector<std::string> stems, files;
@@ -206,10 +227,10 @@ int main(int argc, char** argv) {
         list.push_back(j);
       }
       if (frame_maps)
-        qs::morph::write_textured_frames(outdir, stems, set.positions, set.connectivity.faces, *baked, atlases, pf, threads,
+        qs::morph::write_textured_frames(staging, stems, set.positions, set.connectivity.faces, *baked, atlases, pf, threads,
                                          context);
       else
-        qs::morph::write_frames(outdir, files, set.positions, set.connectivity.faces, pf, ff, threads, context);
+        qs::morph::write_frames(staging, files, set.positions, set.connectivity.faces, pf, ff, threads, context);
       doc["frames"] = {{"count", frames},
                        {"file_format", ext},
                        {"spacing", "uniform in the path parameter s in [0, stops - 1]; stop k is at s = k; "
@@ -222,10 +243,10 @@ int main(int argc, char** argv) {
       if (frame_maps) {
         qs::morph::PathFrame pf;
         pf.weights = weights;
-        qs::morph::write_textured_frames(outdir, {"blend"}, set.positions, set.connectivity.faces, *baked, atlases, {pf}, 1);
+        qs::morph::write_textured_frames(staging, {"blend"}, set.positions, set.connectivity.faces, *baked, atlases, {pf}, 1);
         doc["blend"] = {{"file", file}, {"mtl", "blend.mtl"}, {"normal_map", "blend_normal.png"}, {"weights", weights}};
       } else {
-        qs::morph::FrameWriter(set.connectivity.faces, ff).write(fs::path(outdir) / file, qs::morph::blend(set, weights));
+        qs::morph::FrameWriter(set.connectivity.faces, ff).write(staging / file, qs::morph::blend(set, weights));
         doc["blend"] = {{"file", file}, {"weights", weights}};
       }
       text << "  wrote " << (fs::path(outdir) / file).string() << "\n";
@@ -248,7 +269,10 @@ int main(int argc, char** argv) {
       text << "  wrote " << glb << ": base " << names[go.base] << ", " << mesh.targets.size() << " morph targets, "
            << (stops.size() - 1) << " s animation" << (baked ? ", normal map from " + baked->glb.string() : "") << "\n";
     }
-    if (write_folder) qs::write_file_atomically(fs::path(outdir) / "morph.json", doc.dump(1) + "\n");
+    if (write_folder) {
+      qs::write_file_atomically(staging / "morph.json", qs::json_strict::dump(doc, 1) + "\n");
+      out_folder->commit();
+    }
     const auto t3 = Clock::now();
     if (!quiet)
       std::cout << "morph of " << n << " shapes, " << set.connectivity.num_vertices() << " vertices, "

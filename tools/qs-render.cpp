@@ -19,9 +19,11 @@
 #include <vector>
 
 #include "qs/core/error.h"
+#include "qs/core/output_folder.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/io/read_mesh.h"
 #include "qs/render/render.h"
+#include "resource_limits.h"
 #include "tool_main.h"
 
 namespace fs = std::filesystem;
@@ -102,6 +104,8 @@ int main(int argc, char** argv) {
   app.add_flag("--patch-edges", patch_edges, "Charts: draw patch boundaries as thick dark lines");
   app.add_flag("--uv", uv, "Charts: draw the uv layout (one tile per patch; red = flipped or overlapping)");
   app.add_flag("-v,--verbose", verbose, "Print read and render times");
+  double max_memory = qs::tools::kDefaultMaxMemoryGiB;
+  qs::tools::add_max_memory_option(app, max_memory);
 
   return qs::tools::run_tool(app, argc, argv, [&] {
     std::smatch m;
@@ -112,6 +116,21 @@ int main(int argc, char** argv) {
     opt.height = m[2].matched ? std::stoi(m[2].str()) : opt.width;
     if (opt.width < 16 || opt.height < 16 || opt.width > 8192 || opt.height > 8192)
       throw qs::UsageError("--size " + size + " is out of range; width and height must be 16..8192");
+    // The whole picture, checked before any view is drawn: the views side by side must fit in one
+    // PNG (16384 pixels wide), and the views (colour + depth, ~8 bytes a pixel, plus the joined copy)
+    // in --max-memory.
+    const long long total_width = static_cast<long long>(opt.width) * static_cast<long long>(inputs.size());
+    if (total_width > 16384)
+      throw qs::UsageError(std::to_string(inputs.size()) + " views of width " + std::to_string(opt.width) + " are " +
+                           std::to_string(total_width) + " pixels wide side by side, more than 16384; use a smaller "
+                           "--size or fewer inputs");
+    qs::tools::check_memory(static_cast<double>(total_width) * opt.height * 11.0, max_memory,
+                            std::to_string(inputs.size()) + " views of " + std::to_string(opt.width) + " x " +
+                                std::to_string(opt.height));
+    {
+      std::vector<fs::path> input_paths(inputs.begin(), inputs.end());
+      qs::check_not_an_input(output, input_paths, "-o");
+    }
     std::vector<qs::Vec3> views_dir;  // one per input when several were given
     if (view_v.size() == 3 * inputs.size() && inputs.size() > 1) {
       for (size_t k = 0; k < inputs.size(); ++k)

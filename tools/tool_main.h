@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <new>
 #include <string>
@@ -34,6 +35,10 @@ int run_tool(CLI::App& app, int argc, char** argv, Body&& body) {
   } catch (const Error& e) {
     std::cerr << name << ": " << error_name(e.code()) << " error: " << e.what() << "\n";
     return exit_code(e.code());
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A file-system call that failed (permissions, a path under a file, a full disk): an i/o error.
+    std::cerr << name << ": " << error_name(ErrorCode::Io) << " error: " << e.what() << "\n";
+    return exit_code(ErrorCode::Io);
   } catch (const std::bad_alloc&) {
     std::cerr << name << ": internal error: out of memory\n";
     return exit_code(ErrorCode::Internal);

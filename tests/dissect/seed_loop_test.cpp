@@ -485,4 +485,37 @@ TEST(SeedLoopSharedMeshes, ChosenSeedsRouteOnEveryMesh) {
   }
 }
 
+// A double cone whose two apexes have valence n (fans as in CAD files): the graph and the seed loop
+// are built in O(F log valence); the loop is valid and splits the faces.
+TEST(SeedLoop, HighValenceFansRoute) {
+  const int n = 3000;
+  TriMesh m;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    m.positions.emplace_back(std::cos(a), std::sin(a), 0);
+  }
+  m.positions.emplace_back(0, 0, 1);
+  m.positions.emplace_back(0, 0, -1);
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    m.faces.push_back({i, j, n});
+    m.faces.push_back({j, i, n + 1});
+  }
+  const Seeds seeds = qs::dissect::choose_seeds(m);
+  const SeedLoop loop = qs::dissect::trace_seed_loop(m, seeds);
+  const std::vector<int> side = qs::dissect::seed_patch_of_faces(m, loop);
+  ASSERT_EQ(side.size(), m.faces.size());
+  const auto zeros = std::count(side.begin(), side.end(), 0);
+  EXPECT_GT(zeros, 0);
+  EXPECT_LT(zeros, static_cast<long>(side.size()));
+}
+
+// Non-finite or huge coordinates never reach the distance code (they used to write before an array).
+TEST(SeedLoop, HugeCoordinatesAreInvalidInput) {
+  TriMesh m = qs::shapes::icosphere(1);
+  for (Vec3& p : m.positions) p *= 1e154;
+  EXPECT_THROW((void)qs::dissect::choose_seeds(m), qs::InvalidInput);
+  EXPECT_THROW((void)qs::dissect::choose_seeds_farthest(m), qs::InvalidInput);
+}
+
 }  // namespace

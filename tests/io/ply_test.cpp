@@ -262,4 +262,15 @@ TEST(ReadPly, AsciiUnparsableNumberAndTrailingData) {
               ThrowsMessage<qs::InvalidInput>(HasSubstr("test.ply:14: unexpected data")));
 }
 
+// Only "face" and "tristrips" hold faces: an "edge" element with a vertex_indices list is skipped.
+TEST(ReadPly, OtherElementsWithVertexIndicesAreNotFaces) {
+  const auto r = read_ply(
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\n"
+      "element edge 2\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 0 1 2\n3 1 2 3\n");
+  EXPECT_EQ(r.mesh.num_faces(), 4);
+  EXPECT_EQ(r.mesh.faces[3], (Tri{1, 2, 3}));
+}
+
 }  // namespace

@@ -134,6 +134,24 @@ TEST(Validate, NonFiniteCoordinatesAreFatal) {
   EXPECT_FALSE(r.orientation_flipped);
 }
 
+TEST(Validate, CoordinatesTooLargeToSquareAreFatalAndTheBoxStaysFinite) {
+  // 1e154 squared overflows; 1e100 is the documented limit (qs/core/finite.h).
+  TriMesh m = tetrahedron();
+  for (Vec3& p : m.positions) p *= 1e154;
+  const ValidationReport r = validate(m).report;
+  EXPECT_EQ(problem(r, "non_finite_coordinates").count, 4);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_TRUE(std::isfinite(r.bbox_diagonal));
+  TriMesh one = tetrahedron();
+  one.positions[1].z() = -1e200;
+  EXPECT_EQ(problem(validate(one).report, "non_finite_coordinates").first_ids, (Ids{1}));
+  TriMesh edge = tetrahedron();
+  for (Vec3& p : edge.positions) p *= 1e99;  // large but within the limit: accepted
+  const ValidationReport ok = validate(edge).report;
+  EXPECT_TRUE(ok.accepted);
+  EXPECT_TRUE(std::isfinite(ok.bbox_diagonal) && std::isfinite(ok.signed_volume));
+}
+
 TEST(Validate, NonFiniteUnreferencedVertexIsOnlyDropped) {
   TriMesh m = tetrahedron();
   m.positions.emplace_back(std::nan(""), 0, 0);

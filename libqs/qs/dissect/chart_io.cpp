@@ -1,13 +1,17 @@
 #include "qs/dissect/chart_io.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/finite.h"
+#include "qs/core/json_strict.h"
 
 namespace qs::dissect {
 namespace {
@@ -74,29 +78,44 @@ void write_chart_ply(const std::filesystem::path& path, const Chart& chart) {
 }
 
 Chart read_chart_ply(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path.string() + ": cannot open chart file");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  const std::string data = buf.str();
+  return parse_chart_ply(json_strict::read_text_file(path, "chart file"), json_strict::printable(path.string()));
+}
+
+Chart parse_chart_ply(std::string_view data, const std::string& name) {
   const size_t end = data.find("end_header\n");
   if (data.rfind("ply\nformat binary_little_endian 1.0\n", 0) != 0 || end == std::string::npos)
-    throw InvalidInput(path.string() + ": not a qs chart file (expected a binary little-endian PLY header)");
-  const std::string header = data.substr(0, end);
+    throw InvalidInput(name + ": not a qs chart file (expected a binary little-endian PLY header)");
+  const std::string header(data.substr(0, end));
   long long nv = -1, nf = -1;
   std::istringstream hs(header);
+  auto count = [&](const std::string& line, size_t from, const char* element) {
+    long long n = -1;
+    const char* first = line.data() + from;
+    const char* last = line.data() + line.size();
+    const auto [ptr, ec] = std::from_chars(first, last, n);
+    if (ec != std::errc() || ptr != last || n < 0)
+      throw InvalidInput(name + ": header line \"" + json_strict::printable(line, 60) + "\": the " + element +
+                         " count must be a non-negative integer");
+    return n;
+  };
   for (std::string line; std::getline(hs, line);) {
-    if (line.rfind("element vertex ", 0) == 0) nv = std::stoll(line.substr(15));
-    if (line.rfind("element face ", 0) == 0) nf = std::stoll(line.substr(13));
+    if (line.rfind("element vertex ", 0) == 0) nv = count(line, 15, "vertex");
+    if (line.rfind("element face ", 0) == 0) nf = count(line, 13, "face");
   }
   if (header.find("property int patch") == std::string::npos ||
       (header.find(kDoubleTexcoord) == std::string::npos && header.find(kFloatTexcoord) == std::string::npos))
-    throw InvalidInput(path.string() + ": PLY file lacks the chart's per-face patch and texcoord properties");
+    throw InvalidInput(name + ": PLY file lacks the chart's per-face patch and texcoord properties");
   const bool double_uv = header.find(kDoubleTexcoord) != std::string::npos;
   const size_t face_bytes = 1 + 12 + 1 + (double_uv ? 48 : 24) + 4 + 3;
   const size_t body = end + std::strlen("end_header\n");
-  if (nv < 0 || nf < 0 || data.size() - body != static_cast<size_t>(nv) * 24 + static_cast<size_t>(nf) * face_bytes)
-    throw InvalidInput(path.string() + ": chart file size does not match its header (truncated?)");
+  const size_t bytes = data.size() - body;
+  // Counts are checked against the bytes present before anything is multiplied or allocated.
+  if (nv < 0 || nf < 0 || static_cast<unsigned long long>(nv) > bytes / 24 ||
+      static_cast<unsigned long long>(nf) > bytes / face_bytes ||
+      bytes != static_cast<size_t>(nv) * 24 + static_cast<size_t>(nf) * face_bytes)
+    throw InvalidInput(name + ": chart file size does not match its header (truncated?)");
+  if (nv > std::numeric_limits<int>::max() || nf > std::numeric_limits<int>::max())
+    throw InvalidInput(name + ": more than 2^31 vertices or faces");
   Chart chart;
   const char* p = data.data() + body;
   auto get = [&p](auto& v) {
@@ -104,8 +123,12 @@ Chart read_chart_ply(const std::filesystem::path& path) {
     p += sizeof(v);
   };
   chart.mesh.positions.resize(nv);
-  for (auto& v : chart.mesh.positions)
-    for (int k = 0; k < 3; ++k) get(v[k]);
+  for (long long v = 0; v < nv; ++v) {
+    for (int k = 0; k < 3; ++k) get(chart.mesh.positions[v][k]);
+    if (!usable_position(chart.mesh.positions[v]))
+      throw InvalidInput(name + ": vertex " + std::to_string(v) +
+                         " has a NaN, infinite or too large coordinate (expected finite, |x| <= 1e100)");
+  }
   chart.mesh.faces.resize(nf);
   chart.face_uv.resize(nf);
   chart.face_patch.resize(nf);
@@ -116,28 +139,38 @@ Chart read_chart_ply(const std::filesystem::path& path) {
     std::int32_t idx[3];
     for (auto& i : idx) get(i);
     get(n6);
-    if (n3 != 3 || n6 != 6) throw InvalidInput(path.string() + ": face " + std::to_string(f) + " is not a chart triangle");
+    if (n3 != 3 || n6 != 6) throw InvalidInput(name + ": face " + std::to_string(f) + " is not a chart triangle");
     for (int k = 0; k < 3; ++k) {
       if (idx[k] < 0 || idx[k] >= nv)
-        throw InvalidInput(path.string() + ": face " + std::to_string(f) + " has vertex index " +
+        throw InvalidInput(name + ": face " + std::to_string(f) + " has vertex index " +
                            std::to_string(idx[k]) + " out of range");
       chart.mesh.faces[f][k] = idx[k];
+      double u, v;
       if (double_uv) {
-        double u, v;
         get(u);
         get(v);
-        chart.face_uv[f][k] = Vec2(u, v);
       } else {
-        float u, v;
-        get(u);
-        get(v);
-        chart.face_uv[f][k] = Vec2(u, v);
+        float uf, vf;
+        get(uf);
+        get(vf);
+        u = uf;
+        v = vf;
       }
+      // Patch parameters lie in the unit square (float rounding aside); NaN fails the test too.
+      constexpr double lo = -1e-4, hi = 1 + 1e-4;
+      if (!(u >= lo && u <= hi && v >= lo && v <= hi))
+        throw InvalidInput(name + ": face " + std::to_string(f) + " has texcoord (" + std::to_string(u) + ", " +
+                           std::to_string(v) + "), expected a point of the unit square");
+      chart.face_uv[f][k] = Vec2(u, v);
     }
     std::int32_t patch;
     get(patch);
     for (auto& c : rgb) get(c);
-    if (patch < 0) throw InvalidInput(path.string() + ": face " + std::to_string(f) + " has a negative patch");
+    // Every patch has at least one face, so an id past the face count cannot be right (and would
+    // make readers allocate per-patch tables of that size).
+    if (patch < 0 || patch >= nf)
+      throw InvalidInput(name + ": face " + std::to_string(f) + " has patch " + std::to_string(patch) +
+                         ", expected an id in [0, " + std::to_string(nf) + ") (at most one patch per face)");
     chart.face_patch[f] = patch;
     max_patch = std::max(max_patch, static_cast<int>(patch));
   }

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "qs/dissect/dissection.h"
 
@@ -23,6 +24,10 @@ void write_chart_ply(const std::filesystem::path& path, const Chart& chart);
 /// Reads a chart PLY written by write_chart_ply, version 2 or 1 (patch infos other than the count are not in
 /// the file: `patches` gets one default entry per patch label). \throws IoError, InvalidInput.
 Chart read_chart_ply(const std::filesystem::path& path);
+/// The same from the file's bytes; `name` names the file in messages. Rejects counts that do not
+/// match the bytes, vertex indices out of range, non-finite or too large (> 1e100) coordinates,
+/// texcoords outside the unit square (1e-4 tolerance) or NaN, and patch ids outside [0, #F).
+Chart parse_chart_ply(std::string_view data, const std::string& name);
 
 /// A distinct, stable colour per patch index (golden-ratio hue walk).
 std::array<unsigned char, 3> patch_colour(int patch);

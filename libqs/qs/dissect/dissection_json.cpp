@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/dissect/chart_io.h"
 
 namespace qs::dissect {
@@ -30,7 +31,7 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"stretch_iterations", options.stretch_iterations},
                     {"max_patch_area", options.max_patch_area},
                     {"split_stretch_rounds", options.split_stretch_rounds}};
-  if (meshes.empty()) return doc.dump(2);
+  if (meshes.empty()) return json_strict::dump(doc, 2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();
   for (const auto& n : first.tree) {
@@ -123,7 +124,7 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
     list.push_back(j);
   }
   doc["meshes"] = list;
-  return doc.dump(2) + "\n";
+  return json_strict::dump(doc, 2) + "\n";
 }
 
 }  // namespace qs::dissect
@@ -132,21 +133,61 @@ namespace qs::dissect {
 
 namespace {
 
-// Field access with messages that name the file and the field.
+// Field access with messages that name the file and the field. Every value is checked for its
+// type and range before it is converted (no wrapping of large integers, no NaN or infinity).
 struct Reader {
   std::string file;
   const nlohmann::json& at(const nlohmann::json& j, const char* key, const std::string& where) const {
     if (!j.is_object() || !j.contains(key))
-      throw InvalidInput(file + ": " + where + " lacks \"" + key + "\"");
+      throw InvalidInput(file + ": " + json_strict::printable(where, 80) + " lacks \"" + key + "\"");
     return j.at(key);
+  }
+  [[noreturn]] void wrong(const char* key, const std::string& where, const char* expected,
+                          const nlohmann::json& found) const {
+    throw InvalidInput(file + ": " + json_strict::printable(where, 80) + "." + key + " must be " + expected +
+                       ", found " + json_strict::describe(found));
+  }
+  int integer(const nlohmann::json& v, const char* key, const std::string& where) const {
+    long long x = 0;
+    if (!json_strict::integer_in(v, -1, std::numeric_limits<int>::max(), x))
+      wrong(key, where, "an integer in [-1, 2^31)", v);
+    return static_cast<int>(x);
   }
   template <class T>
   T get(const nlohmann::json& j, const char* key, const std::string& where) const {
-    try {
-      return at(j, key, where).get<T>();
-    } catch (const nlohmann::json::exception&) {
-      throw InvalidInput(file + ": " + where + "." + key + " has the wrong type");
+    const nlohmann::json& v = at(j, key, where);
+    if constexpr (std::is_same_v<T, int>) {
+      return integer(v, key, where);
+    } else if constexpr (std::is_same_v<T, double>) {
+      double x = 0;
+      if (!json_strict::finite_number(v, x)) wrong(key, where, "a finite number", v);
+      return x;
+    } else if constexpr (std::is_same_v<T, bool>) {
+      if (!v.is_boolean()) wrong(key, where, "true or false", v);
+      return v.get<bool>();
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      if (!v.is_string()) wrong(key, where, "a string", v);
+      const auto& str = v.get_ref<const std::string&>();
+      if (!json_strict::is_clean_text(str)) wrong(key, where, "UTF-8 text without control characters", v);
+      return str;
+    } else if constexpr (std::is_same_v<T, std::array<int, 4>>) {
+      if (!v.is_array() || v.size() != 4) wrong(key, where, "an array of 4 integers", v);
+      std::array<int, 4> a{};
+      for (int i = 0; i < 4; ++i) a[i] = integer(v[i], key, where);
+      return a;
+    } else {
+      static_assert(std::is_same_v<T, std::array<double, 2>>);
+      if (!v.is_array() || v.size() != 2) wrong(key, where, "an array of 2 numbers", v);
+      std::array<double, 2> a{};
+      for (int i = 0; i < 2; ++i)
+        if (!json_strict::finite_number(v[i], a[i])) wrong(key, where, "an array of 2 finite numbers", v);
+      return a;
     }
+  }
+  const nlohmann::json& array(const nlohmann::json& j, const char* key, const std::string& where) const {
+    const nlohmann::json& v = at(j, key, where);
+    if (!v.is_array()) wrong(key, where, "an array", v);
+    return v;
   }
 };
 
@@ -154,16 +195,15 @@ struct Reader {
 
 LoadedDissection read_dissection(const std::filesystem::path& folder) {
   const std::filesystem::path path = folder / "dissection.json";
-  std::ifstream in(path);
-  if (!in) throw IoError(path.string() + ": cannot open (is " + folder.string() + " a qs-dissect output folder?)");
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InvalidInput(path.string() + ": not valid JSON (" + e.what() + ")");
-  }
-  const Reader r{path.string()};
-  if (!doc.is_object() || doc.value("format", "") != "qs-dissection")
+  if (!std::filesystem::is_directory(folder))
+    throw IoError(json_strict::printable(folder.string()) + ": no such folder (expected a qs-dissect output folder with dissection.json)");
+  const nlohmann::json doc = json_strict::parse(
+      json_strict::read_text_file(path, "dissection.json (is " + json_strict::printable(folder.string()) +
+                                            " a qs-dissect output folder?)"),
+      json_strict::printable(path.string()));
+  const Reader r{json_strict::printable(path.string())};
+  const auto format = doc.is_object() ? doc.find("format") : doc.end();
+  if (!doc.is_object() || format == doc.end() || *format != "qs-dissection")
     throw InvalidInput(path.string() + ": not a qs-dissection file (\"format\" must be \"qs-dissection\")");
   const int version = r.get<int>(doc, "version", "the document");
   if (version != kDissectionFormatVersion)
@@ -175,7 +215,7 @@ LoadedDissection read_dissection(const std::filesystem::path& folder) {
   out.options.max_depth = r.get<int>(o, "max_depth", "options");
   out.options.min_faces_to_split = r.get<int>(o, "min_faces_to_split", "options");
   std::vector<TreeNode> tree;
-  for (const auto& n : r.at(doc, "tree", "the document")) {
+  for (const auto& n : r.array(doc, "tree", "the document")) {
     TreeNode t;
     t.name = r.get<std::string>(n, "name", "a tree node");
     t.depth = r.get<int>(n, "depth", "tree node " + t.name);
@@ -193,18 +233,22 @@ LoadedDissection read_dissection(const std::filesystem::path& folder) {
     dm.seed_source = r.get<std::string>(m, "seed_source", where);
     dm.input_vertices = r.get<int>(m, "input_vertices", where);
     dm.input_faces = r.get<int>(m, "input_faces", where);
-    if (dm.chart_file.find('/') != std::string::npos || dm.chart_file.find('\\') != std::string::npos)
+    if (dm.chart_file.empty() || dm.chart_file == "." || dm.chart_file == ".." ||
+        dm.chart_file.find('/') != std::string::npos || dm.chart_file.find('\\') != std::string::npos)
       throw InvalidInput(path.string() + ": " + where + ".chart must be a file name in the folder");
     Dissection& d = dm.dissection;
     d.chart = read_chart_ply(folder / dm.chart_file);
     d.tree = tree;
     d.seeds = r.get<std::array<int, 4>>(m, "seeds", where);
-    const auto& patches = r.at(m, "patches", where);
-    if (!patches.is_array() || patches.size() < d.chart.patches.size())
+    const auto& patches = r.array(m, "patches", where);
+    if (patches.size() < d.chart.patches.size())
       throw InvalidInput(path.string() + ": " + where + " lists " + std::to_string(patches.size()) +
                          " patches but its chart uses " + std::to_string(d.chart.patches.size()));
     d.chart.patches.clear();
     const int nv = static_cast<int>(d.chart.mesh.positions.size());
+    if (dm.input_vertices < 0 || dm.input_vertices > nv || dm.input_faces < 0)
+      throw InvalidInput(r.file + ": " + where + ".input_vertices is " + std::to_string(dm.input_vertices) +
+                         ", expected a count in [0, " + std::to_string(nv) + "] (the chart keeps the input's vertices)");
     for (const auto& pj : patches) {
       PatchInfo p;
       p.name = r.get<std::string>(pj, "name", where + ".patches");
@@ -232,7 +276,7 @@ LoadedDissection read_dissection(const std::filesystem::path& folder) {
                            std::to_string(count[p]) + " faces in the chart but " +
                            std::to_string(d.chart.patches[p].faces) + " in dissection.json");
     if (m.contains("features"))
-      for (const auto& fj : m.at("features")) {
+      for (const auto& fj : r.array(m, "features", where)) {
         FeaturePlacement f;
         f.name = r.get<std::string>(fj, "name", where + ".features");
         f.vertex = r.get<int>(fj, "vertex", where + " feature " + f.name);

@@ -53,6 +53,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <optional>
@@ -61,6 +62,7 @@
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/finite.h"
 
 namespace qs::dissect {
 
@@ -107,6 +109,11 @@ Graph build_graph(const TriMesh& mesh) {
       throw InvalidInput("seed loop: face " + std::to_string(f) +
                          " repeats a vertex; validate the mesh first");
   }
+  // Edge lengths must be finite: an infinite one makes every distance infinite and no seed routes.
+  for (int v = 0; v < nv; ++v)
+    if (!usable_position(mesh.positions[v]))
+      throw InvalidInput("seed loop: vertex " + std::to_string(v) +
+                         " has a non-finite or too large coordinate (|x| > 1e100); validate the mesh first");
   Graph g;
   g.position = &mesh.positions;
   g.start.assign(static_cast<std::size_t>(nv) + 1, 0);
@@ -136,16 +143,28 @@ Graph build_graph(const TriMesh& mesh) {
   }
   // Everything about edge v-w is in v's row: the face with v->w is the slot's face, the face with
   // w->v is the one whose corner before v is w.
+  // Per row, the neighbours and the corners before v sorted (with their slots): O(d log d) per
+  // vertex of valence d, not O(d^2) (fans of 100k faces around one vertex occur in CAD files).
   g.across.assign(slots, -1);
+  std::vector<std::pair<int, int>> by_neighbor, by_before;
   for (int v = 0; v < nv; ++v) {
     const int first = g.start[v], last = g.start[v + 1];
+    by_neighbor.clear();
+    by_before.clear();
+    for (int r = first; r < last; ++r) {
+      by_neighbor.emplace_back(g.neighbor[r], r);
+      by_before.emplace_back(before[r], r);
+    }
+    std::sort(by_neighbor.begin(), by_neighbor.end());
+    std::sort(by_before.begin(), by_before.end());
     for (int s = first; s < last; ++s) {
       const int w = g.neighbor[s];
-      int back = -1, same = 0;
-      for (int r = first; r < last; ++r) {
-        same += g.neighbor[r] == w;
-        if (before[r] == w) back = r;
-      }
+      const std::pair<int, int> lo(w, std::numeric_limits<int>::min()), hi(w, std::numeric_limits<int>::max());
+      const auto same = std::upper_bound(by_neighbor.begin(), by_neighbor.end(), hi) -
+                        std::lower_bound(by_neighbor.begin(), by_neighbor.end(), lo);
+      // The last slot whose corner before v is w (what a scan in slot order would keep).
+      const auto bb = std::upper_bound(by_before.begin(), by_before.end(), hi);
+      const int back = bb != by_before.begin() && std::prev(bb)->first == w ? std::prev(bb)->second : -1;
       if (same > 1)
         throw InvalidInput("seed loop: edge " + edge_name(v, w) +
                            " has more than two faces or two faces running the same way; the "
@@ -639,17 +658,25 @@ std::array<int, 4> farthest_seeds(const TriMesh& mesh, Dijkstra& dijkstra,
     }
     return best;
   };
+  // -1 (no vertex with a finite distance left) must never reach the distance code.
+  auto found = [](int v) {
+    if (v < 0)
+      throw InvalidInput("choose_seeds: fewer than 4 vertices are reachable at a finite distance; "
+                         "give the four seeds by hand");
+    return v;
+  };
   std::array<int, 4> s{-1, -1, -1, -1};
-  s[0] = farthest(dijkstra.all_distances(c), s);
+  found(c);
+  s[0] = found(farthest(dijkstra.all_distances(c), s));
   const std::vector<double> d0 = dijkstra.all_distances(s[0]);
-  s[2] = farthest(d0, s);
+  s[2] = found(farthest(d0, s));
   const std::vector<double> d2 = dijkstra.all_distances(s[2]);
   std::vector<double> m(nv);
   for (int v = 0; v < nv; ++v) m[v] = std::min(d0[v], d2[v]);
-  s[1] = farthest(m, s);
+  s[1] = found(farthest(m, s));
   const std::vector<double> d1 = dijkstra.all_distances(s[1]);
   for (int v = 0; v < nv; ++v) m[v] = std::min(m[v], d1[v]);
-  s[3] = farthest(m, s);
+  s[3] = found(farthest(m, s));
   // Counter-clockwise around +e3: the quadrilateral projected on (e1, e2) has positive area.
   double area = 0;
   for (int i = 0; i < 4; ++i) {

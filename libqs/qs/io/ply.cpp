@@ -415,7 +415,9 @@ ReadResult read_ply(std::string_view data, const std::string& name) {
         if (n < 0)
           src.fail_here("negative list length " + std::to_string(n) + " in property " + quote(p.name) +
                         " of " + e.name + " " + std::to_string(rec));
-        if (k != r.list) {
+        // Only face and tristrips elements hold faces: an "edge" (or any other) element's
+        // vertex_indices list is skipped like any other property.
+        if (k != r.list || r.kind == Roles::Kind::Other) {
           src.skip_items(e, p, n, rec);
           continue;
         }

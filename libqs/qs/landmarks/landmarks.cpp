@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "qs/core/error.h"
+#include "qs/core/finite.h"
+#include "qs/core/json_strict.h"
 
 namespace qs::landmarks {
 namespace {
@@ -60,7 +62,15 @@ class Resolver {
   }
 
   [[noreturn]] void fail(const std::string& what, const std::string& msg) const {
-    throw InvalidInput(source_ + ": landmark '" + what + "': " + msg);
+    throw InvalidInput(source_ + ": landmark '" + json_strict::printable(what, 80) + "': " + msg);
+  }
+
+  /// Names are matched across meshes and written into dissection.json: they must be text.
+  void check_name(const std::string& name) const {
+    if (name.empty()) fail(name, "the name is empty");
+    if (name.size() > 256) fail(name, "the name is longer than 256 bytes");
+    if (!json_strict::is_clean_text(name))
+      fail(name, "the name is not UTF-8 text (or holds control characters); save the file as UTF-8");
   }
 
   Landmark vertex(const std::string& name, long long input_id) const {
@@ -103,7 +113,8 @@ class Resolver {
   }
 
   Landmark point(const std::string& name, const Vec3& p) const {
-    if (!p.allFinite()) fail(name, "point coordinates must be finite");
+    if (!usable_position(p))
+      fail(name, "point coordinates must be finite numbers of magnitude at most 1e100");
     double d = 0;
     Landmark lm;
     lm.name = name;
@@ -138,11 +149,22 @@ class Resolver {
   std::vector<int> first_face_;
 };
 
+// A vertex or face id: an integer (a huge unsigned one is out of range, never wrapped to -1).
+long long json_id(const Resolver& r, const std::string& name, const json& j, const char* what) {
+  long long id = 0;
+  if (json_strict::integer_in(j, std::numeric_limits<long long>::min(), std::numeric_limits<long long>::max(), id))
+    return id;
+  if (j.is_number_integer())  // an unsigned value past the signed range
+    r.fail(name, std::string(what) + " " + json_strict::describe(j) + " is out of range");
+  r.fail(name, std::string("\"") + what + "\" must be an integer, found " + json_strict::describe(j));
+}
+
 Landmark parse_json_ref(const Resolver& r, const std::string& name, const json& j) {
-  if (j.is_number_integer()) return r.vertex(name, j.get<long long>());
+  r.check_name(name);
+  if (j.is_number_integer()) return r.vertex(name, json_id(r, name, j, "vertex"));
   if (!j.is_object())
     r.fail(name, "expected a vertex index, {\"vertex\": i}, {\"point\": [x, y, z]} or "
-                 "{\"face\": f, \"bary\": [a, b, c]}, found " + j.dump());
+                 "{\"face\": f, \"bary\": [a, b, c]}, found " + json_strict::describe(j));
   auto number_array = [&](const json& a, size_t n, const char* key) {
     if (!a.is_array() || a.size() != n)
       r.fail(name, std::string("\"") + key + "\" must be an array of " + std::to_string(n) + " numbers");
@@ -153,40 +175,32 @@ Landmark parse_json_ref(const Resolver& r, const std::string& name, const json& 
     }
     return out;
   };
-  if (j.contains("vertex") && j.size() == 1) {
-    if (!j["vertex"].is_number_integer()) r.fail(name, "\"vertex\" must be an integer");
-    return r.vertex(name, j["vertex"].get<long long>());
-  }
+  if (j.contains("vertex") && j.size() == 1) return r.vertex(name, json_id(r, name, j["vertex"], "vertex"));
   if (j.contains("point") && j.size() == 1) {
     const auto p = number_array(j["point"], 3, "point");
     return r.point(name, Vec3(p[0], p[1], p[2]));
   }
   if (j.contains("face") && j.contains("bary") && j.size() == 2) {
-    if (!j["face"].is_number_integer()) r.fail(name, "\"face\" must be an integer");
-    return r.face(name, j["face"].get<long long>(), number_array(j["bary"], 3, "bary"));
+    return r.face(name, json_id(r, name, j["face"], "face"), number_array(j["bary"], 3, "bary"));
   }
-  r.fail(name, "unknown reference " + j.dump() +
+  r.fail(name, "unknown reference (" + json_strict::describe(j) + ")" +
                    "; expected {\"vertex\": i}, {\"point\": [x, y, z]} or {\"face\": f, \"bary\": [a, b, c]}");
 }
 
 Landmarks parse_json(std::string_view text, const std::string& name, const Resolver& r) {
-  json doc;
-  try {
-    doc = json::parse(text.begin(), text.end());
-  } catch (const json::parse_error& e) {
-    throw InvalidInput(name + ": not valid JSON at byte " + std::to_string(e.byte) + ": " + e.what());
-  }
+  const json doc = json_strict::parse(text, name);
   if (!doc.is_object()) throw InvalidInput(name + ": expected a JSON object with \"seeds\" and/or \"features\"");
   for (const auto& [key, value] : doc.items())
     if (key != "seeds" && key != "features")
-      throw InvalidInput(name + ": unknown key \"" + key + "\"; expected \"seeds\" and/or \"features\"");
+      throw InvalidInput(name + ": unknown key \"" + json_strict::printable(key, 80) +
+                         "\"; expected \"seeds\" and/or \"features\"");
   Landmarks out;
   out.source = name;
   if (doc.contains("seeds")) {
     const json& s = doc["seeds"];
     if (!s.is_array() || s.size() != 4)
       throw InvalidInput(name + ": \"seeds\" must be an array of exactly 4 references, found " +
-                         (s.is_array() ? std::to_string(s.size()) + " entries" : s.type_name()));
+                         (s.is_array() ? std::to_string(s.size()) + " entries" : json_strict::describe(s)));
     for (int i = 0; i < 4; ++i) out.seeds.push_back(parse_json_ref(r, "seed" + std::to_string(i), s[i]));
   }
   if (doc.contains("features")) {
@@ -235,6 +249,7 @@ Landmarks parse_pp(std::string_view text, const std::string& name, const Resolve
     if (auto active = attribute(tag, "active"); active && *active == "0") continue;
     const auto label = attribute(tag, "name");
     if (!label || label->empty()) throw InvalidInput(where + ": <point> without a name");
+    r.check_name(*label);
     Vec3 p;
     const char* axes[3] = {"x", "y", "z"};
     for (int k = 0; k < 3; ++k) {
@@ -243,7 +258,8 @@ Landmarks parse_pp(std::string_view text, const std::string& name, const Resolve
       if (!v) throw InvalidInput(where + ": point '" + *label + "' has no " + axes[k] + " attribute");
       p[k] = std::strtod(v->c_str(), &stop);
       if (stop == v->c_str() || *stop != '\0')
-        throw InvalidInput(where + ": point '" + *label + "': " + axes[k] + "=\"" + *v + "\" is not a number");
+        throw InvalidInput(where + ": point '" + *label + "': " + axes[k] + "=\"" + json_strict::printable(*v, 40) +
+                           "\" is not a number");
     }
     if (label->size() == 5 && label->rfind("seed", 0) == 0 && (*label)[4] >= '0' && (*label)[4] <= '3') {
       const int i = (*label)[4] - '0';

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <utility>
 
+#include "qs/core/finite.h"
 #include "qs/mesh/connectivity.h"
 
 namespace qs::mesh {
@@ -167,11 +168,12 @@ ValidationResult validate(const TriMesh& input, const ValidateOptions& options) 
   }
   const int nf = out.num_faces();
 
-  // 3. Non-finite coordinates.
+  // 3. Non-finite coordinates, and coordinates too large for lengths, areas and volumes to stay
+  // finite (|x| > kMaxCoordinate): either makes every later geometric step meaningless.
   IdList non_finite;
   std::vector<char> bad_vertex(nv, 0);
   for (int v = 0; v < nv; ++v)
-    if (!out.positions[v].allFinite()) {
+    if (!usable_position(out.positions[v])) {
       bad_vertex[v] = 1;
       non_finite.add(vertex_source[v]);
     }
@@ -453,7 +455,8 @@ ValidationResult validate(const TriMesh& input, const ValidateOptions& options) 
         "non-finite coordinates: " + std::to_string(non_finite.count) + " " +
             plural(non_finite.count, "vertex", "vertices") +
             " (first: " + format_ids(non_finite, false) +
-            ") with a NaN or infinite coordinate; every coordinate must be a finite number");
+            ") with a NaN, infinite or too large coordinate; every coordinate must be a finite number of "
+            "magnitude at most 1e100");
   if (repeated.count)
     add_problem(report, "repeated_index_faces", S::Fatal, repeated,
                 "faces using a vertex twice: " + std::to_string(repeated.count) + " (first: " +

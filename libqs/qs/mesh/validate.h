@@ -11,8 +11,10 @@
 //                            repeated index are skipped. count: 1; ids: none
 //   invalid_vertex_index     faces with an index < 0 or >= #V. ids: faces. Those faces are dropped
 //                            from all further checks and from the output mesh.
-//   non_finite_coordinates   vertices used by a face with a NaN or infinite coordinate.
-//                            ids: vertices. Faces touching them skip the geometric checks.
+//   non_finite_coordinates   vertices used by a face with a NaN or infinite coordinate, or one of
+//                            magnitude above kMaxCoordinate = 1e100 (qs/core/finite.h: lengths,
+//                            areas and volumes must stay finite). ids: vertices. Faces touching
+//                            them skip the geometric checks; bbox_diagonal is then always finite.
 //   repeated_index_faces     faces that use one vertex twice, e.g. (4, 4, 9). ids: faces. Skipped
 //                            by the checks below (they stay in the output mesh).
 //   duplicate_faces          faces with the same vertex set as an earlier face, in any order and

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/morph/blend.h"
 
 namespace fs = std::filesystem;
@@ -23,24 +24,18 @@ std::vector<unsigned char> read_bytes(const fs::path& path) {
 
 void check_bake_json(const fs::path& bake_dir) {
   const fs::path path = bake_dir / "bake.json";
-  std::ifstream in(path);
-  if (!in)
-    throw IoError(path.string() + ": cannot open (is " + bake_dir.string() +
-                  " a qs-bake output folder? --bake wants the folder holding bake.json, <stem>.glb and "
-                  "<stem>_normal.png)");
-  nlohmann::json doc;
-  try {
-    in >> doc;
-  } catch (const std::exception& e) {
-    throw InvalidInput(path.string() + ": not valid JSON (" + e.what() + ")");
-  }
+  const nlohmann::json doc = json_strict::parse(
+      json_strict::read_text_file(path, "bake.json (is " + json_strict::printable(bake_dir.string()) +
+                                            " a qs-bake output folder? --bake wants the folder holding bake.json, "
+                                            "<stem>.glb and <stem>_normal.png)"),
+      json_strict::printable(path.string()));
   if (!doc.is_object()) throw InvalidInput(path.string() + ": not a JSON object");
   if (doc.contains("format") && doc["format"] != "qs-bake")
-    throw InvalidInput(path.string() + ": not a qs-bake file (\"format\" is " + doc["format"].dump() + ")");
+    throw InvalidInput(path.string() + ": not a qs-bake file (\"format\" is " + json_strict::describe(doc["format"]) + ")");
   // glTF normal textures are tangent-space with OpenGL's green (+Y up).
-  const nlohmann::json options = doc.value("options", nlohmann::json::object());
+  const nlohmann::json options = doc.contains("options") ? doc["options"] : nlohmann::json::object();
   if (options.is_object() && options.contains("space") && options["space"] != "tangent")
-    throw InvalidInput(path.string() + ": the maps are " + options["space"].dump() +
+    throw InvalidInput(path.string() + ": the maps are " + json_strict::describe(options["space"]) +
                        " space; a glTF normal texture must be tangent space (run qs-bake --space tangent)");
   if (options.is_object() && options.contains("green") && options["green"] == "directx")
     throw InvalidInput(path.string() + ": the maps use DirectX's green channel; glTF wants OpenGL's "

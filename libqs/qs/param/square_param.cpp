@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -70,16 +71,19 @@ struct HalfEdges {
   std::vector<int> out_offset;  ///< #V + 1
   std::vector<int> out;         ///< half-edge ids grouped by source vertex
   std::vector<int> twin;        ///< #H
+  /// Per source vertex (same offsets as `out`): (target vertex, half-edge id) sorted, so that a
+  /// look-up costs O(log valence), not O(valence): fans of 100k faces around one vertex occur.
+  std::vector<std::pair<int, int>> by_target;
 };
 
 int he_from(const std::vector<Tri>& faces, int h) { return faces[h / 3][h % 3]; }
 int he_to(const std::vector<Tri>& faces, int h) { return faces[h / 3][(h % 3 + 1) % 3]; }
 
-/// Finds the half-edge a->b among a's out-going ones, or -1.
-int find_half_edge(const HalfEdges& he, const std::vector<Tri>& faces, int a, int b) {
-  for (int k = he.out_offset[a]; k < he.out_offset[a + 1]; ++k)
-    if (he_to(faces, he.out[k]) == b) return he.out[k];
-  return -1;
+/// Finds the half-edge a->b among a's out-going ones (the lowest id if there are several), or -1.
+int find_half_edge(const HalfEdges& he, const std::vector<Tri>&, int a, int b) {
+  const auto first = he.by_target.begin() + he.out_offset[a], last = he.by_target.begin() + he.out_offset[a + 1];
+  const auto it = std::lower_bound(first, last, std::pair<int, int>(b, std::numeric_limits<int>::min()));
+  return it != last && it->first == b ? it->second : -1;
 }
 
 /// \pre face ids are in range.
@@ -93,6 +97,10 @@ HalfEdges build_half_edges(int num_vertices, const std::vector<Tri>& faces) {
   he.out.resize(nh);
   std::vector<int> fill(he.out_offset.begin(), he.out_offset.end() - 1);
   for (int h = 0; h < nh; ++h) he.out[fill[he_from(faces, h)]++] = h;
+  he.by_target.resize(nh);
+  for (int k = 0; k < nh; ++k) he.by_target[k] = {he_to(faces, he.out[k]), he.out[k]};
+  for (int v = 0; v < num_vertices; ++v)
+    std::sort(he.by_target.begin() + he.out_offset[v], he.by_target.begin() + he.out_offset[v + 1]);
   he.twin.assign(nh, -1);
   for (int h = 0; h < nh; ++h) he.twin[h] = find_half_edge(he, faces, he_to(faces, h), he_from(faces, h));
   return he;

@@ -4,6 +4,8 @@
 #include <nlohmann/json.hpp>
 
 #include "qs/core/error.h"
+#include "qs/core/finite.h"
+#include "qs/core/json_strict.h"
 #include "qs/io/read_mesh.h"
 
 namespace qs::remesh {
@@ -19,14 +21,17 @@ const nlohmann::json& field(const nlohmann::json& doc, const char* name, const f
 
 int int_field(const nlohmann::json& doc, const char* name, const fs::path& path) {
   const auto& f = field(doc, name, path);
-  if (!f.is_number_integer() || f.get<long long>() < 0 || f.get<long long>() > (1LL << 31) - 1)
-    throw InvalidInput(path.string() + ": \"" + name + "\" must be a non-negative integer");
-  return f.get<int>();
+  long long x = 0;
+  if (!json_strict::integer_in(f, 0, (1LL << 31) - 1, x))
+    throw InvalidInput(path.string() + ": \"" + name + "\" must be a non-negative integer below 2^31, found " +
+                       json_strict::describe(f));
+  return static_cast<int>(x);
 }
 
 std::string string_field(const nlohmann::json& doc, const char* name, const fs::path& path) {
   const auto& f = field(doc, name, path);
-  if (!f.is_string()) throw InvalidInput(path.string() + ": \"" + name + "\" must be a string");
+  if (!f.is_string() || !json_strict::is_clean_text(f.get_ref<const std::string&>()))
+    throw InvalidInput(path.string() + ": \"" + name + "\" must be a UTF-8 string, found " + json_strict::describe(f));
   return f.get<std::string>();
 }
 
@@ -34,18 +39,19 @@ std::string string_field(const nlohmann::json& doc, const char* name, const fs::
 
 LoadedRemesh read_remesh(const fs::path& folder) {
   const fs::path path = folder / "remesh.json";
-  std::ifstream in(path);
-  if (!in) throw IoError(path.string() + ": cannot open (is " + folder.string() + " a qs-remesh output folder?)");
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(in);
-  } catch (const std::exception& e) {
-    throw InvalidInput(path.string() + ": not valid JSON (" + e.what() + ")");
-  }
-  if (!doc.is_object() || doc.value("format", "") != "qs-remesh")
+  if (!fs::is_directory(folder))
+    throw IoError(json_strict::printable(folder.string()) + ": no such folder (expected a qs-remesh output folder with remesh.json)");
+  const nlohmann::json doc = json_strict::parse(
+      json_strict::read_text_file(path, "remesh.json (is " + json_strict::printable(folder.string()) +
+                                            " a qs-remesh output folder?)"),
+      json_strict::printable(path.string()));
+  const auto format = doc.is_object() ? doc.find("format") : doc.end();
+  if (!doc.is_object() || format == doc.end() || *format != "qs-remesh")
     throw InvalidInput(path.string() + ": not a qs-remesh file (\"format\" must be \"qs-remesh\")");
-  if (doc.value("version", 0) != 1)
-    throw InvalidInput(path.string() + ": format version " + doc.value("version", nlohmann::json()).dump() +
+  const auto version = doc.find("version");
+  if (version == doc.end() || *version != 1)
+    throw InvalidInput(path.string() + ": format version " +
+                       (version == doc.end() ? std::string("missing") : json_strict::describe(*version)) +
                        ", this qs reads version 1");
 
   LoadedRemesh r;
@@ -56,7 +62,9 @@ LoadedRemesh read_remesh(const fs::path& folder) {
   if (r.mode != "uniform" && r.mode != "adaptive" && r.mode != "merge")
     throw InvalidInput(path.string() + ": \"mode\" must be \"uniform\", \"adaptive\" or \"merge\", not \"" + r.mode +
                        "\"");
-  r.quads = doc.value("quads", false);
+  if (doc.contains("quads") && !doc["quads"].is_boolean())
+    throw InvalidInput(path.string() + ": \"quads\" must be true or false");
+  r.quads = doc.contains("quads") && doc["quads"].get<bool>();
   auto& c = r.set.connectivity;
   c.level = int_field(doc, "level", path);
   c.num_base_vertices = int_field(doc, "base_vertices", path);
@@ -78,14 +86,16 @@ LoadedRemesh read_remesh(const fs::path& folder) {
     const auto& p = patch[v];
     const auto& a = uv[2 * v];
     const auto& b = uv[2 * v + 1];
-    if (!p.is_number_integer() || p.get<long long>() < 0 || p.get<long long>() >= c.num_patches)
+    long long pid = 0;
+    if (!json_strict::integer_in(p, 0, static_cast<long long>(c.num_patches) - 1, pid))
       throw InvalidInput(path.string() + ": vertex_patch[" + std::to_string(v) + "] must be a patch index in [0, " +
                          std::to_string(c.num_patches) + ")");
-    if (!a.is_number() || !b.is_number() || a.get<double>() < 0 || a.get<double>() > 1 || b.get<double>() < 0 ||
-        b.get<double>() > 1)
+    double ua = 0, ub = 0;
+    if (!json_strict::finite_number(a, ua) || !json_strict::finite_number(b, ub) || ua < 0 || ua > 1 || ub < 0 ||
+        ub > 1)
       throw InvalidInput(path.string() + ": vertex_uv of vertex " + std::to_string(v) + " must be two numbers in [0, 1]");
-    c.vertex_patch[v] = p.get<int>();
-    c.vertex_uv[v] = Vec2(a.get<double>(), b.get<double>());
+    c.vertex_patch[v] = static_cast<int>(pid);
+    c.vertex_uv[v] = Vec2(ua, ub);
   }
 
   const auto& meshes = field(doc, "meshes", path);
@@ -95,12 +105,14 @@ LoadedRemesh read_remesh(const fs::path& folder) {
     const auto& m = meshes[i];
     if (!m.is_object()) throw InvalidInput(path.string() + ": meshes[" + std::to_string(i) + "] must be an object");
     const std::string out = string_field(m, "output", path);
-    if (out.empty() || fs::path(out).filename() != fs::path(out))
+    if (out.empty() || out == "." || out == ".." || fs::path(out).filename() != fs::path(out))
       throw InvalidInput(path.string() + ": meshes[" + std::to_string(i) + "].output must be a plain file name, not \"" +
                          out + "\"");
     r.outputs.push_back(out);
     r.stems.push_back(fs::path(out).stem().string());
-    r.sources.push_back(m.value("file", std::string()));
+    if (m.contains("file") && !(m["file"].is_string() && json_strict::is_clean_text(m["file"].get_ref<const std::string&>())))
+      throw InvalidInput(path.string() + ": meshes[" + std::to_string(i) + "].file must be a UTF-8 string");
+    r.sources.push_back(m.contains("file") ? m["file"].get<std::string>() : std::string());
     io::ReadResult read = io::read_mesh(folder / out);
     const fs::path file = folder / out;
     if (read.mesh.num_vertices() != nv)
@@ -117,6 +129,11 @@ LoadedRemesh read_remesh(const fs::path& folder) {
       throw InvalidInput(file.string() + ": its faces differ from " + (folder / r.outputs[0]).string() + "'s (first at face " +
                          std::to_string(k) + "): the meshes of a remesh must share one connectivity");
     }
+    // No NaN in, no NaN out: a remesh vertex that is not a usable point would spread into frames.
+    for (size_t v = 0; v < read.mesh.positions.size(); ++v)
+      if (!usable_position(read.mesh.positions[v]))
+        throw InvalidInput(file.string() + ": vertex " + std::to_string(v) +
+                           " has a NaN, infinite or too large coordinate (expected finite, |x| <= 1e100)");
     r.set.positions.push_back(std::move(read.mesh.positions));
   }
   return r;
