@@ -22,7 +22,7 @@ qs::dissect::Chart tetra_chart() {
   c.mesh.faces = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
   // uv with more digits than a float holds
   for (int f = 0; f < 4; ++f)
-    c.face_uv.push_back({qs::Vec2(0.1 + f / 3.0, 1.0 / 7), qs::Vec2(0.9, 0.123456789012345), qs::Vec2(1e-17, 1)});
+    c.face_uv.push_back({qs::Vec2(0.1 + f / 5.0, 1.0 / 7), qs::Vec2(0.9, 0.123456789012345), qs::Vec2(1e-17, 1)});
   c.face_patch = {0, 0, 1, 1};
   c.patches.resize(2);
   return c;

@@ -292,20 +292,21 @@ TEST_F(RobustTool, DamagedChartFilesAreInvalidInput) {
     c.replace(vertex_line, eol - vertex_line, "element vertex abc");
   });
   expect_clean_failure(run_tool("qs-remesh", a.string() + level + (dir_ / "o1").string()), 2, "blob.chart.ply");
-  // The face records: 1 + 12 + 1 + 24 bytes, then the patch id (int32).
+  // The face records (chart version 2): 1 + 12 + 1 + 48 bytes (six float64 texcoords), then the
+  // patch id (int32).
   const std::string chart = read_bytes(root_ / "set.dissection" / "blob.chart.ply");
   const size_t nv = std::stoul(chart.substr(vertex_line + 15));
   const size_t face0 = header_end(chart) + nv * 24;
   auto set_patch = [&](std::int32_t id) {
-    return [=](std::string& c) { std::memcpy(&c[face0 + 38], &id, 4); };
+    return [=](std::string& c) { std::memcpy(&c[face0 + 62], &id, 4); };
   };
   for (std::int32_t id : {2147483647, 100000000}) {
     const fs::path p = damaged("patch" + std::to_string(id), set_patch(id));
     expect_clean_failure(run_tool("qs-remesh", p.string() + level + (dir_ / "o2").string()), 2, "patch");
   }
   // A NaN texcoord, and one far outside the unit square.
-  for (float u : {std::numeric_limits<float>::quiet_NaN(), 1.5f}) {
-    const fs::path p = damaged(u > 1 ? "uv_out" : "uv_nan", [&](std::string& c) { std::memcpy(&c[face0 + 14], &u, 4); });
+  for (double u : {std::numeric_limits<double>::quiet_NaN(), 1.5}) {
+    const fs::path p = damaged(u > 1 ? "uv_out" : "uv_nan", [&](std::string& c) { std::memcpy(&c[face0 + 14], &u, 8); });
     expect_clean_failure(run_tool("qs-remesh", p.string() + level + (dir_ / "o3").string()), 2, "texcoord");
   }
   // A NaN position.
