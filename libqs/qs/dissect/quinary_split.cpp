@@ -37,6 +37,7 @@ int MeshDissector::insert_point(int label, const Vec2& q, bool snap) {
   best_b.minCoeff(&kmin);
   if (snap && best_b[kmax] > 0.8 && flag_[t[kmax]] == kFree) return t[kmax];
   const Vec3 bary = best_b.cwiseMax(0.0) / best_b.cwiseMax(0.0).sum();
+  if (!bary.allFinite()) throw SplitFailure("an inner corner fell on a degenerate parameter triangle");
   if (bary[kmin] < 0.1) {
     const int h = 3 * best_f + (kmin + 1) % 3;  // the edge opposite corner kmin
     if (interior_edge(h, label)) {
@@ -91,6 +92,7 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
       const double denom = cross2(e, d);
       if (std::abs(denom) < 1e-300) throw SplitFailure("a cut is parallel to an edge");
       const double t = std::clamp(cross2(p - ux, d) / denom, 0.0, 1.0);
+      if (!std::isfinite(t)) throw SplitFailure("a cut met a degenerate parameter triangle");
       const double s = cross2(ux - p, e) / cross2(d, e);
       if (s >= 1.0) throw SplitFailure("a cut missed its end vertex");
       if (t < 0.05 && flag_[x] == kFree) {

@@ -259,7 +259,11 @@ DissectionSet SetDissector::run() {
         const size_t budget = std::max<size_t>(2 * in_[i].mesh->faces.size(), 20000);
         if (refined_total[i] >= budget) return;
         if (!ps[i].sp.bijective()) {
-          if (minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet).uv.empty())
+          // Local folds only: a map folded over much of its patch (a degenerate fan, say) is not
+          // a sampling problem.
+          const size_t folded = static_cast<size_t>(ps[i].sp.flipped_faces + ps[i].sp.zero_area_faces);
+          if (folded <= std::max<size_t>(50, faces / 20) &&
+              minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet).uv.empty())
             mode[i] = kFolds;
         } else if (stop == StopReason::SplitFailed && faces <= kRefineFaces && refined_total[i] + 3 * faces <= budget) {
           mode[i] = kWhole;
