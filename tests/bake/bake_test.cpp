@@ -409,3 +409,22 @@ TEST(ExportGlb, CarriesTheFrameAndTexcoordsTheBakeUsed) {
   EXPECT_FALSE(go.material->normal_texture.has_value());
   EXPECT_EQ(go.texcoords.size(), go.positions.size());
 }
+
+// A damaged PNG gives one IoError line that names the file (OpenImageIO's text, libpng's appended
+// to it, used to span lines and print as a stray "libpng error" line before qs's message).
+TEST(ImageIo, DamagedPngIsOneLineIoError) {
+  const auto path = std::filesystem::temp_directory_path() / ("qs_bad_png_" + std::to_string(::getpid()) + ".png");
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "\x89PNG\r\n\x1a\n" << "0000garbage";
+  }
+  try {
+    qs::bake::read_normal_image(path);
+    ADD_FAILURE() << "expected IoError";
+  } catch (const qs::IoError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(path.string()), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  }
+  std::filesystem::remove(path);
+}

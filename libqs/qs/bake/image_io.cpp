@@ -34,6 +34,14 @@ const char* file_suffix(ImageFormat f) {
 
 namespace {
 
+// OpenImageIO's error text can span lines (libpng's own message appended): one line for qs's.
+std::string one_line(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  for (char& c : s)
+    if (c == '\n') c = ';';
+  return s;
+}
+
 // Encodes width x height x 3 pixels of `type` into the bytes of a file of extension `ext`:
 // through an in-memory proxy when the writer supports one, else through a temporary file.
 std::vector<unsigned char> encode(const std::string& ext, int width, int height, OIIO::TypeDesc type, const void* pixels,
@@ -113,7 +121,7 @@ template <class T>
 std::vector<T> read_pixels(const fs::path& path, OIIO::TypeDesc type, int& width, int& height) {
   if (!fs::exists(path)) throw IoError(path.string() + ": no such file");
   auto in = OIIO::ImageInput::open(path.string());
-  if (!in) throw IoError(path.string() + ": cannot read the image (" + OIIO::geterror() + ")");
+  if (!in) throw IoError(path.string() + ": cannot read the image (" + one_line(OIIO::geterror()) + ")");
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.nchannels != 3)
     throw InvalidInput(path.string() + ": " + std::to_string(spec.nchannels) + " channels, a normal map has 3 (RGB)");
@@ -121,7 +129,7 @@ std::vector<T> read_pixels(const fs::path& path, OIIO::TypeDesc type, int& width
   height = spec.height;
   std::vector<T> px(static_cast<size_t>(width) * height * 3);
   if (!in->read_image(0, 0, 0, 3, type, px.data()))
-    throw IoError(path.string() + ": cannot read the pixels (" + in->geterror() + ")");
+    throw IoError(path.string() + ": cannot read the pixels (" + one_line(in->geterror()) + ")");
   in->close();
   return px;
 }

@@ -158,7 +158,7 @@ struct MeshToDissect {
   /// Seeds as surface points: each is inserted into the mesh (an edge or face split, as features
   /// are) unless it lies on a vertex, so that it is exactly a corner of the seed patches. When
   /// set, it takes the place of `seeds`.
-  std::optional<std::array<landmarks::SurfacePoint, 4>> seed_points;
+  std::optional<std::array<landmarks::SurfacePoint, 4>> seed_points{};
 };
 
 /// The common dissection of a set: one union tree, and per mesh a chart whose patches have the

@@ -19,6 +19,14 @@ namespace fs = std::filesystem;
 namespace qs::morph {
 namespace {
 
+// OpenImageIO's error text can span lines (libpng's own message appended): one line for qs's.
+std::string one_line(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  for (char& c : s)
+    if (c == '\n') c = ';';
+  return s;
+}
+
 template <class T>
 void append_number(std::string& out, T v) {
   char buf[32];
@@ -33,7 +41,7 @@ NormalAtlases read_normal_atlases(const fs::path& bake_dir, const std::vector<st
     const fs::path path = bake_dir / (stem + "_normal.png");
     if (!fs::exists(path)) throw IoError(path.string() + ": no such file (the normal map of shape '" + stem + "')");
     auto in = OIIO::ImageInput::open(path.string());
-    if (!in) throw IoError(path.string() + ": cannot read the image (" + OIIO::geterror() + ")");
+    if (!in) throw IoError(path.string() + ": cannot read the image (" + one_line(OIIO::geterror()) + ")");
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.nchannels != 3)
       throw InvalidInput(path.string() + ": " + std::to_string(spec.nchannels) + " channels, a normal map has 3 (RGB)");
@@ -47,7 +55,7 @@ NormalAtlases read_normal_atlases(const fs::path& bake_dir, const std::vector<st
     }
     std::vector<unsigned char> px(static_cast<size_t>(spec.width) * spec.height * 3);
     if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, px.data()))
-      throw IoError(path.string() + ": cannot read the pixels (" + in->geterror() + ")");
+      throw IoError(path.string() + ": cannot read the pixels (" + one_line(in->geterror()) + ")");
     in->close();
     out.rgb.push_back(std::move(px));
     std::ifstream file(path, std::ios::binary);

@@ -727,7 +727,7 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
     RunStage d{"dissect", "qs-dissect", {}};
     for (const auto& m : req.meshes) d.args.push_back("../../" + m);
     d.args.insert(d.args.end(), {"-o", "dissection"});
-    if (req.max_area > 0) {
+    {
       std::ostringstream s;
       s.precision(17);
       s << req.max_area;

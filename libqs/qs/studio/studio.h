@@ -59,12 +59,12 @@ struct Response {
 };
 
 /// What a run does; parsed from POST /api/run's JSON: {"meshes": [names...], "level": 3,
-/// "bake_size": 128, "max_area": 0, "morph": true}.
+/// "bake_size": 128, "max_area": 0.15, "morph": true}.
 struct RunRequest {
   std::vector<std::string> meshes;  ///< file names in the folder, in set order (seeds correspond by order)
   int level = 3;                    ///< qs-remesh --level (0..6)
   int bake_size = 128;              ///< qs-bake --size (16..2048)
-  double max_area = 0;              ///< qs-dissect --max-area (0: off)
+  double max_area = 0.15;           ///< qs-dissect --max-area (0: off; 0.15 is its default)
   bool morph = true;                ///< qs-morph GLB when there are two meshes or more
 };
 
