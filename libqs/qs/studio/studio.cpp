@@ -729,7 +729,7 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
     d.args.insert(d.args.end(), {"-o", "dissection"});
     {
       std::ostringstream s;
-      s.precision(17);
+      s.precision(12);  // the page's steps are 0.05: "0.15", not 0.14999999999999999
       s << req.max_area;
       d.args.insert(d.args.end(), {"--max-area", s.str()});
     }
