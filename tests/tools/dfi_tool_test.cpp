@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../common/gltf_test_support.h"
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
 #include "tool_runner.h"
@@ -41,6 +42,9 @@ TEST_F(DfiTool, SphereToTorusWritesFramesJsonAndGlb) {
                                              " --glb " + (dir_ / "m.glb").string() + " --exact-endpoints");
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_TRUE(fs::exists(dir_ / "m.glb"));
+  std::string validator_out;
+  const int rc = qs::testing::run_gltf_validator(dir_ / "m.glb", &validator_out);
+  if (rc != 3) EXPECT_EQ(rc, 0) << validator_out;  // 3: the validator is not installed
   for (int f = 0; f < 4; ++f) EXPECT_TRUE(fs::exists(out / ("frame_000" + std::to_string(f) + ".obj")));
   const auto j = nlohmann::json::parse(std::ifstream(out / "dfi.json"));
   EXPECT_EQ(j["method"], "blend");

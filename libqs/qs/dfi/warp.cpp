@@ -3,6 +3,7 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <cmath>
 
 #include "qs/core/error.h"
 #include "qs/dfi/sdf.h"
@@ -120,6 +121,32 @@ FoldCheck remove_folds(Displacement& d, double wanted, int max_steps) {
   return f;
 }
 
+namespace {
+
+// The three components at p with one set of trilinear weights (Grid::sample's rule: clamped).
+Vec3 displacement_at(const Displacement& d, const Vec3& p) {
+  const Grid& g = d.u[0];
+  const Vec3 q = (p - g.origin) / g.spacing;
+  int c[3];
+  double f[3];
+  for (int a = 0; a < 3; ++a) {
+    const double x = std::clamp(q[a], 0.0, static_cast<double>(g.dims[a] - 1));
+    c[a] = std::min(static_cast<int>(std::floor(x)), g.dims[a] - 2);
+    f[a] = x - c[a];
+  }
+  Vec3 v = Vec3::Zero();
+  for (int corner = 0; corner < 8; ++corner) {
+    const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;
+    const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+    if (w == 0) continue;
+    const size_t id = g.index(c[0] + dx, c[1] + dy, c[2] + dz);
+    v += w * Vec3(d.u[0].values[id], d.u[1].values[id], d.u[2].values[id]);
+  }
+  return v;
+}
+
+}  // namespace
+
 Grid warped_field(const Grid& sdf, const Displacement& d, double s, int threads) {
   Grid out = sdf;
   if (s == 0) return out;
@@ -129,7 +156,7 @@ Grid warped_field(const Grid& sdf, const Displacement& d, double s, int threads)
       for (int i = 0; i < nx; ++i) {
         const Vec3 y = sdf.point(i, j, k);
         Vec3 x = y;
-        for (int it = 0; it < 6; ++it) x = y - s * d.at(x);
+        for (int it = 0; it < 6; ++it) x = y - s * displacement_at(d, x);
         out.values[sdf.index(i, j, k)] = static_cast<float>(sdf.sample(x));
       }
   });
