@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "qs/core/error.h"
+#include "qs/landmarks/landmarks.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
@@ -26,41 +27,13 @@ std::uint64_t splitmix64(std::uint64_t x) {
 }
 double unit_double(std::uint64_t x) { return static_cast<double>(x >> 11) * 0x1.0p-53; }
 
-/// Barycentric weights of the point of triangle (a, b, c) closest to p (p on or very near it).
-Vec3 closest_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
-  const Vec3 e0 = b - a, e1 = c - a, r = p - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), d20 = r.dot(e0), d21 = r.dot(e1);
-  const double den = d00 * d11 - d01 * d01;
-  Vec3 w(1, 0, 0);
-  if (den > 0) {
-    const double v = (d11 * d20 - d01 * d21) / den, u = (d00 * d21 - d01 * d20) / den;
-    w = Vec3(1 - v - u, v, u);
-  }
-  if (w.minCoeff() < 0) {  // outside by rounding, or a degenerate face: the nearest edge point
-    double best = 1e300;
-    const Vec3 pts[3] = {a, b, c};
-    for (int i = 0; i < 3; ++i) {
-      const Vec3 &s = pts[i], &t = pts[(i + 1) % 3];
-      const double len2 = (t - s).squaredNorm();
-      const double f = len2 > 0 ? std::clamp((p - s).dot(t - s) / len2, 0.0, 1.0) : 0.0;
-      const double d = (s + f * (t - s) - p).squaredNorm();
-      if (d < best) {
-        best = d;
-        w = Vec3::Zero();
-        w[i] = 1 - f;
-        w[(i + 1) % 3] = f;
-      }
-    }
-  }
-  return w;
-}
 
 landmarks::SurfacePoint surface_point_at(const TriMesh& m, int face, const Vec3& p) {
   const Tri& t = m.faces[face];
-  const Vec3 w = closest_weights(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], p);
+  const auto w = landmarks::closest_on_triangle(p, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
   landmarks::SurfacePoint sp;
   sp.face = face;
-  sp.bary = {w.x(), w.y(), w.z()};
+  sp.bary = w;
   return sp;
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "qs/core/error.h"
+#include "qs/landmarks/landmarks.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
 
@@ -16,34 +17,6 @@ namespace qs::family {
 
 namespace {
 
-/// Barycentric weights of the point of triangle (a, b, c) closest to p (p is on or very near it).
-Vec3 closest_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
-  const Vec3 e0 = b - a, e1 = c - a, r = p - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), d20 = r.dot(e0), d21 = r.dot(e1);
-  const double den = d00 * d11 - d01 * d01;
-  Vec3 w(1, 0, 0);
-  if (den > 0) {
-    const double v = (d11 * d20 - d01 * d21) / den, u = (d00 * d21 - d01 * d20) / den;
-    w = Vec3(1 - v - u, v, u);
-  }
-  if (w.minCoeff() < 0) {  // outside by rounding (or on a degenerate face): the nearest edge point
-    double best = 1e300;
-    const Vec3 pts[3] = {a, b, c};
-    for (int i = 0; i < 3; ++i) {
-      const Vec3 &s = pts[i], &t = pts[(i + 1) % 3];
-      const double len2 = (t - s).squaredNorm();
-      const double f = len2 > 0 ? std::clamp((p - s).dot(t - s) / len2, 0.0, 1.0) : 0.0;
-      const double d = (s + f * (t - s) - p).squaredNorm();
-      if (d < best) {
-        best = d;
-        w = Vec3::Zero();
-        w[i] = 1 - f;
-        w[(i + 1) % 3] = f;
-      }
-    }
-  }
-  return w;
-}
 
 }  // namespace
 
@@ -97,10 +70,11 @@ Retessellation retessellate(const TriMesh& mesh, const RetessellateOptions& opti
     const auto c = input.closest(r.mesh.positions[v]);
     r.max_origin_distance = std::max(r.max_origin_distance, c.distance);
     const Tri& t = mesh.faces[c.face];
-    const Vec3 w = closest_weights(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], c.point);
+    const auto w = landmarks::closest_on_triangle(c.point, mesh.positions[t[0]], mesh.positions[t[1]],
+                                                  mesh.positions[t[2]]);
     r.origins[v].face = c.face;
-    r.origins[v].bary = {w.x(), w.y(), w.z()};
-    r.mesh.positions[v] = w.x() * mesh.positions[t[0]] + w.y() * mesh.positions[t[1]] + w.z() * mesh.positions[t[2]];
+    r.origins[v].bary = w;
+    r.mesh.positions[v] = w[0] * mesh.positions[t[0]] + w[1] * mesh.positions[t[1]] + w[2] * mesh.positions[t[2]];
   }
   const mesh::ValidationResult valid = mesh::validate(r.mesh);
   if (!valid.report.accepted || valid.report.orientation_flipped || mesh::find_problem(valid.report, "zero_area_faces"))

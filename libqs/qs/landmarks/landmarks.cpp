@@ -13,12 +13,7 @@
 #include "qs/core/json_strict.h"
 
 namespace qs::landmarks {
-namespace {
 
-using nlohmann::json;
-
-// Closest point to p on triangle abc (Ericson, Real-Time Collision Detection, 5.1.5), returned
-// as barycentric coordinates.
 std::array<double, 3> closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
@@ -49,6 +44,10 @@ std::array<double, 3> closest_on_triangle(const Vec3& p, const Vec3& a, const Ve
   const double v = vb / denom, w = vc / denom;
   return {1 - v - w, v, w};
 }
+
+namespace {
+
+using nlohmann::json;
 
 // Resolves references in the file's numbering against the validated mesh.
 class Resolver {

@@ -64,6 +64,10 @@ Landmarks parse_landmarks(std::string_view text, LandmarkFormat format, const st
 /// `<stem>.landmarks.json` or `<stem>.pp` beside the mesh, if one exists (JSON first).
 std::optional<std::filesystem::path> find_landmarks_beside(const std::filesystem::path& mesh_path);
 
+/// The point of triangle abc closest to p, as barycentric coordinates (Ericson, Real-Time
+/// Collision Detection, 5.1.5). A degenerate triangle gives its first corner.
+std::array<double, 3> closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 /// The closest point of the surface to p, by a scan over the faces (landmark counts are small).
 SurfacePoint closest_surface_point(const TriMesh& mesh, const Vec3& p, double* distance = nullptr);
 
