@@ -14,6 +14,7 @@
 
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
+#include "qs/correspondence/correspondence.h"
 #include "qs/family/family.h"
 
 using Clock = std::chrono::steady_clock;
@@ -31,16 +32,7 @@ int main(int argc, char** argv) {
     fo.seed = seed;
     const qs::family::Family fam = qs::family::generate_family(fo);
     std::vector<qs::dissect::MeshToDissect> all;
-    for (const auto& s : fam.shapes) {
-      qs::dissect::MeshToDissect m;
-      m.mesh = &s.mesh;
-      m.name = s.name;
-      std::array<qs::landmarks::SurfacePoint, 4> sp;
-      for (int i = 0; i < 4; ++i) sp[i] = s.seeds[i].where;
-      m.seed_points = sp;
-      for (const auto& f : s.features) m.features.push_back({f.name, -1, f.where});
-      all.push_back(m);
-    }
+    for (const auto& s : fam.shapes) all.push_back(qs::correspondence::dissect_input(s));
     double t1 = 0;
     for (const int n : {1, 2, 4, 8, 16}) {
       const std::vector<qs::dissect::MeshToDissect> set(all.begin(), all.begin() + n);

@@ -52,25 +52,10 @@ cr::TruthMesh plain_truth(const qs::TriMesh& mesh, const std::string& name) {
   return t;
 }
 
-int nearest_corner(const qs::TriMesh& m, const qs::landmarks::SurfacePoint& p) {
-  const auto& b = p.bary;
-  return m.faces[p.face][std::max_element(b.begin(), b.end()) - b.begin()];
-}
-
-/// The set dissection of family shapes as qs-dissect would run it: seeds at their nearest
-/// vertices, features at their (face, bary).
+// The shapes dissected as qs-dissect does it (seeds inserted at their surface points).
 qs::dissect::DissectionSet dissect_shapes(const std::vector<const qs::family::FamilyShape*>& shapes) {
   std::vector<qs::dissect::MeshToDissect> in;
-  for (const auto* s : shapes) {
-    qs::dissect::MeshToDissect m;
-    m.mesh = &s->mesh;
-    m.name = s->name;
-    std::array<int, 4> seeds{};
-    for (int k = 0; k < 4; ++k) seeds[k] = nearest_corner(s->mesh, s->seeds[k].where);
-    m.seeds = seeds;
-    for (const auto& f : s->features) m.features.push_back({f.name, -1, f.where});
-    in.push_back(m);
-  }
+  for (const auto* s : shapes) in.push_back(cr::dissect_input(*s));
   return qs::dissect::dissect_set(in);
 }
 

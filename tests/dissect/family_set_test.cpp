@@ -8,6 +8,7 @@
 #include <map>
 
 #include "qs/dissect/dissection.h"
+#include "qs/correspondence/correspondence.h"
 #include "qs/family/family.h"
 
 namespace {
@@ -27,16 +28,7 @@ const Generated& family_of(std::uint64_t seed) {
   o.shapes = 16;
   o.seed = seed;
   g.family = qs::family::generate_family(o);
-  for (const auto& s : g.family.shapes) {
-    qs::dissect::MeshToDissect m;
-    m.mesh = &s.mesh;
-    m.name = s.name;
-    std::array<qs::landmarks::SurfacePoint, 4> seeds;
-    for (int i = 0; i < 4; ++i) seeds[i] = s.seeds[i].where;
-    m.seed_points = seeds;
-    for (const auto& f : s.features) m.features.push_back({f.name, -1, f.where});
-    g.set.push_back(m);
-  }
+  for (const auto& s : g.family.shapes) g.set.push_back(qs::correspondence::dissect_input(s));
   return g;
 }
 

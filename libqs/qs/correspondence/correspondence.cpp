@@ -430,4 +430,15 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   return pm;
 }
 
+dissect::MeshToDissect dissect_input(const family::FamilyShape& shape) {
+  dissect::MeshToDissect m;
+  m.mesh = &shape.mesh;
+  m.name = shape.name;
+  std::array<landmarks::SurfacePoint, 4> seeds;
+  for (int k = 0; k < 4; ++k) seeds[k] = shape.seeds[k].where;
+  m.seed_points = seeds;
+  for (const auto& f : shape.features) m.features.push_back({f.name, -1, f.where});
+  return m;
+}
+
 }  // namespace qs::correspondence

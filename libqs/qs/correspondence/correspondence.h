@@ -31,6 +31,7 @@
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/dissect/dissection.h"
+#include "qs/family/family.h"
 #include "qs/family/surface_map.h"
 #include "qs/landmarks/landmarks.h"
 
@@ -122,5 +123,9 @@ std::vector<std::pair<std::string, Vec3>> dissection_landmarks(const dissect::Di
 /// Progress stage: "correspondence".
 PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedInput>& inputs, int a, int b,
                          const MeasureOptions& options = {}, const Context& context = {});
+
+/// A generated shape as qs-dissect takes it: its seeds as surface points (inserted exactly) and its
+/// limb tips as named features. The mesh is referred to, not copied.
+dissect::MeshToDissect dissect_input(const family::FamilyShape& shape);
 
 }  // namespace qs::correspondence
