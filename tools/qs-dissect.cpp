@@ -19,6 +19,7 @@
 #include "qs/dissect/chart_io.h"
 #include "qs/dissect/dissection.h"
 #include "qs/dissect/dissection_json.h"
+#include "qs/maprefine/map_refine.h"
 #include "tool_main.h"
 
 namespace fs = std::filesystem;
@@ -95,6 +96,14 @@ int main(int argc, char** argv) {
                  "Stretch-minimization rounds for a patch over tau before it is split (fewer splits on limbs)")
       ->capture_default_str()
       ->check(CLI::Range(0, 50));
+  bool refine_maps = false;
+  qs::maprefine::RefineOptions refine_opt;
+  app.add_flag("--refine-maps", refine_maps,
+               "After the dissection, move each mesh's chart (u,v) inside its patches so that its map to the first "
+               "mesh has low isometric distortion (issue 17; patch borders, seeds and features stay; see README)");
+  app.add_option("--refine-iterations", refine_opt.iterations, "Newton steps per patch of --refine-maps")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
@@ -169,6 +178,14 @@ int main(int argc, char** argv) {
     qs::dissect::DissectionSet result = qs::dissect::dissect_set(set, opt, ctx);
     const auto t2 = std::chrono::steady_clock::now();
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
+    double refine_seconds = 0;
+    qs::maprefine::RefineReport refine_report;
+    if (refine_maps && result.meshes.size() > 1) {
+      refine_report = qs::maprefine::refine_maps(result.meshes, refine_opt, ctx);
+      refine_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
+      result.max_stretch = 0;
+      for (const auto& m : result.meshes) result.max_stretch = std::max(result.max_stretch, m.max_stretch);
+    }
     const auto charts = chart_names(meshes);
     std::vector<qs::dissect::DissectedMesh> out(inputs.size());
     int flipped = 0;
@@ -201,6 +218,17 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
+      if (i < refine_report.meshes.size()) {
+        const auto& r = refine_report.meshes[i];
+        if (r.reference)
+          text << "  refine maps: reference (not moved)\n";
+        else
+          text << "  refine maps: distortion to mesh " << refine_opt.reference << " " << std::setprecision(4)
+               << r.energy_before << " -> " << r.energy_after << " (1 = isometric), " << r.patches_refined
+               << " patches refined, " << r.patches_skipped << " left as they were, " << r.free_vertices
+               << " vertices moved freely, " << r.newton_steps << " Newton steps, "
+               << r.flipped_faces + r.zero_area_faces << " flipped or zero-area uv faces\n";
+      }
       for (const auto& n : d.tree)
         if (i < n.refined_faces.size() && n.refined_faces[i] > 0)
           text << "  refined patch " << n.name << ": +" << n.refined_faces[i]
@@ -237,8 +265,9 @@ int main(int argc, char** argv) {
          << (out.size() > 1 ? "s" : "") << "\n";
     std::ostringstream times;
     times << std::fixed << std::setprecision(3) << "  time: read+validate "
-          << std::chrono::duration<double>(t1 - t0).count() << " s, dissect " << seconds << " s, write "
-          << std::chrono::duration<double>(t3 - t2).count() << " s\n";
+          << std::chrono::duration<double>(t1 - t0).count() << " s, dissect " << seconds << " s, ";
+    if (refine_maps && out.size() > 1) times << "refine maps " << refine_seconds << " s, ";
+    times << "write " << std::chrono::duration<double>(t3 - t2).count() - refine_seconds << " s\n";
     if (!quiet) std::cout << text.str() << times.str();
     std::ostringstream full;
     full << text.str() << times.str();

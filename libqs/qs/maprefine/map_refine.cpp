@@ -1,0 +1,603 @@
+#include "qs/maprefine/map_refine.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "qs/core/error.h"
+#include "qs/param/square_param.h"
+#include "qs/remesh/chart_sampler.h"
+
+namespace qs::maprefine {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+using Mat32 = Eigen::Matrix<double, 3, 2>;
+using Mat46 = Eigen::Matrix<double, 4, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// The reference mesh's metric in (u, v), per face corner (wedge): the uv-area weighted mean of the
+// metrics of the chart faces of the same patch around the vertex, each with its eigenvalues
+// clamped to [1e-6, 1e6] times the patch's mean (uv slivers must not dominate).
+struct MetricField {
+  std::vector<std::array<Eigen::Matrix2d, 3>> wedge;  // #F of the reference chart
+  std::vector<double> patch_area;                     // 3D area per patch
+};
+
+MetricField metric_field(const dissect::Chart& chart) {
+  const int nf = chart.mesh.num_faces();
+  const int np = static_cast<int>(chart.patches.size());
+  MetricField out;
+  out.wedge.resize(nf);
+  out.patch_area.assign(np, 0.0);
+  std::vector<double> patch_uv(np, 0.0);
+  std::vector<Eigen::Matrix2d> face_metric(nf, Eigen::Matrix2d::Zero());
+  std::vector<double> face_uv_area(nf, 0.0);
+  for (int f = 0; f < nf; ++f) {
+    const auto& t = chart.mesh.faces[f];
+    const auto& uv = chart.face_uv[f];
+    const Vec3& x0 = chart.mesh.positions[t[0]];
+    Mat32 e;
+    e.col(0) = chart.mesh.positions[t[1]] - x0;
+    e.col(1) = chart.mesh.positions[t[2]] - x0;
+    Eigen::Matrix2d ds;
+    ds.col(0) = uv[1] - uv[0];
+    ds.col(1) = uv[2] - uv[0];
+    const double a3 = 0.5 * e.col(0).cross(e.col(1)).norm();
+    const double auv = 0.5 * ds.determinant();
+    const int p = chart.face_patch[f];
+    out.patch_area[p] += a3;
+    patch_uv[p] += std::max(auv, 0.0);
+    face_uv_area[f] = std::max(auv, 0.0);
+    if (auv > param::kZeroUvArea) {
+      const Mat32 g = e * ds.inverse();
+      face_metric[f] = g.transpose() * g;
+    }
+  }
+  std::vector<Eigen::Matrix2d> acc(chart.mesh.num_vertices(), Eigen::Matrix2d::Zero());
+  std::vector<double> weight(chart.mesh.num_vertices(), 0.0);
+  std::vector<std::vector<int>> faces_of(np);
+  for (int f = 0; f < nf; ++f) faces_of[chart.face_patch[f]].push_back(f);
+  for (int p = 0; p < np; ++p) {
+    const double mean = patch_uv[p] > 0 ? out.patch_area[p] / patch_uv[p] : 1.0;
+    const double lo = 1e-6 * mean, hi = 1e6 * mean;
+    for (int f : faces_of[p]) {
+      if (face_uv_area[f] <= 0) continue;
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(face_metric[f]);
+      const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(lo).cwiseMin(hi);
+      const Eigen::Matrix2d m = es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
+      for (int v : chart.mesh.faces[f]) {
+        acc[v] += face_uv_area[f] * m;
+        weight[v] += face_uv_area[f];
+      }
+    }
+    for (int f : faces_of[p])
+      for (int k = 0; k < 3; ++k) {
+        const int v = chart.mesh.faces[f][k];
+        out.wedge[f][k] = weight[v] > 0 ? Eigen::Matrix2d(acc[v] / weight[v]) : Eigen::Matrix2d(mean * Eigen::Matrix2d::Identity());
+      }
+    for (int f : faces_of[p])
+      for (int v : chart.mesh.faces[f]) {
+        acc[v].setZero();
+        weight[v] = 0;
+      }
+  }
+  return out;
+}
+
+// One patch of a mesh being refined, in local numbering.
+struct PatchProblem {
+  std::vector<int> vertices;           // local -> chart vertex
+  std::vector<int> faces;              // chart faces of the patch
+  std::vector<std::array<int, 3>> tri;  // local corner ids per face
+  std::vector<Vec2> uv;                // per local vertex
+  std::vector<int> var;                // per local vertex: index of its u among the unknowns, -1 held
+  std::vector<Eigen::Matrix2d> dm_inv;  // per face: inverse of the 3D edge matrix in a local frame
+  std::vector<double> area;            // per face: 3D area (the energy's weight)
+  int unknowns = 0;
+  double total_area = 0;
+};
+
+// The 2D edge matrix of a 3D triangle in its own frame (first edge along x), with its height
+// floored at 1e-3 of the longest edge so that a needle face still has a finite, positive inverse.
+Eigen::Matrix2d local_edges(const Vec3& x0, const Vec3& x1, const Vec3& x2, double& area) {
+  const Vec3 e1 = x1 - x0, e2 = x2 - x0;
+  area = 0.5 * e1.cross(e2).norm();
+  const double l1 = e1.norm();
+  const double longest = std::max({l1, e2.norm(), (x2 - x1).norm(), 1e-300});
+  Eigen::Matrix2d dm;
+  if (l1 <= 1e-12 * longest) {
+    dm << longest, 0, 0, 1e-3 * longest;
+    return dm;
+  }
+  const double a = e1.dot(e2) / l1;
+  const double h = std::max(2.0 * area / l1, 1e-3 * longest);
+  dm << l1, a, 0, h;
+  return dm;
+}
+
+// vec(J) = A x for J = Q [x1 - x0, x2 - x0] P, x = (u0, v0, u1, v1, u2, v2), vec row-major.
+Mat46 jacobian_matrix(const Eigen::Matrix2d& q, const Eigen::Matrix2d& p) {
+  Mat46 a = Mat46::Zero();
+  for (int r = 0; r < 2; ++r)
+    for (int b = 0; b < 2; ++b)
+      for (int c = 0; c < 2; ++c)
+        for (int d = 0; d < 2; ++d) {
+          const double w = q(r, c) * p(d, b);
+          a(2 * r + b, 2 * (d + 1) + c) += w;
+          a(2 * r + b, c) -= w;
+        }
+  return a;
+}
+
+double tri_det(const Vec2& a, const Vec2& b, const Vec2& c) { return cross2(b - a, c - a); }
+
+// Smallest alpha > 0 at which det(Ds + alpha dDs) = 0, or +inf.
+double flip_step(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& da, const Vec2& db, const Vec2& dc) {
+  const Vec2 e1 = b - a, e2 = c - a, d1 = db - da, d2 = dc - da;
+  const double c0 = cross2(e1, e2);
+  const double c1 = cross2(e1, d2) + cross2(d1, e2);
+  const double c2 = cross2(d1, d2);
+  double best = kInf;
+  auto consider = [&](double t) {
+    if (t > 0 && t < best) best = t;
+  };
+  const double scale = std::abs(c0) + std::abs(c1) + std::abs(c2);
+  if (scale == 0) return kInf;
+  if (std::abs(c2) <= 1e-14 * scale) {
+    if (c1 != 0) consider(-c0 / c1);
+    return best;
+  }
+  const double disc = c1 * c1 - 4 * c2 * c0;
+  if (disc < 0) return best;
+  const double s = std::sqrt(disc);
+  const double qq = -0.5 * (c1 + (c1 >= 0 ? s : -s));
+  if (qq != 0) {
+    consider(qq / c2);
+    consider(c0 / qq);
+  }
+  return best;
+}
+
+class PatchSolver {
+ public:
+  PatchSolver(PatchProblem& prob, const remesh::ChartSampler& ref, const MetricField& field, int patch, double scale)
+      : prob_(prob), ref_(ref), field_(field), patch_(patch), scale_(scale) {
+    const size_t nf = prob.faces.size();
+    a_.resize(nf);
+    hint_.assign(nf, -1);
+  }
+
+  // Re-evaluates the reference metric at the faces' uv centroids and the per-face Jacobian maps.
+  void update_metric() {
+    const auto& chart = ref_.chart();
+    for (size_t t = 0; t < prob_.faces.size(); ++t) {
+      const auto& c = prob_.tri[t];
+      const Vec2 centroid = (prob_.uv[c[0]] + prob_.uv[c[1]] + prob_.uv[c[2]]) / 3.0;
+      const auto loc = ref_.locate(patch_, centroid.cwiseMax(0.0).cwiseMin(1.0), hint_[t]);
+      hint_[t] = loc.face;
+      Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
+      for (int k = 0; k < 3; ++k) m += loc.bary[k] * field_.wedge[loc.face][k];
+      m *= scale_;
+      (void)chart;
+      Eigen::LLT<Eigen::Matrix2d> llt(m);
+      Eigen::Matrix2d l = llt.info() == Eigen::Success ? Eigen::Matrix2d(llt.matrixL())
+                                                       : Eigen::Matrix2d(std::sqrt(std::max(m.trace() / 2, 1e-300)) *
+                                                                         Eigen::Matrix2d::Identity());
+      a_[t] = jacobian_matrix(l.transpose(), prob_.dm_inv[t]);
+    }
+  }
+
+  Vec6 corner_uv(size_t t, const std::vector<Vec2>& uv) const {
+    const auto& c = prob_.tri[t];
+    Vec6 x;
+    x << uv[c[0]], uv[c[1]], uv[c[2]];
+    return x;
+  }
+
+  // Energy (sum of area * symDirichlet) at uv under the current metric; +inf when a face folds.
+  double energy(const std::vector<Vec2>& uv) const {
+    double e = 0;
+    for (size_t t = 0; t < prob_.faces.size(); ++t) {
+      const auto& c = prob_.tri[t];
+      if (tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) <= 0) return kInf;
+      const Eigen::Vector4d j = a_[t] * corner_uv(t, uv);
+      Eigen::Matrix2d jm;
+      jm << j[0], j[1], j[2], j[3];
+      const double f = sym_dirichlet(jm);
+      if (!std::isfinite(f)) return kInf;
+      e += prob_.area[t] * f;
+    }
+    return e;
+  }
+
+  // One projected Newton step; returns false when no progress was made.
+  bool step(double& e_now, double tolerance) {
+    const int n = prob_.unknowns;
+    if (n == 0) return false;
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(prob_.faces.size() * 36);
+    for (size_t t = 0; t < prob_.faces.size(); ++t) {
+      const Eigen::Vector4d j = a_[t] * corner_uv(t, prob_.uv);
+      Eigen::Matrix2d jm;
+      jm << j[0], j[1], j[2], j[3];
+      Eigen::Vector4d gj;
+      Eigen::Matrix4d hj;
+      if (!std::isfinite(sym_dirichlet(jm, &gj, &hj))) return false;
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(hj);
+      const Eigen::Vector4d lam = es.eigenvalues().cwiseMax(0.0);
+      const Eigen::Matrix4d hp = es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
+      const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
+      const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
+      const auto& c = prob_.tri[t];
+      for (int r = 0; r < 6; ++r) {
+        const int vr = prob_.var[c[r / 2]];
+        if (vr < 0) continue;
+        g[vr + r % 2] += gx[r];
+        for (int s = 0; s < 6; ++s) {
+          const int vs = prob_.var[c[s / 2]];
+          if (vs < 0) continue;
+          trip.emplace_back(vr + r % 2, vs + s % 2, hx(r, s));
+        }
+      }
+    }
+    Eigen::SparseMatrix<double> h(n, n);
+    h.setFromTriplets(trip.begin(), trip.end());
+    double diag = 0;
+    for (int i = 0; i < n; ++i) diag = std::max(diag, h.coeff(i, i));
+    Eigen::VectorXd d;
+    double mu = 1e-10 * std::max(diag, 1e-300);
+    for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
+      Eigen::SparseMatrix<double> hm = h;
+      for (int i = 0; i < n; ++i) hm.coeffRef(i, i) += mu;
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hm);
+      if (ldlt.info() != Eigen::Success) continue;
+      d = ldlt.solve(-g);
+      if (ldlt.info() == Eigen::Success && d.allFinite() && g.dot(d) < 0) break;
+      d.resize(0);
+    }
+    if (d.size() == 0) return false;
+    // Direction per local vertex; cap the step below the first fold.
+    std::vector<Vec2> dir(prob_.uv.size(), Vec2::Zero());
+    for (size_t v = 0; v < prob_.uv.size(); ++v)
+      if (prob_.var[v] >= 0) dir[v] = Vec2(d[prob_.var[v]], d[prob_.var[v] + 1]);
+    double alpha_max = kInf;
+    for (const auto& c : prob_.tri)
+      alpha_max = std::min(alpha_max, flip_step(prob_.uv[c[0]], prob_.uv[c[1]], prob_.uv[c[2]], dir[c[0]], dir[c[1]],
+                                                dir[c[2]]));
+    double alpha = std::min(1.0, 0.8 * alpha_max);
+    const double slope = g.dot(d);
+    std::vector<Vec2> trial(prob_.uv.size());
+    for (int k = 0; k < 40; ++k, alpha *= 0.5) {
+      for (size_t v = 0; v < trial.size(); ++v) trial[v] = prob_.uv[v] + alpha * dir[v];
+      const double e = energy(trial);
+      if (e <= e_now + 1e-4 * alpha * slope) {
+        const double gain = e_now - e;
+        prob_.uv.swap(trial);
+        e_now = e;
+        return gain > tolerance * e;
+      }
+    }
+    return false;
+  }
+
+ private:
+  PatchProblem& prob_;
+  const remesh::ChartSampler& ref_;
+  const MetricField& field_;
+  int patch_;
+  double scale_;
+  std::vector<Mat46> a_;
+  std::vector<int> hint_;
+};
+
+struct PatchResult {
+  bool changed = false;
+  bool skipped = false;
+  int steps = 0;
+  double energy_before = 0, energy_after = 0, area = 0;  // unnormalized energies, total 3D area
+  int free = 0, held = 0;
+  std::vector<std::pair<int, Vec2>> moved;  // chart vertex -> new uv
+};
+
+void check_set(const std::vector<dissect::Dissection>& meshes, const RefineOptions& options) {
+  if (meshes.empty()) throw InvalidInput("refine_maps: the set is empty; give the meshes of one dissection");
+  if (options.reference < 0 || options.reference >= static_cast<int>(meshes.size()))
+    throw InvalidInput("refine_maps: reference mesh " + std::to_string(options.reference) + " is not in the set of " +
+                       std::to_string(meshes.size()) + " meshes (expected 0.." + std::to_string(meshes.size() - 1) +
+                       ")");
+  if (options.iterations < 0 || !(options.tolerance >= 0))
+    throw InvalidInput("refine_maps: iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
+                       std::to_string(options.tolerance) + ") must be >= 0");
+  const size_t np = meshes[0].chart.patches.size();
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const auto& c = meshes[i].chart;
+    const size_t nf = c.mesh.faces.size();
+    if (c.patches.size() != np)
+      throw InvalidInput("refine_maps: mesh " + std::to_string(i) + " has " + std::to_string(c.patches.size()) +
+                         " patches, mesh 0 has " + std::to_string(np) + "; the meshes must come from one dissection");
+    if (c.face_patch.size() != nf || c.face_uv.size() != nf)
+      throw InvalidInput("refine_maps: mesh " + std::to_string(i) + " has " + std::to_string(nf) + " faces but " +
+                         std::to_string(c.face_patch.size()) + " patch labels and " + std::to_string(c.face_uv.size()) +
+                         " uv triples");
+    for (size_t f = 0; f < nf; ++f) {
+      if (c.face_patch[f] < 0 || c.face_patch[f] >= static_cast<int>(np))
+        throw InvalidInput("refine_maps: face " + std::to_string(f) + " of mesh " + std::to_string(i) +
+                           " has patch " + std::to_string(c.face_patch[f]) + ", expected 0.." +
+                           std::to_string(np - 1));
+      for (int v : c.mesh.faces[f])
+        if (v < 0 || v >= c.mesh.num_vertices())
+          throw InvalidInput("refine_maps: face " + std::to_string(f) + " of mesh " + std::to_string(i) +
+                             " uses vertex " + std::to_string(v) + " out of range");
+    }
+  }
+}
+
+// The patch problems of one mesh (free = patch-interior, not a seed/feature, consistent wedges).
+std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
+  const auto& chart = d.chart;
+  const int nv = chart.mesh.num_vertices();
+  const int np = static_cast<int>(chart.patches.size());
+  std::vector<int> first_patch(nv, -1);
+  std::vector<char> held(nv, 0);
+  for (int f = 0; f < chart.mesh.num_faces(); ++f)
+    for (int v : chart.mesh.faces[f]) {
+      if (first_patch[v] < 0) first_patch[v] = chart.face_patch[f];
+      else if (first_patch[v] != chart.face_patch[f]) held[v] = 1;  // on a patch border
+    }
+  for (int s : d.seeds)
+    if (s >= 0 && s < nv) held[s] = 1;
+  for (const auto& f : d.features)
+    if (f.vertex >= 0 && f.vertex < nv) held[f.vertex] = 1;
+  for (const auto& p : chart.patches)
+    for (int c : p.corners)
+      if (c >= 0 && c < nv) held[c] = 1;
+
+  std::vector<PatchProblem> probs(np);
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) probs[chart.face_patch[f]].faces.push_back(f);
+  std::vector<int> local(nv, -1);
+  for (int p = 0; p < np; ++p) {
+    auto& pr = probs[p];
+    for (int f : pr.faces) {
+      std::array<int, 3> c{};
+      for (int k = 0; k < 3; ++k) {
+        const int v = chart.mesh.faces[f][k];
+        if (local[v] < 0) {
+          local[v] = static_cast<int>(pr.vertices.size());
+          pr.vertices.push_back(v);
+          pr.uv.push_back(chart.face_uv[f][k]);
+          pr.var.push_back(held[v] ? -1 : 0);
+        } else if (pr.uv[local[v]] != chart.face_uv[f][k]) {
+          pr.var[local[v]] = -1;  // wedges disagree: hold it
+        }
+        c[k] = local[v];
+      }
+      pr.tri.push_back(c);
+      double area = 0;
+      const auto& t = chart.mesh.faces[f];
+      const Eigen::Matrix2d dm = local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]],
+                                             chart.mesh.positions[t[2]], area);
+      pr.dm_inv.push_back(dm.inverse());
+      pr.area.push_back(area);
+      pr.total_area += area;
+    }
+    for (auto& v : pr.var)
+      if (v == 0) {
+        v = pr.unknowns;
+        pr.unknowns += 2;
+      }
+    for (int v : pr.vertices) local[v] = -1;
+  }
+  return probs;
+}
+
+PatchResult solve_patch(PatchProblem& pr, const remesh::ChartSampler& ref, const MetricField& field, int patch,
+                        const RefineOptions& options, bool optimize) {
+  PatchResult res;
+  res.area = pr.total_area;
+  for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
+  if (pr.faces.empty()) return res;
+  const double scale = field.patch_area[patch] > 0 ? pr.total_area / field.patch_area[patch] : 1.0;
+  PatchSolver solver(pr, ref, field, patch, scale);
+  solver.update_metric();
+  const std::vector<Vec2> start = pr.uv;
+  double e = solver.energy(pr.uv);
+  res.energy_before = e;
+  res.energy_after = e;
+  if (!std::isfinite(e)) {
+    res.skipped = true;  // folded to start with: left alone, and left out of the energies
+    res.energy_before = res.energy_after = res.area = 0;
+    return res;
+  }
+  if (!optimize || pr.unknowns == 0) return res;
+  for (int it = 0; it < options.iterations; ++it) {
+    const bool more = solver.step(e, options.tolerance);
+    ++res.steps;
+    solver.update_metric();
+    e = solver.energy(pr.uv);
+    if (!more || !std::isfinite(e)) break;
+  }
+  // Keep the result only if it is bijective, inside the square and better.
+  bool ok = std::isfinite(e) && e < res.energy_before;
+  for (const auto& c : pr.tri)
+    if (!(0.5 * tri_det(pr.uv[c[0]], pr.uv[c[1]], pr.uv[c[2]]) > param::kZeroUvArea)) ok = false;
+  for (const auto& q : pr.uv)
+    if (!(q.x() >= 0 && q.x() <= 1 && q.y() >= 0 && q.y() <= 1)) ok = false;
+  if (!ok) {
+    pr.uv = start;
+    res.skipped = true;
+    return res;
+  }
+  res.energy_after = e;
+  res.changed = true;
+  for (size_t v = 0; v < pr.uv.size(); ++v)
+    if (pr.var[v] >= 0 && pr.uv[v] != start[v]) res.moved.emplace_back(pr.vertices[v], pr.uv[v]);
+  return res;
+}
+
+template <class F>
+void parallel_for(int n, int threads, const Context& context, F&& body) {
+  threads = std::max(1, std::min(threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()), n));
+  std::atomic<int> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    for (int i; (i = next++) < n;) {
+      if (failed || (context.cancel && context.cancel->load())) return;
+      try {
+        body(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  context.check_cancel();
+}
+
+std::vector<PatchResult> run_mesh(dissect::Dissection& b, const remesh::ChartSampler& ref, const MetricField& field,
+                                  const RefineOptions& options, bool optimize, const Context& context) {
+  std::vector<PatchProblem> probs = build_problems(b);
+  std::vector<PatchResult> results(probs.size());
+  // Largest patches first: better balance; the result does not depend on the order.
+  std::vector<int> order(probs.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int x, int y) { return probs[x].faces.size() > probs[y].faces.size(); });
+  parallel_for(static_cast<int>(order.size()), options.threads, context, [&](int i) {
+    const int p = order[i];
+    results[p] = solve_patch(probs[p], ref, field, p, options, optimize);
+  });
+  if (!optimize) return results;
+  // Write the moved vertices back into every wedge of their patch, then recount.
+  auto& chart = b.chart;
+  for (size_t p = 0; p < probs.size(); ++p) {
+    if (!results[p].changed) continue;
+    const auto& pr = probs[p];
+    for (size_t t = 0; t < pr.faces.size(); ++t)
+      for (int k = 0; k < 3; ++k) chart.face_uv[pr.faces[t]][k] = pr.uv[pr.tri[t][k]];
+    // Patch figures from the refined map, as the dissection computes them.
+    std::vector<Vec3> pos(pr.vertices.size());
+    for (size_t v = 0; v < pos.size(); ++v) pos[v] = chart.mesh.positions[pr.vertices[v]];
+    std::vector<Tri> tris(pr.tri.begin(), pr.tri.end());
+    param::SquareParam sp;
+    sp.uv = pr.uv;
+    param::count_uv_faces(tris, sp);
+    auto& info = chart.patches[p];
+    info.stretch = param::l2_stretch(pos, tris, pr.uv).patch;
+    info.flipped_faces = sp.flipped_faces;
+    info.zero_area_faces = sp.zero_area_faces;
+    info.uv_area_sum = sp.uv_area_sum;
+  }
+  b.max_stretch = 0;
+  for (const auto& p : chart.patches) b.max_stretch = std::max(b.max_stretch, p.stretch);
+  return results;
+}
+
+void count_faces(const dissect::Chart& chart, MeshRefineReport& r) {
+  r.flipped_faces = r.zero_area_faces = 0;
+  for (const auto& uv : chart.face_uv) {
+    const double a = 0.5 * tri_det(uv[0], uv[1], uv[2]);
+    if (a < -param::kZeroUvArea) ++r.flipped_faces;
+    else if (std::abs(a) <= param::kZeroUvArea) ++r.zero_area_faces;
+  }
+}
+
+}  // namespace
+
+double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient, Eigen::Matrix4d* hessian) {
+  const double d = J.determinant();
+  if (!(d > 0)) return kInf;
+  const Eigen::Vector4d j(J(0, 0), J(0, 1), J(1, 0), J(1, 1));
+  const double s = j.squaredNorm();
+  const double id2 = 1.0 / (d * d);
+  if (gradient || hessian) {
+    const Eigen::Vector4d c(J(1, 1), -J(1, 0), -J(0, 1), J(0, 0));  // d det / d vec(J)
+    const double id3 = id2 / d;
+    if (gradient) *gradient = 2 * (1 + id2) * j - 2 * s * id3 * c;
+    if (hessian) {
+      Eigen::Matrix4d k = Eigen::Matrix4d::Zero();
+      k(0, 3) = k(3, 0) = 1;
+      k(1, 2) = k(2, 1) = -1;
+      *hessian = 2 * (1 + id2) * Eigen::Matrix4d::Identity() - 4 * id3 * (j * c.transpose() + c * j.transpose()) +
+                 6 * s * id2 * id2 * c * c.transpose() - 2 * s * id3 * k;
+    }
+  }
+  return s * (1 + id2);
+}
+
+double map_energy(const dissect::Dissection& a, const dissect::Dissection& b) {
+  std::vector<dissect::Dissection> pair{a, b};
+  RefineOptions o;
+  o.reference = 0;
+  check_set(pair, o);
+  const remesh::ChartSampler ref(pair[0].chart);
+  const MetricField field = metric_field(pair[0].chart);
+  const auto results = run_mesh(pair[1], ref, field, o, false, {});
+  double e = 0, area = 0;
+  for (const auto& r : results) {
+    e += r.energy_before;
+    area += r.area;
+  }
+  return area > 0 ? e / area / 4 : 0;
+}
+
+RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options,
+                         const Context& context) {
+  check_set(meshes, options);
+  RefineReport report;
+  report.meshes.resize(meshes.size());
+  const auto& a = meshes[options.reference];
+  const remesh::ChartSampler ref(a.chart, context);
+  const MetricField field = metric_field(a.chart);
+  context.report("refine maps", 0);
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    auto& r = report.meshes[i];
+    if (static_cast<int>(i) == options.reference) {
+      r.reference = true;
+      count_faces(meshes[i].chart, r);
+      continue;
+    }
+    const auto results = run_mesh(meshes[i], ref, field, options, true, context);
+    double eb = 0, ea = 0, area = 0;
+    for (const auto& pr : results) {
+      eb += pr.energy_before;
+      ea += pr.energy_after;
+      area += pr.area;
+      r.free_vertices += pr.free;
+      r.held_vertices += pr.held;
+      r.newton_steps += pr.steps;
+      r.patches_refined += pr.changed ? 1 : 0;
+      r.patches_skipped += pr.skipped ? 1 : 0;
+    }
+    r.energy_before = area > 0 ? eb / area / 4 : 0;
+    r.energy_after = area > 0 ? ea / area / 4 : 0;
+    count_faces(meshes[i].chart, r);
+    context.report("refine maps", static_cast<double>(i + 1) / meshes.size());
+  }
+  context.report("refine maps", 1);
+  return report;
+}
+
+}  // namespace qs::maprefine

@@ -1,0 +1,91 @@
+#pragma once
+// Map refinement after the common dissection (issue 17, item 3).
+//
+// A common dissection maps every mesh of a set onto the same patches; the inter-surface map from
+// mesh A to mesh B is point on A -> (patch, u, v) by A's chart -> the point of B at (patch, u, v)
+// by B's chart. refine_maps() moves the chart (u, v) of B's patch-interior vertices so that the map
+// B -> A (and so its inverse A -> B) has low isometric distortion, in the spirit of Schmidt et al.
+// 2019 ("Distortion-minimizing injective maps between surfaces"), restricted to one patch at a time:
+//
+//  - Reference: one mesh of the set (RefineOptions::reference, default mesh 0) is not moved; every
+//    other mesh is refined against it. The reference's chart gives, per patch, the metric of its
+//    surface in (u, v): M(uv) = (dA/duv)^T (dA/duv), per chart face, averaged at the vertices (uv
+//    area weights) and interpolated linearly, scaled per patch by area_B(patch) / area_A(patch) so
+//    that a map that is isometric up to the patch's size scores best.
+//  - Energy of B's patch: sum over B's faces t of area_B(t) * symDirichlet(J_t) with
+//    J_t = L^T (d uv / dB on t), M = L L^T at t's uv centroid, symDirichlet(J) = |J|^2 + |J^-1|^2
+//    (4 for a rotation; reported normalized: 1 = isometric). It goes to infinity as a uv triangle
+//    degenerates, a barrier against folds.
+//  - Solver: projected Newton (per-face 4x4 Hessian of symDirichlet clamped to positive
+//    semi-definite), sparse LDLT, step capped at 0.8 of the largest flip-free step (Smith and
+//    Schaefer 2015) and backtracked (Armijo); the metric is re-evaluated at the new uv centroids
+//    after every step.
+//  - Held: every patch border vertex (sides and corners stay where the dissection put them),
+//    seeds, features, and any vertex whose wedges in its patch disagree. Only patch-interior
+//    vertices move, and only inside their own patch.
+//  - Safety: a patch keeps its refined (u, v) only if every uv face stays positive (signed area
+//    above param::kZeroUvArea) and the energy went down; otherwise it is left as it was. Patches
+//    with a flipped or zero-area uv face to start with are not touched.
+//
+// Patches are independent (their borders are held), so they run in parallel; the result does not
+// depend on the thread count.
+
+#include <vector>
+
+#include "qs/core/context.h"
+#include "qs/dissect/dissection.h"
+
+namespace qs::maprefine {
+
+struct RefineOptions {
+  int reference = 0;         ///< the mesh of the set that is not moved. \pre 0 <= reference < #meshes
+  int iterations = 30;       ///< Newton steps per patch at most. \pre >= 0
+  /// A patch stops when a step lowers its energy by less than this fraction. \pre >= 0
+  double tolerance = 1e-5;
+  int threads = 0;           ///< 0: all cores; the result does not depend on it
+};
+
+/// What refinement did to one mesh of the set.
+struct MeshRefineReport {
+  bool reference = false;       ///< this mesh was the reference (not moved)
+  int free_vertices = 0;        ///< chart vertices that were free to move
+  int held_vertices = 0;        ///< patch-border vertices, seeds, features, inconsistent wedges
+  int patches_refined = 0;      ///< patches whose (u, v) changed
+  int patches_skipped = 0;      ///< patches left as they were (folded to start with, or no gain)
+  int newton_steps = 0;         ///< summed over the patches
+  /// Normalized distortion energy of the map to the reference (area-weighted mean of
+  /// symDirichlet / 4 over the mesh's faces: 1 = isometric up to each patch's scale).
+  double energy_before = 0;
+  double energy_after = 0;
+  int flipped_faces = 0;        ///< uv faces with signed area < -param::kZeroUvArea after refinement
+  int zero_area_faces = 0;      ///< uv faces with |signed area| <= param::kZeroUvArea after refinement
+};
+
+struct RefineReport {
+  std::vector<MeshRefineReport> meshes;  ///< one per mesh of the set, in order
+};
+
+/// Refines the charts of a dissected set in place (see the top of this file). Only
+/// chart.face_uv of non-reference meshes changes, and the PatchInfo figures that depend on it
+/// (stretch, flipped and zero-area counts, uv area sum) and Dissection::max_stretch are
+/// recomputed; meshes, patches, corners, features and seeds are unchanged, so every later stage
+/// reads the refined charts as before.
+/// \pre the meshes come from one dissect_set (same patches in the same order, base domains
+/// identical). \throws InvalidInput for an empty set, a reference out of range, options out of
+/// range or charts that do not share their patches (naming the mesh and patch count);
+/// Error(Internal "cancelled") when context's cancel flag is raised.
+/// Progress stage: "refine maps".
+RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options = {},
+                         const Context& context = {});
+
+/// The normalized distortion energy of mesh `b`'s map to mesh `a` (as MeshRefineReport::
+/// energy_after): for tests and reports. \pre as refine_maps.
+double map_energy(const dissect::Dissection& a, const dissect::Dissection& b);
+
+/// symDirichlet(J) = |J|_F^2 + |J^-1|_F^2 of a 2x2 matrix with det > 0, its gradient and the
+/// Hessian with respect to J's entries in row-major order (J00, J01, J10, J11). Exposed for tests.
+/// Returns +infinity (gradient and Hessian untouched) when det(J) <= 0.
+double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient = nullptr,
+                     Eigen::Matrix4d* hessian = nullptr);
+
+}  // namespace qs::maprefine

@@ -1,0 +1,269 @@
+// Map refinement after the common dissection: the energy's derivatives, the invariants the
+// refinement keeps (no folds, held vertices unchanged, determinism) and that it repairs a
+// deliberately distorted chart as measured against ground truth.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "qs/core/error.h"
+#include "qs/correspondence/correspondence.h"
+#include "qs/dissect/dissection.h"
+#include "qs/family/family.h"
+#include "qs/maprefine/map_refine.h"
+#include "qs/param/square_param.h"
+
+using ::testing::HasSubstr;
+using qs::Vec2;
+namespace cr = qs::correspondence;
+namespace mr = qs::maprefine;
+
+namespace {
+
+qs::family::Family same_shape_pair() {
+  qs::family::FamilyOptions o;
+  o.shapes = 2;
+  o.seed = 4;
+  o.faces = 2000;
+  o.limbs = 4;
+  o.variation = 0;  // one surface, two tessellations: the ideal map is the identity
+  return qs::family::generate_family(o);
+}
+
+cr::TruthMesh sphere_truth(const qs::family::FamilyShape& s) {
+  cr::TruthMesh t;
+  t.name = s.name;
+  t.mesh = s.mesh;
+  qs::family::SurfaceMap m;
+  m.sphere = s.parameters;
+  t.map = m;
+  return t;
+}
+
+std::vector<qs::dissect::Dissection> dissect_pair(const qs::family::Family& fam) {
+  std::vector<qs::dissect::MeshToDissect> in;
+  for (const auto& s : fam.shapes) in.push_back(cr::dissect_input(s));
+  return qs::dissect::dissect_set(in).meshes;
+}
+
+cr::ErrorStats measure(const cr::GroundTruth& truth, const std::vector<qs::dissect::Dissection>& set) {
+  std::vector<cr::DissectedInput> in;
+  for (const auto& d : set) in.push_back({&d.chart, cr::dissection_landmarks(d)});
+  cr::MeasureOptions o;
+  o.samples = 20000;
+  return cr::measure_pair(truth, in, 0, 1, o).dissection;
+}
+
+int folded_faces(const qs::dissect::Chart& chart) {
+  int n = 0;
+  for (const auto& uv : chart.face_uv) {
+    const double a = 0.5 * ((uv[1] - uv[0]).x() * (uv[2] - uv[0]).y() - (uv[1] - uv[0]).y() * (uv[2] - uv[0]).x());
+    if (a <= qs::param::kZeroUvArea) ++n;
+  }
+  return n;
+}
+
+// Vertices that refinement must hold: on a patch border, seeds, features.
+std::vector<char> held_vertices(const qs::dissect::Dissection& d) {
+  const auto& c = d.chart;
+  std::vector<int> patch(c.mesh.num_vertices(), -1);
+  std::vector<char> held(c.mesh.num_vertices(), 0);
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    for (int v : c.mesh.faces[f]) {
+      if (patch[v] >= 0 && patch[v] != c.face_patch[f]) held[v] = 1;
+      patch[v] = c.face_patch[f];
+    }
+  for (int s : d.seeds) held[s] = 1;
+  for (const auto& f : d.features) held[f.vertex] = 1;
+  return held;
+}
+
+// Pushes the interior vertices of every feature-free patch by a smooth bijection of the square
+// that fixes its border: u' = u + 0.22 sin(pi u) sin(pi v) (monotone in u since 0.22 pi < 1). A
+// patch whose piecewise-linear image would fold (a sliver along its border) is left as it was.
+void distort(qs::dissect::Dissection& d) {
+  const auto held = held_vertices(d);
+  std::vector<char> has_feature(d.chart.patches.size(), 0);
+  for (const auto& f : d.features) has_feature[f.patch] = 1;
+  auto& c = d.chart;
+  const auto before = c.face_uv;
+  std::vector<char> folded(c.patches.size(), 0);
+  for (int f = 0; f < c.mesh.num_faces(); ++f) {
+    if (has_feature[c.face_patch[f]]) continue;
+    for (int k = 0; k < 3; ++k) {
+      if (held[c.mesh.faces[f][k]]) continue;
+      Vec2& uv = c.face_uv[f][k];
+      uv.x() += 0.22 * std::sin(M_PI * uv.x()) * std::sin(M_PI * uv.y());
+    }
+    const auto& uv = c.face_uv[f];
+    if ((uv[1] - uv[0]).x() * (uv[2] - uv[0]).y() - (uv[1] - uv[0]).y() * (uv[2] - uv[0]).x() <= 1e-12)
+      folded[c.face_patch[f]] = 1;
+  }
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    if (folded[c.face_patch[f]]) c.face_uv[f] = before[f];
+}
+
+}  // namespace
+
+TEST(SymDirichlet, IsFourForARotationAndInfiniteWhenFolded) {
+  const double a = 0.7;
+  Eigen::Matrix2d r;
+  r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  EXPECT_NEAR(mr::sym_dirichlet(r), 4, 1e-12);
+  Eigen::Matrix2d s = 2 * r;
+  EXPECT_NEAR(mr::sym_dirichlet(s), 8 + 0.5, 1e-12);  // |J|^2 = 8, |J^-1|^2 = 1/2
+  Eigen::Matrix2d m;
+  m << 1, 0, 0, -1;
+  EXPECT_TRUE(std::isinf(mr::sym_dirichlet(m)));
+  m << 1, 2, 0.5, 1;  // det 0
+  EXPECT_TRUE(std::isinf(mr::sym_dirichlet(m)));
+}
+
+TEST(SymDirichlet, GradientAndHessianMatchFiniteDifferences) {
+  Eigen::Matrix2d j;
+  j << 1.3, 0.4, -0.2, 0.8;
+  Eigen::Vector4d g;
+  Eigen::Matrix4d h;
+  mr::sym_dirichlet(j, &g, &h);
+  EXPECT_NEAR((h - h.transpose()).norm(), 0, 1e-12);
+  const double eps = 1e-6;
+  for (int i = 0; i < 4; ++i) {
+    Eigen::Matrix2d jp = j, jm = j;
+    jp(i / 2, i % 2) += eps;
+    jm(i / 2, i % 2) -= eps;
+    EXPECT_NEAR(g[i], (mr::sym_dirichlet(jp) - mr::sym_dirichlet(jm)) / (2 * eps), 1e-6) << i;
+    Eigen::Vector4d gp, gm;
+    mr::sym_dirichlet(jp, &gp);
+    mr::sym_dirichlet(jm, &gm);
+    const Eigen::Vector4d fd = (gp - gm) / (2 * eps);
+    for (int k = 0; k < 4; ++k) EXPECT_NEAR(h(k, i), fd[k], 1e-5) << k << "," << i;
+  }
+}
+
+TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeatures) {
+  const auto fam = same_shape_pair();
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  auto set = dissect_pair(fam);
+  ASSERT_EQ(set.size(), 2u);
+  ASSERT_EQ(folded_faces(set[1].chart), 0);
+  const auto plain = measure(truth, set);
+  distort(set[1]);
+  ASSERT_EQ(folded_faces(set[1].chart), 0) << "the distortion itself must stay bijective";
+  const auto distorted = measure(truth, set);
+  EXPECT_GT(distorted.mean, 1.3 * plain.mean);  // the distortion is visible in the measure
+  const double e_distorted = mr::map_energy(set[0], set[1]);
+
+  const auto before = set;
+  const auto report = mr::refine_maps(set);
+  ASSERT_EQ(report.meshes.size(), 2u);
+  EXPECT_TRUE(report.meshes[0].reference);
+  const auto& r = report.meshes[1];
+  EXPECT_FALSE(r.reference);
+  EXPECT_GT(r.free_vertices, 0);
+  EXPECT_GT(r.patches_refined, 0);
+  EXPECT_EQ(r.flipped_faces, 0);
+  EXPECT_EQ(r.zero_area_faces, 0);
+  EXPECT_EQ(folded_faces(set[1].chart), 0);
+  EXPECT_LT(r.energy_after, r.energy_before);
+  EXPECT_NEAR(r.energy_before, e_distorted, 1e-9 * e_distorted);
+  EXPECT_NEAR(r.energy_after, mr::map_energy(set[0], set[1]), 1e-9 * r.energy_after);
+  EXPECT_GE(r.energy_after, 1.0 - 1e-9);  // normalized: 1 only for an isometry
+
+  // The reference is untouched; in the refined mesh, held vertices keep every wedge's uv.
+  EXPECT_EQ(set[0].chart.face_uv, before[0].chart.face_uv);
+  const auto held = held_vertices(before[1]);
+  int moved = 0;
+  for (int f = 0; f < set[1].chart.mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = set[1].chart.mesh.faces[f][k];
+      if (held[v]) EXPECT_EQ(set[1].chart.face_uv[f][k], before[1].chart.face_uv[f][k]) << "vertex " << v;
+      else moved += set[1].chart.face_uv[f][k] != before[1].chart.face_uv[f][k];
+    }
+  EXPECT_GT(moved, 0);
+  // Same connectivity, patches and features: the later stages read it as before.
+  EXPECT_EQ(set[1].chart.mesh.faces, before[1].chart.mesh.faces);
+  EXPECT_EQ(set[1].chart.face_patch, before[1].chart.face_patch);
+  for (size_t i = 0; i < set[1].features.size(); ++i) EXPECT_EQ(set[1].features[i].uv, before[1].features[i].uv);
+  for (const auto& p : set[1].chart.patches) {
+    EXPECT_EQ(p.flipped_faces + p.zero_area_faces, 0) << p.name;
+    EXPECT_NEAR(p.uv_area_sum, 1.0, 1e-9) << p.name;
+  }
+
+  // The correspondence measured against the truth gets better, back near the undistorted map.
+  const auto refined = measure(truth, set);
+  EXPECT_LT(refined.mean, 0.8 * distorted.mean);
+  EXPECT_LT(refined.p95, distorted.p95);
+  EXPECT_LT(refined.mean, 1.15 * plain.mean);
+}
+
+TEST(RefineMaps, TheResultDoesNotDependOnTheThreadCount) {
+  const auto fam = same_shape_pair();
+  auto set1 = dissect_pair(fam);
+  distort(set1[1]);
+  auto set4 = set1;
+  mr::RefineOptions o;
+  o.threads = 1;
+  const auto r1 = mr::refine_maps(set1, o);
+  o.threads = 4;
+  const auto r4 = mr::refine_maps(set4, o);
+  EXPECT_EQ(set1[1].chart.face_uv, set4[1].chart.face_uv);
+  EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
+  EXPECT_EQ(r1.meshes[1].newton_steps, r4.meshes[1].newton_steps);
+}
+
+TEST(RefineMaps, AnotherReferenceMovesTheOtherMesh) {
+  const auto fam = same_shape_pair();
+  auto set = dissect_pair(fam);
+  distort(set[0]);
+  const auto before = set;
+  mr::RefineOptions o;
+  o.reference = 1;
+  const auto r = mr::refine_maps(set, o);
+  EXPECT_TRUE(r.meshes[1].reference);
+  EXPECT_EQ(set[1].chart.face_uv, before[1].chart.face_uv);
+  EXPECT_NE(set[0].chart.face_uv, before[0].chart.face_uv);
+  EXPECT_LT(r.meshes[0].energy_after, r.meshes[0].energy_before);
+  EXPECT_EQ(folded_faces(set[0].chart), 0);
+}
+
+TEST(RefineMaps, ZeroIterationsChangeNothing) {
+  const auto fam = same_shape_pair();
+  auto set = dissect_pair(fam);
+  const auto before = set;
+  mr::RefineOptions o;
+  o.iterations = 0;
+  const auto r = mr::refine_maps(set, o);
+  EXPECT_EQ(set[1].chart.face_uv, before[1].chart.face_uv);
+  EXPECT_EQ(r.meshes[1].energy_after, r.meshes[1].energy_before);
+}
+
+TEST(RefineMaps, BadInputIsNamed) {
+  std::vector<qs::dissect::Dissection> none;
+  try {
+    mr::refine_maps(none);
+    FAIL();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("empty"));
+  }
+  const auto fam = same_shape_pair();
+  auto set = dissect_pair(fam);
+  mr::RefineOptions o;
+  o.reference = 2;
+  try {
+    mr::refine_maps(set, o);
+    FAIL();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("reference mesh 2 is not in the set of 2 meshes"));
+  }
+  o.reference = 0;
+  o.iterations = -1;
+  EXPECT_THROW(mr::refine_maps(set, o), qs::InvalidInput);
+  o.iterations = 5;
+  set[1].chart.patches.pop_back();
+  try {
+    mr::refine_maps(set, o);
+    FAIL();
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("mesh 1 has"));
+  }
+}
