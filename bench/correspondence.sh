@@ -3,7 +3,9 @@
 # (landmarks given), then measured with `qs-metro --correspondence` against its exact ground truth.
 #
 #   usage: bench/correspondence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-correspondence)
-#   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000)
+#   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000),
+#          DISSECT_ARGS (extra qs-dissect options, e.g. "--refine-maps"; the table then shows the
+#          dissection's and the refinement's own times from qs-dissect's report)
 #
 # Pairs (data made here, nothing committed but the SMPL landmark file):
 #   gen-sS        generated pair (qs-family, seed S = 1, 2, 3): two warps of one base, own tessellations
@@ -23,6 +25,7 @@ OUT=${2:-out/bench-correspondence}
 TOOLS=${QS_TOOLS:-build/tools}
 SAMPLES=${SAMPLES:-100000}
 FACES=${FACES:-8000}
+read -r -a EXTRA <<< "${DISSECT_ARGS:-}"
 LM=bench/correspondence/smpl.landmarks.json
 mkdir -p "$OUT"
 RESULTS="$OUT/results.tsv"
@@ -38,7 +41,7 @@ run_pair() {
   local t0 t1 rc
   t0=$(date +%s.%N)
   "$TOOLS/qs-dissect" "${meshes[@]}" --landmarks "${lms[@]}" -o "$dir" --quiet --report "$dir.report.txt" \
-      > "$dir.dissect.log" 2>&1
+      "${EXTRA[@]}" > "$dir.dissect.log" 2>&1
   rc=$?
   t1=$(date +%s.%N)
   local secs; secs=$(python3 -c "print(f'{$t1-$t0:.2f}')")
@@ -110,7 +113,15 @@ fi
 
 # The table (Markdown): one row per measured pair (A = the first mesh of the dissection).
 python3 - "$RESULTS" <<'PY'
-import json, sys
+import json, re, sys
+def timing(path, secs):
+    # "0.42 s" or, with --refine-maps, "0.42 s (dissect 0.30 + refine 0.08)" from qs-dissect's report
+    try:
+        rep = open(path.replace(".corr.json", ".report.txt")).read()
+    except OSError:
+        return f"{secs} s"
+    m = re.search(r"dissect ([0-9.]+) s, refine maps ([0-9.]+) s", rep)
+    return f"{secs} s (dissect {float(m.group(1)):.2f} + refine {float(m.group(2)):.2f})" if m else f"{secs} s"
 print()
 print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | level 4: mean / p95 / max | baseline mean | baseline p95 | baseline max | truth within (mean / max) |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
@@ -131,7 +142,7 @@ for line in open(sys.argv[1]):
         b = {k: avg(P, "baseline", k + "_percent") for k in ("mean", "p95")}
         b["max"] = avg(P, "baseline", "max_percent", max)
         share = sum(p["same_patch_share"] for p in P) / len(P)
-        print(f"| {name} (average of {len(P)} pairs, largest max) | {rc} | {secs} s | {doc['patches']} | {m['mean']:.2f}% | "
+        print(f"| {name} (average of {len(P)} pairs, largest max) | {rc} | {timing(path, secs)} | {doc['patches']} | {m['mean']:.2f}% | "
               f"{m['median']:.2f}% | {m['p95']:.2f}% | {m['max']:.2f}% | {100*share:.1f}% | "
               f"{avg(Q, 'dissection', 'mean_percent'):.2f} / {avg(Q, 'dissection', 'p95_percent'):.2f} / "
               f"{avg(Q, 'dissection', 'max_percent', max):.2f}% | {b['mean']:.2f}% | {b['p95']:.2f}% | {b['max']:.2f}% | exact |")
@@ -142,7 +153,7 @@ for line in open(sys.argv[1]):
         label = name if len(doc["pairs"]) == 1 else f"{name} {a}->{b}"
         t, tm = p["truth_tolerance_percent"], p["truth_tolerance_mean_percent"]
         tol = "exact" if t == 0 else f"{tm:.3f}% / {t:.2f}%"
-        print(f"| {label} | {rc} | {secs} s | {doc['patches']} | {d['mean_percent']:.2f}% | {d['median_percent']:.2f}% | "
+        print(f"| {label} | {rc} | {timing(path, secs)} | {doc['patches']} | {d['mean_percent']:.2f}% | {d['median_percent']:.2f}% | "
               f"{d['p95_percent']:.2f}% | {d['max_percent']:.2f}% | {100*p['same_patch_share']:.1f}% | "
               f"{q['dissection']['mean_percent']:.2f} / {q['dissection']['p95_percent']:.2f} / {q['dissection']['max_percent']:.2f}% | "
               f"{bl['mean_percent']:.2f}% | {bl['p95_percent']:.2f}% | {bl['max_percent']:.2f}% | {tol} |")

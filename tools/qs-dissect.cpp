@@ -249,6 +249,8 @@ int main(int argc, char** argv) {
              << f.uv.x() << ", " << f.uv.y() << ")\n";
       flipped += mesh_flipped;
     }
+    if (refine_maps && inputs.size() == 1)
+      text << "refine maps: one mesh, no map between meshes to refine (the chart is as dissected)\n";
     if (inputs.size() > 1)
       text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
            << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events

@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "qs/core/error.h"
@@ -137,6 +138,22 @@ TEST(SymDirichlet, GradientAndHessianMatchFiniteDifferences) {
     mr::sym_dirichlet(jm, &gm);
     const Eigen::Vector4d fd = (gp - gm) / (2 * eps);
     for (int k = 0; k < 4; ++k) EXPECT_NEAR(h(k, i), fd[k], 1e-5) << k << "," << i;
+  }
+}
+
+TEST(SymDirichlet, TheAnalyticProjectionIsTheEigenProjection) {
+  const Eigen::Matrix2d js[] = {(Eigen::Matrix2d() << 1.3, 0.4, -0.2, 0.8).finished(),
+                                (Eigen::Matrix2d() << 0.2, -0.9, 1.7, 0.1).finished(),
+                                (Eigen::Matrix2d() << 3.0, 0.0, 0.0, 0.3).finished(),
+                                (Eigen::Matrix2d() << 1.0, 0.0, 0.0, 1.0).finished(),
+                                (Eigen::Matrix2d() << 0.05, 0.02, -0.01, 0.04).finished()};
+  for (const auto& j : js) {
+    Eigen::Matrix4d h;
+    ASSERT_TRUE(std::isfinite(mr::sym_dirichlet(j, nullptr, &h)));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(h);
+    const Eigen::Matrix4d want =
+        es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+    EXPECT_LT((mr::project_hessian(j, h) - want).norm(), 1e-9 * (1 + want.norm())) << j;
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -172,6 +173,33 @@ double flip_step(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& da, co
   return best;
 }
 
+}  // namespace
+
+Eigen::Matrix4d project_hessian(const Eigen::Matrix2d& J, const Eigen::Matrix4d& H) {
+  // The Hessian of an isotropic energy is diagonal in the basis U E V^T (J = U S V^T) with E the
+  // two scalings e1 e1^T, e2 e2^T and the twist / flip (e1 e2^T -+ e2 e1^T) / sqrt(2) (Smith,
+  // Goes, Kim 2019): the eigenvalues are the Rayleigh quotients, clamped at 0.
+  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix2d& u = svd.matrixU();
+  const Eigen::Matrix2d& v = svd.matrixV();
+  const double r = std::sqrt(0.5);
+  Eigen::Matrix2d e[4];
+  e[0] << 1, 0, 0, 0;
+  e[1] << 0, 0, 0, 1;
+  e[2] << 0, r, -r, 0;
+  e[3] << 0, r, r, 0;
+  Eigen::Matrix4d out = Eigen::Matrix4d::Zero();
+  for (const auto& ek : e) {
+    const Eigen::Matrix2d m = u * ek * v.transpose();
+    const Eigen::Vector4d q(m(0, 0), m(0, 1), m(1, 0), m(1, 1));
+    const double lam = q.dot(H * q);
+    if (lam > 0) out += lam * q * q.transpose();
+  }
+  return out;
+}
+
+namespace {
+
 class PatchSolver {
  public:
   PatchSolver(PatchProblem& prob, const remesh::ChartSampler& ref, const MetricField& field, int patch, double scale)
@@ -238,9 +266,7 @@ class PatchSolver {
       Eigen::Vector4d gj;
       Eigen::Matrix4d hj;
       if (!std::isfinite(sym_dirichlet(jm, &gj, &hj))) return false;
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(hj);
-      const Eigen::Vector4d lam = es.eigenvalues().cwiseMax(0.0);
-      const Eigen::Matrix4d hp = es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
+      const Eigen::Matrix4d hp = project_hessian(jm, hj);
       const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
       const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
       const auto& c = prob_.tri[t];
@@ -255,19 +281,27 @@ class PatchSolver {
         }
       }
     }
+    // The diagonal is always in the pattern (it takes the regularization), so the pattern is the
+    // same at every step: ordered once per patch.
+    double diag = 0;
+    for (const auto& t : trip)
+      if (t.row() == t.col()) diag = std::max(diag, t.value());
+    for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);
     Eigen::SparseMatrix<double> h(n, n);
     h.setFromTriplets(trip.begin(), trip.end());
-    double diag = 0;
-    for (int i = 0; i < n; ++i) diag = std::max(diag, h.coeff(i, i));
+    if (!analyzed_) {
+      ldlt_.analyzePattern(h);
+      analyzed_ = true;
+    }
     Eigen::VectorXd d;
     double mu = 1e-10 * std::max(diag, 1e-300);
     for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
       Eigen::SparseMatrix<double> hm = h;
       for (int i = 0; i < n; ++i) hm.coeffRef(i, i) += mu;
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hm);
-      if (ldlt.info() != Eigen::Success) continue;
-      d = ldlt.solve(-g);
-      if (ldlt.info() == Eigen::Success && d.allFinite() && g.dot(d) < 0) break;
+      ldlt_.factorize(hm);
+      if (ldlt_.info() != Eigen::Success) continue;
+      d = ldlt_.solve(-g);
+      if (ldlt_.info() == Eigen::Success && d.allFinite() && g.dot(d) < 0) break;
       d.resize(0);
     }
     if (d.size() == 0) return false;
@@ -303,6 +337,8 @@ class PatchSolver {
   double scale_;
   std::vector<Mat46> a_;
   std::vector<int> hint_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  bool analyzed_ = false;
 };
 
 struct PatchResult {

@@ -88,4 +88,9 @@ double map_energy(const dissect::Dissection& a, const dissect::Dissection& b);
 double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient = nullptr,
                      Eigen::Matrix4d* hessian = nullptr);
 
+/// The Hessian of sym_dirichlet (as it returns it) made positive semi-definite: its eigenvalues
+/// clamped at 0, from the analytic eigenvectors of isotropic energies (no eigen-solver). Exposed
+/// for tests. \pre det(J) > 0.
+Eigen::Matrix4d project_hessian(const Eigen::Matrix2d& J, const Eigen::Matrix4d& hessian);
+
 }  // namespace qs::maprefine

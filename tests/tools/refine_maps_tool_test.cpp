@@ -1,0 +1,71 @@
+// qs-dissect --refine-maps as a user runs it: refined charts that the later tools read as before.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tool_runner.h"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace {
+
+std::string bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class RefineMapsTool : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("qs_refine_tool_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    ASSERT_EQ(run_tool("qs-family", "generate -n 2 --seed 3 --faces 1600 --limbs 4 --quiet -o " + d()).exit, 0);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string d() const { return dir_.string(); }
+  std::string pair() const { return d() + "/shape00.obj " + d() + "/shape01.obj"; }
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
+  RunResult r = run_tool("qs-dissect", pair() + " --refine-maps -o " + d() + "/ref");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("refine maps: reference (not moved)"));
+  EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));
+  EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
+  EXPECT_THAT(r.out, HasSubstr(", refine maps "));
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
+  // The reference's chart is the plain one; the other mesh's differs (same size: same format).
+  EXPECT_EQ(bytes(dir_ / "ref/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
+  EXPECT_NE(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "plain/shape01.chart.ply"));
+  EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
+  // Same input, same bytes.
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-maps --quiet -o " + d() + "/ref2").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "ref2/shape01.chart.ply"));
+  EXPECT_EQ(bytes(dir_ / "ref/dissection.json"), bytes(dir_ / "ref2/dissection.json"));
+  // The later stages consume it unchanged.
+  r = run_tool("qs-remesh", d() + "/ref --level 3 -q -o " + d() + "/remesh");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-metro", "--correspondence " + d() + "/ref --samples 5000");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("  dissection: mean "));
+}
+
+TEST_F(RefineMapsTool, OneMeshIsLeftAsDissectedAndBadOptionsAreUsageErrors) {
+  RunResult r = run_tool("qs-dissect", d() + "/shape00.obj --refine-maps -o " + d() + "/one");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("refine maps: one mesh, no map between meshes to refine"));
+  r = run_tool("qs-dissect", pair() + " --refine-maps --refine-iterations -1 -o " + d() + "/bad");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
