@@ -13,10 +13,10 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <unordered_map>
 
 #include "qs/core/error.h"
 #include "qs/param/square_param.h"
-#include "qs/remesh/chart_sampler.h"
 
 namespace qs::maprefine {
 
@@ -30,74 +30,133 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-// The reference mesh's metric in (u, v), per face corner (wedge): the uv-area weighted mean of the
-// metrics of the chart faces of the same patch around the vertex, each with its eigenvalues
-// clamped to [1e-6, 1e6] times the patch's mean (uv slivers must not dominate).
-struct MetricField {
-  std::vector<std::array<Eigen::Matrix2d, 3>> wedge;  // #F of the reference chart
-  std::vector<double> patch_area;                     // 3D area per patch
-};
-
-MetricField metric_field(const dissect::Chart& chart) {
-  const int nf = chart.mesh.num_faces();
-  const int np = static_cast<int>(chart.patches.size());
-  MetricField out;
-  out.wedge.resize(nf);
-  out.patch_area.assign(np, 0.0);
-  std::vector<double> patch_uv(np, 0.0);
-  std::vector<Eigen::Matrix2d> face_metric(nf, Eigen::Matrix2d::Zero());
-  std::vector<double> face_uv_area(nf, 0.0);
-  for (int f = 0; f < nf; ++f) {
-    const auto& t = chart.mesh.faces[f];
-    const auto& uv = chart.face_uv[f];
-    const Vec3& x0 = chart.mesh.positions[t[0]];
-    Mat32 e;
-    e.col(0) = chart.mesh.positions[t[1]] - x0;
-    e.col(1) = chart.mesh.positions[t[2]] - x0;
-    Eigen::Matrix2d ds;
-    ds.col(0) = uv[1] - uv[0];
-    ds.col(1) = uv[2] - uv[0];
-    const double a3 = 0.5 * e.col(0).cross(e.col(1)).norm();
-    const double auv = 0.5 * ds.determinant();
-    const int p = chart.face_patch[f];
-    out.patch_area[p] += a3;
-    patch_uv[p] += std::max(auv, 0.0);
-    face_uv_area[f] = std::max(auv, 0.0);
-    if (auv > param::kZeroUvArea) {
-      const Mat32 g = e * ds.inverse();
-      face_metric[f] = g.transpose() * g;
-    }
-  }
-  std::vector<Eigen::Matrix2d> acc(chart.mesh.num_vertices(), Eigen::Matrix2d::Zero());
-  std::vector<double> weight(chart.mesh.num_vertices(), 0.0);
-  std::vector<std::vector<int>> faces_of(np);
-  for (int f = 0; f < nf; ++f) faces_of[chart.face_patch[f]].push_back(f);
-  for (int p = 0; p < np; ++p) {
-    const double mean = patch_uv[p] > 0 ? out.patch_area[p] / patch_uv[p] : 1.0;
-    const double lo = 1e-6 * mean, hi = 1e6 * mean;
-    for (int f : faces_of[p]) {
-      if (face_uv_area[f] <= 0) continue;
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(face_metric[f]);
-      const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(lo).cwiseMin(hi);
-      const Eigen::Matrix2d m = es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
-      for (int v : chart.mesh.faces[f]) {
-        acc[v] += face_uv_area[f] * m;
-        weight[v] += face_uv_area[f];
-      }
-    }
-    for (int f : faces_of[p])
-      for (int k = 0; k < 3; ++k) {
-        const int v = chart.mesh.faces[f][k];
-        out.wedge[f][k] = weight[v] > 0 ? Eigen::Matrix2d(acc[v] / weight[v]) : Eigen::Matrix2d(mean * Eigen::Matrix2d::Identity());
-      }
-    for (int f : faces_of[p])
-      for (int v : chart.mesh.faces[f]) {
-        acc[v].setZero();
-        weight[v] = 0;
-      }
-  }
-  return out;
+// Eigenvalues of a symmetric 2x2 matrix clamped into [lo, hi] (closed form).
+Eigen::Matrix2d clamp_metric(const Eigen::Matrix2d& m, double lo, double hi) {
+  const double a = m(0, 0), b = 0.5 * (m(0, 1) + m(1, 0)), c = m(1, 1);
+  const double mean = 0.5 * (a + c), r = std::hypot(0.5 * (a - c), b);
+  const double l1 = mean + r, l2 = mean - r;
+  const double c1 = std::clamp(l1, lo, hi), c2 = std::clamp(l2, lo, hi);
+  if (c1 == l1 && c2 == l2) return m;
+  if (r <= 1e-300) return 0.5 * (c1 + c2) * Eigen::Matrix2d::Identity();
+  // Eigenvector of l1: (b, l1 - a) or (l1 - c, b), whichever is longer.
+  Vec2 e1 = std::abs(l1 - a) > std::abs(l1 - c) ? Vec2(b, l1 - a) : Vec2(l1 - c, b);
+  e1.normalize();
+  return c1 * e1 * e1.transpose() + c2 * (Eigen::Matrix2d::Identity() - e1 * e1.transpose());
 }
+
+// One patch of the reference mesh: its surface's metric in (u, v) per face corner (the uv-area
+// weighted mean of the metrics of the patch's faces around the vertex, each with its eigenvalues
+// clamped to [1e-6, 1e6] times the patch's mean, so that uv slivers do not dominate), and a
+// uniform grid over the unit square for point location (about one cell per face).
+class ReferencePatch {
+ public:
+  ReferencePatch(const dissect::Chart& chart, std::vector<int> faces) : chart_(chart), faces_(std::move(faces)) {
+    const size_t nf = faces_.size();
+    wedge_.resize(nf);
+    std::vector<Eigen::Matrix2d> metric(nf, Eigen::Matrix2d::Zero());
+    std::vector<double> uv_area(nf, 0.0);
+    double total_uv = 0;
+    for (size_t i = 0; i < nf; ++i) {
+      const int f = faces_[i];
+      const auto& t = chart.mesh.faces[f];
+      const auto& uv = chart.face_uv[f];
+      const Vec3& x0 = chart.mesh.positions[t[0]];
+      Mat32 e;
+      e.col(0) = chart.mesh.positions[t[1]] - x0;
+      e.col(1) = chart.mesh.positions[t[2]] - x0;
+      Eigen::Matrix2d ds;
+      ds.col(0) = uv[1] - uv[0];
+      ds.col(1) = uv[2] - uv[0];
+      area_ += 0.5 * e.col(0).cross(e.col(1)).norm();
+      const double auv = 0.5 * ds.determinant();
+      if (auv > param::kZeroUvArea) {
+        const Mat32 g = e * ds.inverse();
+        metric[i] = g.transpose() * g;
+        uv_area[i] = auv;
+        total_uv += auv;
+      }
+    }
+    const double mean = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
+    std::unordered_map<int, std::pair<Eigen::Matrix2d, double>> acc;
+    acc.reserve(nf);
+    for (size_t i = 0; i < nf; ++i) {
+      if (uv_area[i] <= 0) continue;
+      const Eigen::Matrix2d m = clamp_metric(metric[i], 1e-6 * mean, 1e6 * mean);
+      for (int v : chart.mesh.faces[faces_[i]]) {
+        auto& a = acc.try_emplace(v, Eigen::Matrix2d::Zero(), 0.0).first->second;
+        a.first += uv_area[i] * m;
+        a.second += uv_area[i];
+      }
+    }
+    for (size_t i = 0; i < nf; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const auto it = acc.find(chart.mesh.faces[faces_[i]][k]);
+        wedge_[i][k] = it != acc.end() && it->second.second > 0 ? Eigen::Matrix2d(it->second.first / it->second.second)
+                                                                 : Eigen::Matrix2d(mean * Eigen::Matrix2d::Identity());
+      }
+    // Location grid (faces with a positive uv area only).
+    size_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(nf)))), 1, 1024);
+    offsets_.assign(static_cast<size_t>(size_) * size_ + 1, 0);
+    auto cells = [&](size_t i, auto&& visit) {
+      const auto& uv = chart.face_uv[faces_[i]];
+      const Vec2 lo = uv[0].cwiseMin(uv[1]).cwiseMin(uv[2]), hi = uv[0].cwiseMax(uv[1]).cwiseMax(uv[2]);
+      const int x0 = cell(lo.x()), x1 = cell(hi.x()), y0 = cell(lo.y()), y1 = cell(hi.y());
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) visit(y * size_ + x);
+    };
+    for (size_t i = 0; i < nf; ++i)
+      if (uv_area[i] > 0) cells(i, [&](int c) { ++offsets_[c + 1]; });
+    for (size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
+    grid_.resize(offsets_.back());
+    std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
+    for (size_t i = 0; i < nf; ++i)
+      if (uv_area[i] > 0) cells(i, [&](int c) { grid_[fill[c]++] = static_cast<int>(i); });
+  }
+
+  double area() const { return area_; }
+
+  // The metric at uv (clamped to the square); `hint`: a local face to try first, updated.
+  Eigen::Matrix2d metric(const Vec2& q, int& hint) const {
+    Vec3 bary;
+    double score = -kInf;
+    int best = -1;
+    if (hint >= 0) try_face(hint, q, best, bary, score);
+    if (score < 0) {
+      const int c = cell(q.y()) * size_ + cell(q.x());
+      for (int k = offsets_[c]; k < offsets_[c + 1] && score < 0; ++k) try_face(grid_[k], q, best, bary, score);
+    }
+    if (best < 0)  // in no face of its cell (rounding): the nearest of the patch
+      for (size_t i = 0; i < faces_.size() && score < 0; ++i) try_face(static_cast<int>(i), q, best, bary, score);
+    if (best < 0) return Eigen::Matrix2d::Identity() * (area_ > 0 ? area_ : 1.0);
+    hint = best;
+    bary = bary.cwiseMax(0.0);
+    bary /= bary.sum();
+    return bary[0] * wedge_[best][0] + bary[1] * wedge_[best][1] + bary[2] * wedge_[best][2];
+  }
+
+ private:
+  int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
+  void try_face(int i, const Vec2& q, int& best, Vec3& bary, double& score) const {
+    const auto& uv = chart_.face_uv[faces_[i]];
+    const double area = cross2(uv[1] - uv[0], uv[2] - uv[0]);
+    if (!(area > 0)) return;
+    const Vec3 b(cross2(uv[1] - q, uv[2] - q) / area, cross2(uv[2] - q, uv[0] - q) / area,
+                 cross2(uv[0] - q, uv[1] - q) / area);
+    const double s = b.minCoeff();
+    if (s > score) {
+      score = s;
+      bary = b;
+      best = i;
+    }
+  }
+
+  const dissect::Chart& chart_;
+  std::vector<int> faces_;
+  std::vector<std::array<Eigen::Matrix2d, 3>> wedge_;
+  double area_ = 0;
+  int size_ = 1;
+  std::vector<int> offsets_, grid_;
+};
 
 // One patch of a mesh being refined, in local numbering.
 struct PatchProblem {
@@ -202,8 +261,7 @@ namespace {
 
 class PatchSolver {
  public:
-  PatchSolver(PatchProblem& prob, const remesh::ChartSampler& ref, const MetricField& field, int patch, double scale)
-      : prob_(prob), ref_(ref), field_(field), patch_(patch), scale_(scale) {
+  PatchSolver(PatchProblem& prob, const ReferencePatch& ref, double scale) : prob_(prob), ref_(ref), scale_(scale) {
     const size_t nf = prob.faces.size();
     a_.resize(nf);
     hint_.assign(nf, -1);
@@ -211,16 +269,10 @@ class PatchSolver {
 
   // Re-evaluates the reference metric at the faces' uv centroids and the per-face Jacobian maps.
   void update_metric() {
-    const auto& chart = ref_.chart();
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       const Vec2 centroid = (prob_.uv[c[0]] + prob_.uv[c[1]] + prob_.uv[c[2]]) / 3.0;
-      const auto loc = ref_.locate(patch_, centroid.cwiseMax(0.0).cwiseMin(1.0), hint_[t]);
-      hint_[t] = loc.face;
-      Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
-      for (int k = 0; k < 3; ++k) m += loc.bary[k] * field_.wedge[loc.face][k];
-      m *= scale_;
-      (void)chart;
+      const Eigen::Matrix2d m = scale_ * ref_.metric(centroid.cwiseMax(0.0).cwiseMin(1.0), hint_[t]);
       Eigen::LLT<Eigen::Matrix2d> llt(m);
       Eigen::Matrix2d l = llt.info() == Eigen::Success ? Eigen::Matrix2d(llt.matrixL())
                                                        : Eigen::Matrix2d(std::sqrt(std::max(m.trace() / 2, 1e-300)) *
@@ -331,9 +383,7 @@ class PatchSolver {
 
  private:
   PatchProblem& prob_;
-  const remesh::ChartSampler& ref_;
-  const MetricField& field_;
-  int patch_;
+  const ReferencePatch& ref_;
   double scale_;
   std::vector<Mat46> a_;
   std::vector<int> hint_;
@@ -441,14 +491,13 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
   return probs;
 }
 
-PatchResult solve_patch(PatchProblem& pr, const remesh::ChartSampler& ref, const MetricField& field, int patch,
-                        const RefineOptions& options, bool optimize) {
+PatchResult solve_patch(PatchProblem& pr, const ReferencePatch& ref, const RefineOptions& options, bool optimize) {
   PatchResult res;
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
   if (pr.faces.empty()) return res;
-  const double scale = field.patch_area[patch] > 0 ? pr.total_area / field.patch_area[patch] : 1.0;
-  PatchSolver solver(pr, ref, field, patch, scale);
+  const double scale = ref.area() > 0 ? pr.total_area / ref.area() : 1.0;
+  PatchSolver solver(pr, ref, scale);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
@@ -459,7 +508,7 @@ PatchResult solve_patch(PatchProblem& pr, const remesh::ChartSampler& ref, const
     res.energy_before = res.energy_after = res.area = 0;
     return res;
   }
-  if (!optimize || pr.unknowns == 0) return res;
+  if (!optimize || pr.unknowns == 0 || options.iterations == 0) return res;
   for (int it = 0; it < options.iterations; ++it) {
     const bool more = solver.step(e, options.tolerance);
     ++res.steps;
@@ -512,9 +561,11 @@ void parallel_for(int n, int threads, const Context& context, F&& body) {
   context.check_cancel();
 }
 
-std::vector<PatchResult> run_mesh(dissect::Dissection& b, const remesh::ChartSampler& ref, const MetricField& field,
+std::vector<PatchResult> run_mesh(dissect::Dissection& b, const dissect::Chart& ref,
                                   const RefineOptions& options, bool optimize, const Context& context) {
   std::vector<PatchProblem> probs = build_problems(b);
+  std::vector<std::vector<int>> ref_faces(probs.size());
+  for (int f = 0; f < ref.mesh.num_faces(); ++f) ref_faces[ref.face_patch[f]].push_back(f);
   std::vector<PatchResult> results(probs.size());
   // Largest patches first: better balance; the result does not depend on the order.
   std::vector<int> order(probs.size());
@@ -523,7 +574,8 @@ std::vector<PatchResult> run_mesh(dissect::Dissection& b, const remesh::ChartSam
                    [&](int x, int y) { return probs[x].faces.size() > probs[y].faces.size(); });
   parallel_for(static_cast<int>(order.size()), options.threads, context, [&](int i) {
     const int p = order[i];
-    results[p] = solve_patch(probs[p], ref, field, p, options, optimize);
+    const ReferencePatch rp(ref, ref_faces[p]);
+    results[p] = solve_patch(probs[p], rp, options, optimize);
   });
   if (!optimize) return results;
   // Write the moved vertices back into every wedge of their patch, then recount.
@@ -588,9 +640,7 @@ double map_energy(const dissect::Dissection& a, const dissect::Dissection& b) {
   RefineOptions o;
   o.reference = 0;
   check_set(pair, o);
-  const remesh::ChartSampler ref(pair[0].chart);
-  const MetricField field = metric_field(pair[0].chart);
-  const auto results = run_mesh(pair[1], ref, field, o, false, {});
+  const auto results = run_mesh(pair[1], pair[0].chart, o, false, {});
   double e = 0, area = 0;
   for (const auto& r : results) {
     e += r.energy_before;
@@ -604,9 +654,7 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
   check_set(meshes, options);
   RefineReport report;
   report.meshes.resize(meshes.size());
-  const auto& a = meshes[options.reference];
-  const remesh::ChartSampler ref(a.chart, context);
-  const MetricField field = metric_field(a.chart);
+  const dissect::Chart& ref = meshes[options.reference].chart;
   context.report("refine maps", 0);
   for (size_t i = 0; i < meshes.size(); ++i) {
     auto& r = report.meshes[i];
@@ -615,7 +663,7 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       count_faces(meshes[i].chart, r);
       continue;
     }
-    const auto results = run_mesh(meshes[i], ref, field, options, true, context);
+    const auto results = run_mesh(meshes[i], ref, options, true, context);
     double eb = 0, ea = 0, area = 0;
     for (const auto& pr : results) {
       eb += pr.energy_before;
