@@ -11,6 +11,7 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -159,12 +160,19 @@ class ReferencePatch {
 };
 
 // One patch of a mesh being refined, in local numbering.
+// A set of chart faces whose wedge (u, v) are affine in a few unknowns. Local vertices are wedges
+// of one chart vertex in one patch: a patch-interior vertex has 2 unknowns (u and v); a vertex
+// sliding along a patch side has 1, shared by its wedges in the two patches of the side, each
+// moving along its side (`basis`); a held vertex has none.
 struct PatchProblem {
   std::vector<int> vertices;           // local -> chart vertex
-  std::vector<int> faces;              // chart faces of the patch
+  std::vector<int> faces;              // chart faces
+  std::vector<int> face_patch;         // their patches (the reference patch of each face)
   std::vector<std::array<int, 3>> tri;  // local corner ids per face
   std::vector<Vec2> uv;                // per local vertex
-  std::vector<int> var;                // per local vertex: index of its u among the unknowns, -1 held
+  std::vector<int> var;                // per local vertex: index of its first unknown, -1 held
+  std::vector<int> dims;               // per local vertex: 0 held, 1 sliding, 2 free
+  std::vector<Vec2> basis;             // per local vertex with dims 1: d uv / d unknown
   std::vector<Eigen::Matrix2d> dm_inv;  // per face: inverse of the 3D edge matrix in a local frame
   std::vector<double> area;            // per face: 3D area (the energy's weight)
   int unknowns = 0;
@@ -261,7 +269,9 @@ namespace {
 
 class PatchSolver {
  public:
-  PatchSolver(PatchProblem& prob, const ReferencePatch& ref, double scale) : prob_(prob), ref_(ref), scale_(scale) {
+  // `refs` and `scale`: per patch, the reference patch and area_B(patch) / area_A(patch).
+  PatchSolver(PatchProblem& prob, const std::vector<ReferencePatch>& refs, const std::vector<double>& scale)
+      : prob_(prob), refs_(refs), scale_(scale) {
     const size_t nf = prob.faces.size();
     a_.resize(nf);
     hint_.assign(nf, -1);
@@ -272,7 +282,8 @@ class PatchSolver {
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       const Vec2 centroid = (prob_.uv[c[0]] + prob_.uv[c[1]] + prob_.uv[c[2]]) / 3.0;
-      const Eigen::Matrix2d m = scale_ * ref_.metric(centroid.cwiseMax(0.0).cwiseMin(1.0), hint_[t]);
+      const int p = prob_.face_patch[t];
+      const Eigen::Matrix2d m = scale_[p] * refs_[p].metric(centroid.cwiseMax(0.0).cwiseMin(1.0), hint_[t]);
       Eigen::LLT<Eigen::Matrix2d> llt(m);
       Eigen::Matrix2d l = llt.info() == Eigen::Success ? Eigen::Matrix2d(llt.matrixL())
                                                        : Eigen::Matrix2d(std::sqrt(std::max(m.trace() / 2, 1e-300)) *
@@ -293,7 +304,7 @@ class PatchSolver {
     double e = 0;
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
-      if (tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) <= 0) return kInf;
+      if (tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) <= 2 * param::kZeroUvArea) return kInf;
       const Eigen::Vector4d j = a_[t] * corner_uv(t, uv);
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
@@ -322,14 +333,29 @@ class PatchSolver {
       const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
       const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
       const auto& c = prob_.tri[t];
-      for (int r = 0; r < 6; ++r) {
-        const int vr = prob_.var[c[r / 2]];
-        if (vr < 0) continue;
-        g[vr + r % 2] += gx[r];
-        for (int s = 0; s < 6; ++s) {
-          const int vs = prob_.var[c[s / 2]];
-          if (vs < 0) continue;
-          trip.emplace_back(vr + r % 2, vs + s % 2, hx(r, s));
+      // Unknown columns of the 6 corner coordinates: (unknown, d corner uv / d unknown).
+      std::array<std::pair<int, Vec2>, 6> cols;
+      int ncols = 0;
+      std::array<int, 6> col_corner{};
+      for (int k = 0; k < 3; ++k) {
+        const int lv = c[k];
+        if (prob_.dims[lv] == 2) {
+          col_corner[ncols] = k;
+          cols[ncols++] = {prob_.var[lv], Vec2(1, 0)};
+          col_corner[ncols] = k;
+          cols[ncols++] = {prob_.var[lv] + 1, Vec2(0, 1)};
+        } else if (prob_.dims[lv] == 1) {
+          col_corner[ncols] = k;
+          cols[ncols++] = {prob_.var[lv], prob_.basis[lv]};
+        }
+      }
+      for (int r = 0; r < ncols; ++r) {
+        const int kr = col_corner[r];
+        g[cols[r].first] += cols[r].second.dot(gx.segment<2>(2 * kr));
+        for (int q = 0; q < ncols; ++q) {
+          const int kq = col_corner[q];
+          trip.emplace_back(cols[r].first, cols[q].first,
+                            cols[r].second.dot(hx.block<2, 2>(2 * kr, 2 * kq) * cols[q].second));
         }
       }
     }
@@ -360,7 +386,8 @@ class PatchSolver {
     // Direction per local vertex; cap the step below the first fold.
     std::vector<Vec2> dir(prob_.uv.size(), Vec2::Zero());
     for (size_t v = 0; v < prob_.uv.size(); ++v)
-      if (prob_.var[v] >= 0) dir[v] = Vec2(d[prob_.var[v]], d[prob_.var[v] + 1]);
+      if (prob_.dims[v] == 2) dir[v] = Vec2(d[prob_.var[v]], d[prob_.var[v] + 1]);
+      else if (prob_.dims[v] == 1) dir[v] = d[prob_.var[v]] * prob_.basis[v];
     double alpha_max = kInf;
     for (const auto& c : prob_.tri)
       alpha_max = std::min(alpha_max, flip_step(prob_.uv[c[0]], prob_.uv[c[1]], prob_.uv[c[2]], dir[c[0]], dir[c[1]],
@@ -383,8 +410,8 @@ class PatchSolver {
 
  private:
   PatchProblem& prob_;
-  const ReferencePatch& ref_;
-  double scale_;
+  const std::vector<ReferencePatch>& refs_;
+  const std::vector<double>& scale_;
   std::vector<Mat46> a_;
   std::vector<int> hint_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
@@ -397,7 +424,6 @@ struct PatchResult {
   int steps = 0;
   double energy_before = 0, energy_after = 0, area = 0;  // unnormalized energies, total 3D area
   int free = 0, held = 0;
-  std::vector<std::pair<int, Vec2>> moved;  // chart vertex -> new uv
 };
 
 void check_set(const std::vector<dissect::Dissection>& meshes, const RefineOptions& options) {
@@ -467,12 +493,15 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
           pr.vertices.push_back(v);
           pr.uv.push_back(chart.face_uv[f][k]);
           pr.var.push_back(held[v] ? -1 : 0);
+          pr.dims.push_back(0);
+          pr.basis.push_back(Vec2::Zero());
         } else if (pr.uv[local[v]] != chart.face_uv[f][k]) {
           pr.var[local[v]] = -1;  // wedges disagree: hold it
         }
         c[k] = local[v];
       }
       pr.tri.push_back(c);
+      pr.face_patch.push_back(p);
       double area = 0;
       const auto& t = chart.mesh.faces[f];
       const Eigen::Matrix2d dm = local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]],
@@ -481,9 +510,10 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
       pr.area.push_back(area);
       pr.total_area += area;
     }
-    for (auto& v : pr.var)
-      if (v == 0) {
-        v = pr.unknowns;
+    for (size_t v = 0; v < pr.var.size(); ++v)
+      if (pr.var[v] == 0) {
+        pr.var[v] = pr.unknowns;
+        pr.dims[v] = 2;
         pr.unknowns += 2;
       }
     for (int v : pr.vertices) local[v] = -1;
@@ -491,13 +521,107 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
   return probs;
 }
 
-PatchResult solve_patch(PatchProblem& pr, const ReferencePatch& ref, const RefineOptions& options, bool optimize) {
+// The sliding problem of a mesh: every vertex on exactly one patch side (in two patches, not a
+// corner, seed or feature, its wedges consistent, its side coordinate in the two patches s and s
+// or 1 - s) gets one unknown; the faces are all faces around them, in both patches.
+PatchProblem build_side_problem(const dissect::Dissection& d) {
+  const auto& chart = d.chart;
+  const int nv = chart.mesh.num_vertices();
+  std::vector<std::array<int, 2>> patches(nv, {-1, -1});
+  std::vector<char> bad(nv, 0);
+  std::vector<std::array<Vec2, 2>> wedge(nv);
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) {
+    const int p = chart.face_patch[f];
+    for (int k = 0; k < 3; ++k) {
+      const int v = chart.mesh.faces[f][k];
+      auto& ps = patches[v];
+      int slot = ps[0] == p ? 0 : ps[1] == p ? 1 : -1;
+      if (slot < 0) {
+        if (ps[0] < 0) slot = 0;
+        else if (ps[1] < 0) slot = 1;
+        else {
+          bad[v] = 1;  // three patches or more: a corner
+          continue;
+        }
+        ps[slot] = p;
+        wedge[v][slot] = chart.face_uv[f][k];
+      } else if (wedge[v][slot] != chart.face_uv[f][k]) {
+        bad[v] = 1;
+      }
+    }
+  }
+  for (int s : d.seeds)
+    if (s >= 0 && s < nv) bad[s] = 1;
+  for (const auto& f : d.features)
+    if (f.vertex >= 0 && f.vertex < nv) bad[f.vertex] = 1;
+  for (const auto& p : chart.patches)
+    for (int c : p.corners)
+      if (c >= 0 && c < nv) bad[c] = 1;
+  // The moving axis of a wedge on a side: the other coordinate is exactly 0 or 1, this one inside.
+  auto moving_axis = [](const Vec2& uv) {
+    const bool fx = uv.x() == 0 || uv.x() == 1, fy = uv.y() == 0 || uv.y() == 1;
+    const bool ix = uv.x() > 0 && uv.x() < 1, iy = uv.y() > 0 && uv.y() < 1;
+    if (fx && iy) return 1;
+    if (fy && ix) return 0;
+    return -1;
+  };
+  std::vector<int> var(nv, -1);
+  std::vector<std::array<Vec2, 2>> basis(nv);
+  PatchProblem pr;
+  for (int v = 0; v < nv; ++v) {
+    if (bad[v] || patches[v][1] < 0) continue;
+    const int lo = patches[v][0] < patches[v][1] ? 0 : 1, hi = 1 - lo;
+    const int a0 = moving_axis(wedge[v][lo]), a1 = moving_axis(wedge[v][hi]);
+    if (a0 < 0 || a1 < 0) continue;
+    const double s0 = wedge[v][lo][a0], s1 = wedge[v][hi][a1];
+    double sign = 0;
+    if (std::abs(s1 - s0) <= 1e-9) sign = 1;
+    else if (std::abs(s1 - (1 - s0)) <= 1e-9) sign = -1;
+    else continue;
+    var[v] = pr.unknowns++;
+    basis[v][lo] = a0 == 0 ? Vec2(1, 0) : Vec2(0, 1);
+    basis[v][hi] = sign * (a1 == 0 ? Vec2(1, 0) : Vec2(0, 1));
+  }
+  if (pr.unknowns == 0) return pr;
+  std::unordered_map<long long, int> local;
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) {
+    const auto& t = chart.mesh.faces[f];
+    if (var[t[0]] < 0 && var[t[1]] < 0 && var[t[2]] < 0) continue;
+    const int p = chart.face_patch[f];
+    std::array<int, 3> c{};
+    for (int k = 0; k < 3; ++k) {
+      const int v = t[k];
+      const long long key = static_cast<long long>(v) * static_cast<long long>(chart.patches.size()) + p;
+      auto [it, added] = local.try_emplace(key, static_cast<int>(pr.vertices.size()));
+      if (added) {
+        pr.vertices.push_back(v);
+        pr.uv.push_back(chart.face_uv[f][k]);
+        pr.var.push_back(var[v]);
+        pr.dims.push_back(var[v] >= 0 ? 1 : 0);
+        pr.basis.push_back(var[v] >= 0 ? basis[v][patches[v][0] == p ? 0 : 1] : Vec2::Zero());
+      }
+      c[k] = it->second;
+    }
+    pr.faces.push_back(f);
+    pr.face_patch.push_back(p);
+    pr.tri.push_back(c);
+    double area = 0;
+    const Eigen::Matrix2d dm =
+        local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], area);
+    pr.dm_inv.push_back(dm.inverse());
+    pr.area.push_back(area);
+    pr.total_area += area;
+  }
+  return pr;
+}
+
+PatchResult solve_problem(PatchProblem& pr, const std::vector<ReferencePatch>& refs, const std::vector<double>& scale,
+                          const RefineOptions& options, bool optimize) {
   PatchResult res;
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
   if (pr.faces.empty()) return res;
-  const double scale = ref.area() > 0 ? pr.total_area / ref.area() : 1.0;
-  PatchSolver solver(pr, ref, scale);
+  PatchSolver solver(pr, refs, scale);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
@@ -525,13 +649,18 @@ PatchResult solve_patch(PatchProblem& pr, const ReferencePatch& ref, const Refin
   if (!ok) {
     pr.uv = start;
     res.skipped = true;
+    res.energy_after = res.energy_before;
     return res;
   }
   res.energy_after = e;
-  res.changed = true;
-  for (size_t v = 0; v < pr.uv.size(); ++v)
-    if (pr.var[v] >= 0 && pr.uv[v] != start[v]) res.moved.emplace_back(pr.vertices[v], pr.uv[v]);
+  res.changed = pr.uv != start;
   return res;
+}
+
+// Writes a solved problem's (u, v) into the chart's wedges.
+void write_back(const PatchProblem& pr, dissect::Chart& chart) {
+  for (size_t t = 0; t < pr.faces.size(); ++t)
+    for (int k = 0; k < 3; ++k) chart.face_uv[pr.faces[t]][k] = pr.uv[pr.tri[t][k]];
 }
 
 template <class F>
@@ -561,11 +690,16 @@ void parallel_for(int n, int threads, const Context& context, F&& body) {
   context.check_cancel();
 }
 
-std::vector<PatchResult> run_mesh(dissect::Dissection& b, const dissect::Chart& ref,
-                                  const RefineOptions& options, bool optimize, const Context& context) {
+struct MeshResult {
+  double energy_before = 0, energy_after = 0, area = 0;  // unnormalized energies, 3D area
+  int free = 0, held = 0, steps = 0, refined = 0, skipped = 0;
+};
+
+// Interior pass: every patch on its own (parallel); returns per patch results.
+std::vector<PatchResult> interior_pass(dissect::Dissection& b, const std::vector<ReferencePatch>& refs,
+                                       const std::vector<double>& scale, const RefineOptions& options,
+                                       bool optimize, const Context& context) {
   std::vector<PatchProblem> probs = build_problems(b);
-  std::vector<std::vector<int>> ref_faces(probs.size());
-  for (int f = 0; f < ref.mesh.num_faces(); ++f) ref_faces[ref.face_patch[f]].push_back(f);
   std::vector<PatchResult> results(probs.size());
   // Largest patches first: better balance; the result does not depend on the order.
   std::vector<int> order(probs.size());
@@ -574,33 +708,96 @@ std::vector<PatchResult> run_mesh(dissect::Dissection& b, const dissect::Chart& 
                    [&](int x, int y) { return probs[x].faces.size() > probs[y].faces.size(); });
   parallel_for(static_cast<int>(order.size()), options.threads, context, [&](int i) {
     const int p = order[i];
-    const ReferencePatch rp(ref, ref_faces[p]);
-    results[p] = solve_patch(probs[p], rp, options, optimize);
+    results[p] = solve_problem(probs[p], refs, scale, options, optimize);
   });
-  if (!optimize) return results;
-  // Write the moved vertices back into every wedge of their patch, then recount.
+  for (size_t p = 0; p < probs.size(); ++p)
+    if (results[p].changed) write_back(probs[p], b.chart);
+  return results;
+}
+
+MeshResult run_mesh(dissect::Dissection& b, const dissect::Chart& ref, const RefineOptions& options, bool optimize,
+                    const Context& context) {
+  const int np = static_cast<int>(b.chart.patches.size());
+  std::vector<std::vector<int>> ref_faces(np);
+  for (int f = 0; f < ref.mesh.num_faces(); ++f) ref_faces[ref.face_patch[f]].push_back(f);
+  std::vector<std::optional<ReferencePatch>> built(np);
+  parallel_for(np, options.threads, context, [&](int p) { built[p].emplace(ref, ref_faces[p]); });
+  std::vector<ReferencePatch> refs;
+  refs.reserve(np);
+  for (auto& r : built) refs.push_back(std::move(*r));
+  std::vector<double> area_b(np, 0.0), scale(np, 1.0);
+  for (int f = 0; f < b.chart.mesh.num_faces(); ++f) area_b[b.chart.face_patch[f]] += face_area(b.chart.mesh, f);
+  for (int p = 0; p < np; ++p)
+    if (refs[p].area() > 0) scale[p] = area_b[p] / refs[p].area();
+
+  MeshResult out;
+  std::vector<char> changed(np, 0);
+  auto note = [&](const std::vector<PatchResult>& rs, bool first) {
+    double e = 0, area = 0;
+    for (size_t p = 0; p < rs.size(); ++p) {
+      e += rs[p].energy_after;
+      area += rs[p].area;
+      out.steps += rs[p].steps;
+      if (rs[p].changed) changed[p] = 1;
+      if (first) {
+        out.energy_before += rs[p].energy_before;
+        out.free += rs[p].free;
+        out.held += rs[p].held;
+        out.skipped += rs[p].skipped && !rs[p].changed ? 1 : 0;
+      }
+    }
+    out.energy_after = e;
+    out.area = area;
+  };
+  note(interior_pass(b, refs, scale, options, optimize, context), true);
+  if (optimize && options.slide_borders && options.iterations > 0) {
+    PatchProblem sides = build_side_problem(b);
+    const PatchResult r = solve_problem(sides, refs, scale, options, true);
+    out.steps += r.steps;
+    if (r.changed) {
+      write_back(sides, b.chart);
+      for (int p : sides.face_patch) changed[p] = 1;
+      out.free += r.free;
+      note(interior_pass(b, refs, scale, options, true, context), false);
+    }
+  }
+  if (!optimize) return out;
+  // Patch figures from the refined map, as the dissection computes them.
+  std::vector<std::vector<int>> faces_of(np);
+  for (int f = 0; f < b.chart.mesh.num_faces(); ++f) faces_of[b.chart.face_patch[f]].push_back(f);
   auto& chart = b.chart;
-  for (size_t p = 0; p < probs.size(); ++p) {
-    if (!results[p].changed) continue;
-    const auto& pr = probs[p];
-    for (size_t t = 0; t < pr.faces.size(); ++t)
-      for (int k = 0; k < 3; ++k) chart.face_uv[pr.faces[t]][k] = pr.uv[pr.tri[t][k]];
-    // Patch figures from the refined map, as the dissection computes them.
-    std::vector<Vec3> pos(pr.vertices.size());
-    for (size_t v = 0; v < pos.size(); ++v) pos[v] = chart.mesh.positions[pr.vertices[v]];
-    std::vector<Tri> tris(pr.tri.begin(), pr.tri.end());
+  for (int p = 0; p < np; ++p) {
+    if (!changed[p]) continue;
+    ++out.refined;
+    std::unordered_map<int, int> local;
+    std::vector<Vec3> pos;
+    std::vector<Vec2> uv;
+    std::vector<Tri> tris;
+    for (int f : faces_of[p]) {
+      Tri t{};
+      for (int k = 0; k < 3; ++k) {
+        const int v = chart.mesh.faces[f][k];
+        auto [it, added] = local.try_emplace(v, static_cast<int>(pos.size()));
+        if (added) {
+          pos.push_back(chart.mesh.positions[v]);
+          uv.push_back(chart.face_uv[f][k]);
+        }
+        t[k] = it->second;
+      }
+      tris.push_back(t);
+    }
     param::SquareParam sp;
-    sp.uv = pr.uv;
+    sp.uv = uv;
     param::count_uv_faces(tris, sp);
     auto& info = chart.patches[p];
-    info.stretch = param::l2_stretch(pos, tris, pr.uv).patch;
+    info.stretch = param::l2_stretch(pos, tris, uv).patch;
     info.flipped_faces = sp.flipped_faces;
     info.zero_area_faces = sp.zero_area_faces;
     info.uv_area_sum = sp.uv_area_sum;
   }
   b.max_stretch = 0;
   for (const auto& p : chart.patches) b.max_stretch = std::max(b.max_stretch, p.stretch);
-  return results;
+  return out;
 }
 
 void count_faces(const dissect::Chart& chart, MeshRefineReport& r) {
@@ -640,13 +837,8 @@ double map_energy(const dissect::Dissection& a, const dissect::Dissection& b) {
   RefineOptions o;
   o.reference = 0;
   check_set(pair, o);
-  const auto results = run_mesh(pair[1], pair[0].chart, o, false, {});
-  double e = 0, area = 0;
-  for (const auto& r : results) {
-    e += r.energy_before;
-    area += r.area;
-  }
-  return area > 0 ? e / area / 4 : 0;
+  const MeshResult r = run_mesh(pair[1], pair[0].chart, o, false, {});
+  return r.area > 0 ? r.energy_before / r.area / 4 : 0;
 }
 
 RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options,
@@ -663,20 +855,14 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       count_faces(meshes[i].chart, r);
       continue;
     }
-    const auto results = run_mesh(meshes[i], ref, options, true, context);
-    double eb = 0, ea = 0, area = 0;
-    for (const auto& pr : results) {
-      eb += pr.energy_before;
-      ea += pr.energy_after;
-      area += pr.area;
-      r.free_vertices += pr.free;
-      r.held_vertices += pr.held;
-      r.newton_steps += pr.steps;
-      r.patches_refined += pr.changed ? 1 : 0;
-      r.patches_skipped += pr.skipped ? 1 : 0;
-    }
-    r.energy_before = area > 0 ? eb / area / 4 : 0;
-    r.energy_after = area > 0 ? ea / area / 4 : 0;
+    const MeshResult m = run_mesh(meshes[i], ref, options, true, context);
+    r.free_vertices = m.free;
+    r.held_vertices = m.held;
+    r.newton_steps = m.steps;
+    r.patches_refined = m.refined;
+    r.patches_skipped = m.skipped;
+    r.energy_before = m.area > 0 ? m.energy_before / m.area / 4 : 0;
+    r.energy_after = m.area > 0 ? m.energy_after / m.area / 4 : 0;
     count_faces(meshes[i].chart, r);
     context.report("refine maps", static_cast<double>(i + 1) / meshes.size());
   }

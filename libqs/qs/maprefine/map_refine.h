@@ -43,6 +43,10 @@ struct RefineOptions {
   /// A patch stops when a step lowers its energy by less than this fraction. \pre >= 0
   double tolerance = 1e-5;
   int threads = 0;           ///< 0: all cores; the result does not depend on it
+  /// Also let patch-side vertices slide along their side (one unknown each, shared by the two
+  /// patches of the side; corners, seeds and features stay), between two passes over the patch
+  /// interiors. The sides' curves on the surface do not move, only where along them (u, v) lands.
+  bool slide_borders = true;
 };
 
 /// What refinement did to one mesh of the set.
