@@ -104,9 +104,8 @@ int main(int argc, char** argv) {
   app.add_option("--refine-iterations", refine_opt.iterations, "Newton steps per patch of --refine-maps")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
-  bool fixed_borders = false;
-  app.add_flag("--refine-fixed-borders", fixed_borders,
-               "With --refine-maps: keep patch-side vertices where they are (only patch interiors move)");
+  app.add_flag("--refine-slide-borders", refine_opt.slide_borders,
+               "With --refine-maps: let patch-side vertices slide along their sides too (slower; see README)");
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
@@ -183,7 +182,6 @@ int main(int argc, char** argv) {
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
-    refine_opt.slide_borders = !fixed_borders;
     if (refine_maps && result.meshes.size() > 1) {
       refine_report = qs::maprefine::refine_maps(result.meshes, refine_opt, ctx);
       refine_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();

@@ -191,7 +191,9 @@ TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeature
   const double e_distorted = mr::map_energy(set[0], set[1]);
 
   const auto before = set;
-  const auto report = mr::refine_maps(set);
+  mr::RefineOptions with_sliding;
+  with_sliding.slide_borders = true;
+  const auto report = mr::refine_maps(set, with_sliding);
   ASSERT_EQ(report.meshes.size(), 2u);
   EXPECT_TRUE(report.meshes[0].reference);
   const auto& r = report.meshes[1];
@@ -250,9 +252,7 @@ TEST(RefineMaps, WithoutSlidingTheBordersStayExactly) {
   auto set = dissect_pair(fam);
   distort(set[1]);
   const auto before = set;
-  mr::RefineOptions o;
-  o.slide_borders = false;
-  const auto r = mr::refine_maps(set, o);
+  const auto r = mr::refine_maps(set);  // slide_borders is off by default
   EXPECT_LT(r.meshes[1].energy_after, r.meshes[1].energy_before);
   const auto held = held_vertices(before[1]);
   int changed = 0;
@@ -269,6 +269,7 @@ TEST(RefineMaps, TheResultDoesNotDependOnTheThreadCount) {
   distort(set1[1]);
   auto set4 = set1;
   mr::RefineOptions o;
+  o.slide_borders = true;
   o.threads = 1;
   const auto r1 = mr::refine_maps(set1, o);
   o.threads = 4;

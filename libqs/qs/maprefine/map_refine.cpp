@@ -757,7 +757,7 @@ MeshResult run_mesh(dissect::Dissection& b, const dissect::Chart& ref, const Ref
     if (r.changed) {
       write_back(sides, b.chart);
       for (int p : sides.face_patch) changed[p] = 1;
-      out.free += r.free;
+      out.free += sides.unknowns;
       note(interior_pass(b, refs, scale, options, true, context), false);
     }
   }
