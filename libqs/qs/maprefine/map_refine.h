@@ -16,19 +16,21 @@
 //    J_t = L^T (d uv / dB on t), M = L L^T at t's uv centroid, symDirichlet(J) = |J|^2 + |J^-1|^2
 //    (4 for a rotation; reported normalized: 1 = isometric). It goes to infinity as a uv triangle
 //    degenerates, a barrier against folds.
-//  - Solver: projected Newton (per-face 4x4 Hessian of symDirichlet clamped to positive
-//    semi-definite), sparse LDLT, step capped at 0.8 of the largest flip-free step (Smith and
+//  - Solver: projected Newton (per-face 4x4 Hessian of symDirichlet made positive semi-definite
+//    analytically), sparse LDLT, step capped at 0.8 of the largest flip-free step (Smith and
 //    Schaefer 2015) and backtracked (Armijo); the metric is re-evaluated at the new uv centroids
 //    after every step.
-//  - Held: every patch border vertex (sides and corners stay where the dissection put them),
-//    seeds, features, and any vertex whose wedges in its patch disagree. Only patch-interior
-//    vertices move, and only inside their own patch.
+//  - Held: patch corners, seeds, features, any vertex whose wedges in its patch disagree, and
+//    (unless RefineOptions::slide_borders) every patch-side vertex. Patch-interior vertices move
+//    inside their own patch; with slide_borders, side vertices slide along their side (one
+//    unknown shared by the two patches), between two interior passes. Patch curves on the
+//    surface never move.
 //  - Safety: a patch keeps its refined (u, v) only if every uv face stays positive (signed area
 //    above param::kZeroUvArea) and the energy went down; otherwise it is left as it was. Patches
 //    with a flipped or zero-area uv face to start with are not touched.
 //
-// Patches are independent (their borders are held), so they run in parallel; the result does not
-// depend on the thread count.
+// In the interior passes patches are independent (their borders are held), so they run in
+// parallel; the sliding pass is one problem. The result does not depend on the thread count.
 
 #include <vector>
 
@@ -47,7 +49,7 @@ struct RefineOptions {
   /// patches of the side; corners, seeds and features stay), between two passes over the patch
   /// interiors. The sides' curves on the surface do not move, only where along them (u, v) lands.
   /// Off by default: on the correspondence benchmark it lowers the distortion energy but changes
-  /// no error by more than 0.03% of the diagonal, at 5-10 times the time on the human pairs.
+  /// no mean error by more than 0.02% of the diagonal, at 9-17 times the time on the human pairs.
   bool slide_borders = false;
 };
 
