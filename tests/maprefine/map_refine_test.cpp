@@ -335,3 +335,63 @@ TEST(RefineMaps, BadInputIsNamed) {
     EXPECT_THAT(e.what(), HasSubstr("mesh 1 has"));
   }
 }
+
+TEST(RefineMaps, AFoldedPatchIsLeftAsItWas) {
+  const auto fam = same_shape_pair();
+  auto set = dissect_pair(fam);
+  distort(set[1]);
+  // Fold one patch of mesh 1: move one of its interior vertices far across its neighbours.
+  const auto held = held_vertices(set[1]);
+  auto& c = set[1].chart;
+  int victim = -1, patch = -1;
+  for (int f = 0; f < c.mesh.num_faces() && victim < 0; ++f)
+    for (int v : c.mesh.faces[f])
+      if (!held[v]) {
+        victim = v;
+        patch = c.face_patch[f];
+        break;
+      }
+  ASSERT_GE(victim, 0);
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (c.mesh.faces[f][k] == victim) {
+        Vec2& uv = c.face_uv[f][k];
+        uv = Vec2(uv.x() < 0.5 ? 0.97 : 0.03, uv.y() < 0.5 ? 0.97 : 0.03);
+      }
+  const int folded = folded_faces(c);
+  ASSERT_GT(folded, 0);
+  const auto before = set;
+  const auto r = mr::refine_maps(set);
+  EXPECT_GE(r.meshes[1].patches_skipped, 1);
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    if (c.face_patch[f] == patch) EXPECT_EQ(c.face_uv[f], before[1].chart.face_uv[f]) << "face " << f;
+  EXPECT_EQ(folded_faces(c), folded);  // no new folds anywhere, the folded patch untouched
+  EXPECT_EQ(r.meshes[1].flipped_faces + r.meshes[1].zero_area_faces, folded);
+}
+
+TEST(RefineMaps, AFamilyOfThreeRefinesEveryMeshButTheReference) {
+  qs::family::FamilyOptions o;
+  o.shapes = 3;
+  o.seed = 2;
+  o.faces = 1600;
+  o.limbs = 4;
+  const auto fam = qs::family::generate_family(o);
+  auto set = dissect_pair(fam);
+  ASSERT_EQ(set.size(), 3u);
+  const auto before = set;
+  const auto r = mr::refine_maps(set);
+  ASSERT_EQ(r.meshes.size(), 3u);
+  EXPECT_EQ(set[0].chart.face_uv, before[0].chart.face_uv);
+  for (int i = 1; i < 3; ++i) {
+    EXPECT_FALSE(r.meshes[i].reference);
+    EXPECT_LE(r.meshes[i].energy_after, r.meshes[i].energy_before) << i;
+    EXPECT_EQ(folded_faces(set[i].chart), 0) << i;
+    EXPECT_NE(set[i].chart.face_uv, before[i].chart.face_uv) << i;
+    for (size_t k = 0; k < set[i].features.size(); ++k) {
+      const int v = set[i].features[k].vertex;
+      for (int f = 0; f < set[i].chart.mesh.num_faces(); ++f)
+        for (int j = 0; j < 3; ++j)
+          if (set[i].chart.mesh.faces[f][j] == v) EXPECT_EQ(set[i].chart.face_uv[f][j], set[i].features[k].uv);
+    }
+  }
+}
