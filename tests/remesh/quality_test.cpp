@@ -175,6 +175,40 @@ TEST(DensitySpread, ChartDensityFollowsTheUvAreas) {
   EXPECT_TRUE(std::isinf(qs::remesh::chart_density(c, 4).spread));
 }
 
+TEST(DensitySpread, ChartDensityWithACountPerPatch) {
+  // Two patches of 3D area 0.5 and 2 (a triangle of each, covering half of each unit square): with
+  // the same 4 cells per side the densities are 16 and 4 (spread 4); with 4 and 8 cells per side
+  // (sides in proportion to the square root of the areas) both are 16: spread 1.
+  qs::dissect::Chart c;
+  c.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 0, 0}, {7, 0, 0}, {5, 2, 0}};
+  c.mesh.faces = {{0, 1, 2}, {3, 4, 5}};
+  c.face_patch = {0, 1};
+  c.face_uv = {{qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(0, 1)}, {qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(0, 1)}};
+  const auto same = qs::remesh::chart_density(c, 4);
+  EXPECT_NEAR(same.p5, 4, 1e-12);
+  EXPECT_NEAR(same.p95, 16, 1e-12);
+  EXPECT_NEAR(same.spread, 4, 1e-12);
+  const auto sized = qs::remesh::chart_density(c, std::vector<double>{4, 8});
+  EXPECT_NEAR(sized.p5, 16, 1e-12);
+  EXPECT_NEAR(sized.p95, 16, 1e-12);
+  EXPECT_NEAR(sized.spread, 1, 1e-12);
+  EXPECT_THROW(qs::remesh::chart_density(c, std::vector<double>{4}), qs::InvalidInput);  // patch 1 has no count
+  EXPECT_THROW(qs::remesh::chart_density(c, std::vector<double>{4, 0}), qs::InvalidInput);
+  // Shares of the surface: 0.5 / 2.5 and 2 / 2.5; for a set, the larger of each patch's shares.
+  c.patches.resize(2);
+  const auto one = qs::remesh::patch_area_shares({&c});
+  EXPECT_NEAR(one[0], 0.2, 1e-12);
+  EXPECT_NEAR(one[1], 0.8, 1e-12);
+  qs::dissect::Chart d = c;
+  for (int v = 0; v < 3; ++v) d.mesh.positions[v] *= 2;  // patch 0 now 2 of 4
+  const auto both = qs::remesh::patch_area_shares({&c, &d});
+  EXPECT_NEAR(both[0], 0.5, 1e-12);
+  EXPECT_NEAR(both[1], 0.8, 1e-12);
+  qs::dissect::Chart e = c;
+  e.patches.resize(3);
+  EXPECT_THROW(qs::remesh::patch_area_shares({&c, &e}), qs::InvalidInput);
+}
+
 TEST(DensitySpread, RemeshOfASphereIsFairlyEven) {
   // Vertex density of a level-4 remesh of a sphere's two seed patches, and the chart density at
   // the same grid resolution: both measure one mapping, so their spreads agree roughly.

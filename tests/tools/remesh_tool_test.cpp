@@ -38,7 +38,7 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
   double last_error = 1e9;
   for (int level : {2, 4}) {
     const fs::path out = dir_ / ("L" + std::to_string(level));
-    const RunResult r = run_tool("qs-remesh", d.string() + " --level " + std::to_string(level) + " -o " + out.string());
+    const RunResult r = run_tool("qs-remesh", d.string() + " --level " + std::to_string(level) + " --error -o " + out.string());
     ASSERT_EQ(r.exit, 0) << r.out;
     const auto ra = qs::io::read_mesh(out / "a.obj"), rb = qs::io::read_mesh(out / "b.obj");
     EXPECT_EQ(ra.mesh.faces, rb.mesh.faces) << "the set must share one face list";

@@ -164,6 +164,7 @@ struct MeshData {
   std::vector<Sample> samples;      // patch by patch
   std::vector<int> patch_begin;     // #P + 1
   double inv_diagonal = 0;
+  double inv_area = 0;              // 1 / the chart's surface area
 };
 
 MeshData gather_samples(const ChartSampler& sampler) {
@@ -190,6 +191,9 @@ MeshData gather_samples(const ChartSampler& sampler) {
   for (int p = 0; p < sampler.num_patches(); ++p) md.patch_begin[p + 1] += md.patch_begin[p];
   const double diag = sampler.bbox_diagonal();
   md.inv_diagonal = diag > 0 ? 1.0 / diag : 0.0;
+  double area = 0;
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) area += face_area(chart.mesh, f);
+  md.inv_area = area > 0 ? 1.0 / area : 0.0;
   return md;
 }
 
@@ -230,6 +234,19 @@ class Refiner {
       ++stats_.evaluated_nodes;
       const bool d02 = node_diagonal02(t_, n);
       double error = 0;
+      const double bound = o_.criterion == AdaptiveCriterion::Size ? o_.max_area : o_.epsilon;
+      if (o_.criterion == AdaptiveCriterion::Size) {
+        // A_C(q): the node's share of the surface, from its 3 x 3 grid points (8 triangles).
+        auto tri = [](const Vec3& a, const Vec3& b, const Vec3& c) { return 0.5 * (b - a).cross(c - a).norm(); };
+        for (size_t m = 0; m < nm; ++m) {
+          const auto& c = corners[m];
+          const auto& x = mids[m];  // M0 (bottom), M1 (right), M2 (top), M3 (left), centre
+          const double area = tri(c[0], x[0], x[4]) + tri(c[0], x[4], x[3]) + tri(x[0], c[1], x[1]) +
+                              tri(x[0], x[1], x[4]) + tri(x[4], x[1], c[2]) + tri(x[4], c[2], x[2]) +
+                              tri(x[3], x[4], x[2]) + tri(x[3], x[2], c[3]);
+          error = std::max(error, area * meshes_[m].inv_area);
+        }
+      } else
       for (size_t m = 0; m < nm; ++m) {
         const auto& c = corners[m];
         // The node's triangles: (C0,C1,C2), (C0,C2,C3) or (C0,C1,C3), (C1,C2,C3).
@@ -242,10 +259,10 @@ class Refiner {
         for (int k = 0; k < 5; ++k) worst = std::max(worst, dist2(mids[m][k]));
         error = std::max(error, std::sqrt(worst) * meshes_[m].inv_diagonal);
       }
-      if (error > o_.epsilon && can_split) split = true;
+      if (error > bound && can_split) split = true;
       if (!split) {
         stats_.max_leaf_error = std::max(stats_.max_leaf_error, error);
-        if (error > o_.epsilon) {
+        if (error > bound) {
           ++stats_.unresolved_leaves;
           stats_.max_unresolved_error = std::max(stats_.max_unresolved_error, error);
         }
@@ -388,7 +405,11 @@ SemiRegularConnectivity adaptive_connectivity(const BaseTopology& topology, cons
 
 AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts, const AdaptiveOptions& options,
                                const Context& context) {
-  if (!(options.epsilon > 0) || !std::isfinite(options.epsilon))
+  if (options.criterion == AdaptiveCriterion::Size) {
+    if (!(options.max_area > 0) || !std::isfinite(options.max_area))
+      throw InvalidInput("remesh: the even remesh's area bound must be a positive share of the surface, got " +
+                         std::to_string(options.max_area));
+  } else if (!(options.epsilon > 0) || !std::isfinite(options.epsilon))
     throw InvalidInput("remesh: epsilon must be a positive number (a fraction of the bounding-box diagonal, e.g. "
                        "0.0025), got " + std::to_string(options.epsilon));
   if (options.max_level < 0 || options.max_level > kMaxAdaptiveLevel)
@@ -431,6 +452,24 @@ AdaptiveRemesh remesh_adaptive(const std::vector<dissect::Chart>& charts, const 
   std::vector<const dissect::Chart*> ptrs;
   for (const auto& c : charts) ptrs.push_back(&c);
   return remesh_adaptive(ptrs, options, context);
+}
+
+AdaptiveOptions even_options(int level, int patches) {
+  if (level < 0 || level > kMaxAdaptiveLevel)
+    throw InvalidInput("remesh: even level " + std::to_string(level) + " is out of range; expected 0.." +
+                       std::to_string(kMaxAdaptiveLevel));
+  if (patches < 1) throw InvalidInput("remesh: " + std::to_string(patches) + " patches; expected at least 1");
+  AdaptiveOptions o;
+  o.criterion = AdaptiveCriterion::Size;
+  o.max_area = 2.0 / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
+  o.min_level = 0;
+  o.max_level = std::min(level + 4, kMaxAdaptiveLevel);
+  return o;
+}
+
+AdaptiveRemesh remesh_even(const std::vector<const dissect::Chart*>& charts, int level, const Context& context) {
+  if (charts.empty() || charts.front() == nullptr) throw InvalidInput("remesh: no charts to remesh");
+  return remesh_adaptive(charts, even_options(level, static_cast<int>(charts.front()->patches.size())), context);
 }
 
 }  // namespace qs::remesh
