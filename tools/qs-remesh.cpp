@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   bool even = false;
   auto* even_flag = app.add_flag("--even", even,
                                  "With --level n: about the uniform level n's face count, spread over the surface by "
-                                 "area (balanced quadtrees split while a node covers more than 2 / (P 4^n) of the "
+                                 "area (balanced quadtrees split while a node covers more than 2.3 / (P 4^n) of the "
                                  "surface, the largest share over the set)");
   even_flag->needs(lvl);
   app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));

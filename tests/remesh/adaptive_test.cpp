@@ -345,8 +345,11 @@ TEST(EvenRemesh, EqualPatchesGiveTheUniformLevel) {
   const auto& chart = sphere_dissection().chart;
   for (int level : {1, 2, 3}) {
     const auto a = qs::remesh::remesh_even({&chart}, level);
-    const auto u = qs::remesh::remesh_uniform(chart, level);
+    qs::remesh::UniformOptions uo;  // the even remesh cuts its cells as qs-remesh's default does
+    uo.diagonals = qs::remesh::DiagonalRule::BestAngle;
+    const auto u = qs::remesh::remesh_uniform(chart, level, uo);
     EXPECT_EQ(face_set(a.remesh.connectivity.faces), face_set(u.connectivity.faces)) << "level " << level;
+    EXPECT_EQ(a.remesh.positions[0].size(), u.positions.size());
   }
 }
 

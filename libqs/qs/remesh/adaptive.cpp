@@ -158,6 +158,62 @@ struct Sample {
   Vec3 x;
 };
 
+/// sin of the smallest angle of triangle (a, b, c) (as uniform.cpp's): the angle opposite the
+/// shortest edge. 0 for a degenerate triangle.
+double sin_smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, bc = c - b, ca = a - c;
+  const double lab = ab.squaredNorm(), lbc = bc.squaredNorm(), lca = ca.squaredNorm();
+  const double twice_area = ab.cross(ca).norm();
+  double denom2;
+  if (lab <= lbc && lab <= lca) denom2 = lbc * lca;
+  else if (lbc <= lca) denom2 = lab * lca;
+  else denom2 = lab * lbc;
+  return denom2 > 0 ? twice_area / std::sqrt(denom2) : 0.0;
+}
+
+/// Re-cuts every leaf without a T-vertex along the diagonal whose two triangles have the larger
+/// smallest angle over the set (uniform.h's DiagonalRule::BestAngle, with the same exceptions: a
+/// leaf of level 0, a leaf at a patch corner that is a base vertex of valence 2, and at level 1 a
+/// leaf of a patch with such a corner keep the pattern's diagonal, whose other diagonal another
+/// patch may join too). Faces are in adaptive_connectivity's order.
+void choose_leaf_diagonals(const BaseTopology& t, const QuadForest& forest, const Forest& f,
+                           SemiRegularConnectivity& c, const std::vector<std::vector<Vec3>>& positions) {
+  size_t face = 0;
+  for (const auto& n : forest.leaves) {
+    int nt = 0;
+    for (int d = 0; d < 4; ++d) nt += f.is_split(f.neighbour(n, d));
+    const size_t first = face;
+    face += nt == 0 ? 2 : nt == 1 ? 3 : 4 + nt;
+    if (nt != 0 || n.level == 0) continue;
+    const int size = 1 << n.level;
+    if ((n.i == 0 || n.i == size - 1) && (n.j == 0 || n.j == size - 1)) {
+      const int k = n.j == 0 ? (n.i == 0 ? 0 : 1) : (n.i == 0 ? 3 : 2);
+      if (t.valence[t.quads[n.patch][k]] < 3) continue;
+      if (size == 2) {
+        bool free = true;
+        for (int q = 0; q < 4; ++q) free = free && t.valence[t.quads[n.patch][q]] >= 3;
+        if (!free) continue;
+      }
+    }
+    Tri& f0 = c.faces[first];
+    Tri& f1 = c.faces[first + 1];
+    const bool diag02 = node_diagonal02(t, n);
+    const int v00 = f0[0], v10 = f0[1];
+    const int v11 = diag02 ? f0[2] : f1[1], v01 = diag02 ? f1[2] : f0[2];
+    double keep = 1e300, other = 1e300;
+    for (const auto& x : positions) {
+      const Vec3 &a = x[v00], &b = x[v10], &cc = x[v11], &d = x[v01];
+      const double q02 = std::min(sin_smallest_angle(a, b, cc), sin_smallest_angle(a, cc, d));
+      const double q13 = std::min(sin_smallest_angle(a, b, d), sin_smallest_angle(b, cc, d));
+      keep = std::min(keep, diag02 ? q02 : q13);
+      other = std::min(other, diag02 ? q13 : q02);
+    }
+    if (!(other > keep)) continue;
+    if (diag02) f0 = {v00, v10, v01}, f1 = {v10, v11, v01};
+    else f0 = {v00, v10, v11}, f1 = {v00, v11, v01};
+  }
+}
+
 // Per mesh: the samplers and the chart vertices of each patch with their uv there.
 struct MeshData {
   const ChartSampler* sampler = nullptr;
@@ -443,6 +499,11 @@ AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts,
     context.report("remesh", 0.8 + 0.2 * m / samplers.size());
     out.remesh.positions.push_back(sample_positions(samplers[m], out.remesh.connectivity, context));
   }
+  if (options.best_angle_diagonals) {
+    Forest f(topology, std::max(out.forest.max_level, 1));
+    for (const auto& n : out.forest.split) f.split(n);
+    choose_leaf_diagonals(topology, out.forest, f, out.remesh.connectivity, out.remesh.positions);
+  }
   context.report("remesh", 1.0);
   return out;
 }
@@ -461,9 +522,10 @@ AdaptiveOptions even_options(int level, int patches) {
   if (patches < 1) throw InvalidInput("remesh: " + std::to_string(patches) + " patches; expected at least 1");
   AdaptiveOptions o;
   o.criterion = AdaptiveCriterion::Size;
-  o.max_area = 2.0 / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
+  o.max_area = kEvenAreaFactor / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
   o.min_level = 0;
   o.max_level = std::min(level + 4, kMaxAdaptiveLevel);
+  o.best_angle_diagonals = true;
   return o;
 }
 
