@@ -75,8 +75,8 @@ int main(int argc, char** argv) {
   bool even = false;
   auto* even_flag = app.add_flag("--even", even,
                                  "With --level n: about the uniform level n's face count, spread over the surface by "
-                                 "area (balanced quadtrees split while a node covers more than 2.3 / (P 4^n) of the "
-                                 "surface, the largest share over the set)");
+                                 "area (balanced quadtrees split while a node covers more than 2.3 s / (P 4^n) of the "
+                                 "surface, the largest share over the set; s = the patches' largest shares summed)");
   even_flag->needs(lvl);
   app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));
   app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
@@ -145,7 +145,9 @@ int main(int argc, char** argv) {
     qs::remesh::SemiRegularSet set;
     nlohmann::ordered_json adaptive_stats;
     if (even) {
-      const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, c_patches(charts));
+      double share_sum = 0;
+      for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
+      const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, c_patches(charts), std::max(share_sum, 1.0));
       const qs::remesh::AdaptiveRemesh ar = qs::remesh::remesh_adaptive(charts, eo, ctx);
       set = ar.remesh;
       adaptive_stats = {{"level", level},

@@ -328,15 +328,25 @@ TEST(EvenRemesh, SetIsClosedManifoldWithOneConnectivityAndDeterministic) {
   expect_balanced_tiling(qs::remesh::build_base_topology(s.meshes[0].chart.patches), a.forest);
   // Every leaf covers at most the bound of the surface in each mesh (none left over at the finest level).
   EXPECT_EQ(a.stats.unresolved_leaves, 0);
-  EXPECT_LE(a.stats.max_leaf_error, qs::remesh::even_options(3, static_cast<int>(charts[0]->patches.size())).max_area);
+  double share_sum = 0;
+  for (double x : qs::remesh::patch_area_shares(charts)) share_sum += x;
+  EXPECT_GT(share_sum, 1.0) << "two different shapes: the largest shares add up to more than the surface";
+  EXPECT_LE(a.stats.max_leaf_error,
+            qs::remesh::even_options(3, static_cast<int>(charts[0]->patches.size()), share_sum).max_area);
+  // About the uniform level's face count (the bound grows with the share sum).
+  const double ratio = static_cast<double>(c.faces.size()) /
+                       static_cast<double>(qs::remesh::remesh_uniform(*charts[0], 3).connectivity.faces.size());
+  EXPECT_GT(ratio, 0.5);
+  EXPECT_LT(ratio, 2.0);
   // Deterministic: the same input gives the same faces and the same positions, bit for bit.
   const auto b = qs::remesh::remesh_even(charts, 3);
   EXPECT_EQ(b.remesh.connectivity.faces, c.faces);
   EXPECT_EQ(b.remesh.positions, a.remesh.positions);
-  // The set's splits include each mesh's own (max over the set).
+  // The set's splits include each mesh's own under the same bound (max over the set).
   const std::set<QuadNode> all(a.forest.split.begin(), a.forest.split.end());
+  const auto o = qs::remesh::even_options(3, static_cast<int>(charts[0]->patches.size()), share_sum);
   for (int i = 0; i < 2; ++i)
-    for (const auto& n : qs::remesh::remesh_even({charts[i]}, 3).forest.split) EXPECT_TRUE(all.count(n));
+    for (const auto& n : qs::remesh::remesh_adaptive({charts[i]}, o).forest.split) EXPECT_TRUE(all.count(n));
 }
 
 TEST(EvenRemesh, EqualPatchesGiveTheUniformLevel) {
@@ -367,6 +377,7 @@ TEST(EvenRemesh, SamplesFollowTheAreaNotThePatchCount) {
   EXPECT_LT(ratio, 2.0);
   EXPECT_THROW(qs::remesh::even_options(-1, 4), qs::InvalidInput);
   EXPECT_THROW(qs::remesh::even_options(2, 0), qs::InvalidInput);
+  EXPECT_THROW(qs::remesh::even_options(2, 4, 0.5), qs::InvalidInput);
   qs::remesh::AdaptiveOptions o = qs::remesh::even_options(2, 4);
   o.max_area = 0;
   EXPECT_THROW(qs::remesh::remesh_adaptive(std::vector<qs::dissect::Chart>{chart}, o), qs::InvalidInput);

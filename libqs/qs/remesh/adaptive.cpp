@@ -8,6 +8,7 @@
 
 #include "qs/core/error.h"
 #include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 
 namespace qs::remesh {
@@ -515,14 +516,17 @@ AdaptiveRemesh remesh_adaptive(const std::vector<dissect::Chart>& charts, const 
   return remesh_adaptive(ptrs, options, context);
 }
 
-AdaptiveOptions even_options(int level, int patches) {
+AdaptiveOptions even_options(int level, int patches, double share_sum) {
   if (level < 0 || level > kMaxAdaptiveLevel)
     throw InvalidInput("remesh: even level " + std::to_string(level) + " is out of range; expected 0.." +
                        std::to_string(kMaxAdaptiveLevel));
   if (patches < 1) throw InvalidInput("remesh: " + std::to_string(patches) + " patches; expected at least 1");
+  if (!(share_sum >= 1) || !std::isfinite(share_sum))
+    throw InvalidInput("remesh: the patches' largest shares of the surface add up to " + std::to_string(share_sum) +
+                       "; expected a finite number >= 1");
   AdaptiveOptions o;
   o.criterion = AdaptiveCriterion::Size;
-  o.max_area = kEvenAreaFactor / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
+  o.max_area = kEvenAreaFactor * share_sum / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
   o.min_level = 0;
   o.max_level = std::min(level + 4, kMaxAdaptiveLevel);
   o.best_angle_diagonals = true;
@@ -531,7 +535,10 @@ AdaptiveOptions even_options(int level, int patches) {
 
 AdaptiveRemesh remesh_even(const std::vector<const dissect::Chart*>& charts, int level, const Context& context) {
   if (charts.empty() || charts.front() == nullptr) throw InvalidInput("remesh: no charts to remesh");
-  return remesh_adaptive(charts, even_options(level, static_cast<int>(charts.front()->patches.size())), context);
+  double sum = 0;
+  for (double a : patch_area_shares(charts)) sum += a;
+  return remesh_adaptive(charts, even_options(level, static_cast<int>(charts.front()->patches.size()), std::max(sum, 1.0)),
+                         context);
 }
 
 }  // namespace qs::remesh

@@ -139,12 +139,15 @@ AdaptiveRemesh remesh_adaptive(const std::vector<dissect::Chart>& charts, const 
                                const Context& context = {});
 
 /// Options of the even remesh for a level n (see the top of this file): criterion Size, max_area
-/// = kEvenAreaFactor / (P 4^n), max_level = min(n + 4, kMaxAdaptiveLevel), min_level 0, best-angle diagonals.
-/// \throws InvalidInput for a level outside 0..kMaxAdaptiveLevel or patches < 1.
-AdaptiveOptions even_options(int level, int patches);
+/// = kEvenAreaFactor * share_sum / (P 4^n), max_level = min(n + 4, kMaxAdaptiveLevel), min_level 0,
+/// best-angle diagonals. share_sum is the sum over the patches of their largest share of a mesh's
+/// surface over the set (patch_area_shares; 1 for one mesh): a set's leaves follow the largest
+/// share, so the bound grows with it to keep about the uniform level's face count.
+/// \throws InvalidInput for a level outside 0..kMaxAdaptiveLevel, patches < 1 or share_sum < 1.
+AdaptiveOptions even_options(int level, int patches, double share_sum = 1.0);
 
-/// The even remesh for a level n: remesh_adaptive with even_options(n, patch count). About the
-/// uniform level n's face count, spread over the surface by area.
+/// The even remesh for a level n: remesh_adaptive with even_options(n, patch count, the sum of
+/// patch_area_shares). About the uniform level n's face count, spread over the surface by area.
 AdaptiveRemesh remesh_even(const std::vector<const dissect::Chart*>& charts, int level, const Context& context = {});
 
 }  // namespace qs::remesh
