@@ -82,11 +82,12 @@ int main(int argc, char** argv) {
   app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
   app.add_flag("--quads", quads, "Uniform: write the grid cells as quads (OBJ only)");
   std::string diagonals = "angle";
-  app.add_option("--diagonals", diagonals,
+  auto* diag_opt = app.add_option("--diagonals", diagonals,
                  "Uniform: cut each grid cell along the diagonal with the larger smallest angle over the set (angle) "
                  "or by the fixed symmetric pattern (pattern: the face list depends on the patches and level only)")
       ->capture_default_str()
       ->check(CLI::IsMember({"angle", "pattern"}));
+  even_flag->excludes(diag_opt);
   // The error report is opt-in: its closest-point tree over the original costs more than the
   // whole remesh at the usual levels (venus_100k level 5: ~0.1 s of CPU for the remesh, ~0.3 s
   // for the report; see the README).
@@ -119,8 +120,8 @@ int main(int argc, char** argv) {
     if (level >= 0) {
       // Uniform level n: (2^n+1)^2 samples and 2 * 4^n triangles per patch. Per vertex: a position
       // per mesh (and its copy for writing), (patch, u, v), the JSON sites; per face: the face list,
-      // its copy and, unless --no-metro, the error measurement's tree and samples. Measured on a
-      // 42-patch level 8 (2.8M vertices): peak 1.69 GiB (0.59 GiB with --no-metro), estimated 2.0
+      // its copy and, with --error, the error measurement's tree and samples. Measured on a
+      // 42-patch level 8 (2.8M vertices): peak 1.69 GiB (0.59 GiB without --error), estimated 2.0
       // (1.0) GiB.
       const double patches = static_cast<double>(charts.front()->patches.size());
       const double side = std::ldexp(1.0, level) + 1;
