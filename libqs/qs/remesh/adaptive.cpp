@@ -224,15 +224,16 @@ struct MeshData {
   double inv_area = 0;              // 1 / the chart's surface area
 };
 
-MeshData gather_samples(const ChartSampler& sampler) {
+// `with_vertices` false (the size rule needs no chart vertices): every patch's range is empty.
+MeshData gather_samples(const ChartSampler& sampler, bool with_vertices) {
   const auto& chart = sampler.chart();
   struct Entry {
     int patch, vertex;
     Vec2 uv;
   };
   std::vector<Entry> e;
-  e.reserve(3 * chart.mesh.faces.size());
-  for (int f = 0; f < chart.mesh.num_faces(); ++f)
+  if (with_vertices) e.reserve(3 * chart.mesh.faces.size());
+  for (int f = 0; f < (with_vertices ? chart.mesh.num_faces() : 0); ++f)
     for (int k = 0; k < 3; ++k) e.push_back({chart.face_patch[f], chart.mesh.faces[f][k], chart.face_uv[f][k]});
   std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {
     return a.patch != b.patch ? a.patch < b.patch : a.vertex < b.vertex;
@@ -479,7 +480,7 @@ AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts,
   const std::vector<ChartSampler> samplers = set_samplers(charts, context);
   const BaseTopology& topology = samplers[0].topology();
   std::vector<MeshData> meshes;
-  for (const auto& s : samplers) meshes.push_back(gather_samples(s));
+  for (const auto& s : samplers) meshes.push_back(gather_samples(s, options.criterion == AdaptiveCriterion::Error));
 
   AdaptiveRemesh out;
   Forest forest(topology, std::max(options.max_level, 1));
