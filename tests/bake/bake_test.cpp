@@ -379,6 +379,11 @@ TEST(Bake, AreaSizedTilesAreBakedWithGuttersAndEvenTexelDensity) {
         ASSERT_EQ(r.atlas.at(x, y), r.atlas.at(std::clamp(x, x0, x0 + S - 1), std::clamp(y, y0, y0 + S - 1)));
   }
   EXPECT_LT(worst, 1.5);
+  // The same atlas on one thread and on three (patches are baked in parallel).
+  BakeOptions one = o, three = o;
+  one.threads = 1;
+  three.threads = 3;
+  EXPECT_EQ(bake(f, one).atlas.texels, bake(f, three).atlas.texels);
   for (int y = 0; y < img.height; ++y)  // outside the cells: the flat normal, a unit vector too
     for (int x = 0; x < img.width; ++x) ASSERT_NEAR(decode8(img, x, y).norm(), 1.0, 0.02);
   // Texel density: per patch (S_p - 1)^2 per unit square. Sizing by area evens it out.
