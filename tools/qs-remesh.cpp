@@ -47,7 +47,7 @@ void write_quad_obj(const fs::path& path, const std::vector<qs::Vec3>& positions
   file.commit();
 }
 
-int c_patches(const std::vector<const qs::dissect::Chart*>& charts) {
+int patch_count(const std::vector<const qs::dissect::Chart*>& charts) {
   return static_cast<int>(charts.front()->patches.size());
 }
 
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
     if (even) {
       double share_sum = 0;
       for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
-      const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, c_patches(charts), std::max(share_sum, 1.0));
+      const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, patch_count(charts), std::max(share_sum, 1.0));
       const qs::remesh::AdaptiveRemesh ar = qs::remesh::remesh_adaptive(charts, eo, ctx);
       set = ar.remesh;
       adaptive_stats = {{"level", level},

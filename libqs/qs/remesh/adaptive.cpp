@@ -304,18 +304,19 @@ class Refiner {
                               tri(x[3], x[4], x[2]) + tri(x[3], x[2], c[3]);
           error = std::max(error, area * meshes_[m].inv_area);
         }
-      } else
-      for (size_t m = 0; m < nm; ++m) {
-        const auto& c = corners[m];
-        // The node's triangles: (C0,C1,C2), (C0,C2,C3) or (C0,C1,C3), (C1,C2,C3).
-        auto dist2 = [&](const Vec3& x) {
-          if (d02) return std::min(point_triangle_distance2(x, c[0], c[1], c[2]), point_triangle_distance2(x, c[0], c[2], c[3]));
-          return std::min(point_triangle_distance2(x, c[0], c[1], c[3]), point_triangle_distance2(x, c[1], c[2], c[3]));
-        };
-        double worst = 0;
-        for (int s = ranges[m][0]; s < ranges[m][1]; ++s) worst = std::max(worst, dist2(meshes_[m].samples[s].x));
-        for (int k = 0; k < 5; ++k) worst = std::max(worst, dist2(mids[m][k]));
-        error = std::max(error, std::sqrt(worst) * meshes_[m].inv_diagonal);
+      } else {
+        for (size_t m = 0; m < nm; ++m) {
+          const auto& c = corners[m];
+          // The node's triangles: (C0,C1,C2), (C0,C2,C3) or (C0,C1,C3), (C1,C2,C3).
+          auto dist2 = [&](const Vec3& x) {
+            if (d02) return std::min(point_triangle_distance2(x, c[0], c[1], c[2]), point_triangle_distance2(x, c[0], c[2], c[3]));
+            return std::min(point_triangle_distance2(x, c[0], c[1], c[3]), point_triangle_distance2(x, c[1], c[2], c[3]));
+          };
+          double worst = 0;
+          for (int s = ranges[m][0]; s < ranges[m][1]; ++s) worst = std::max(worst, dist2(meshes_[m].samples[s].x));
+          for (int k = 0; k < 5; ++k) worst = std::max(worst, dist2(mids[m][k]));
+          error = std::max(error, std::sqrt(worst) * meshes_[m].inv_diagonal);
+        }
       }
       if (error > bound && can_split) split = true;
       if (!split) {
@@ -529,7 +530,7 @@ AdaptiveOptions even_options(int level, int patches, double share_sum) {
   o.criterion = AdaptiveCriterion::Size;
   o.max_area = kEvenAreaFactor * share_sum / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
   o.min_level = 0;
-  o.max_level = std::min(level + 4, kMaxAdaptiveLevel);
+  o.max_level = std::min(level + 6, kMaxAdaptiveLevel);
   o.best_angle_diagonals = true;
   return o;
 }

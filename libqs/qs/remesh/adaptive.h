@@ -139,7 +139,7 @@ AdaptiveRemesh remesh_adaptive(const std::vector<dissect::Chart>& charts, const 
                                const Context& context = {});
 
 /// Options of the even remesh for a level n (see the top of this file): criterion Size, max_area
-/// = kEvenAreaFactor * share_sum / (P 4^n), max_level = min(n + 4, kMaxAdaptiveLevel), min_level 0,
+/// = kEvenAreaFactor * share_sum / (P 4^n), max_level = min(n + 6, kMaxAdaptiveLevel), min_level 0,
 /// best-angle diagonals. share_sum is the sum over the patches of their largest share of a mesh's
 /// surface over the set (patch_area_shares; 1 for one mesh): a set's leaves follow the largest
 /// share, so the bound grows with it to keep about the uniform level's face count.
