@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
         const auto ee = qs::metro::metro(d.chart.mesh, e5.mesh(0), mo);
         const double eerr = 100 * ee.mean / ee.diagonal;
         const auto evd = qs::remesh::vertex_density(e5.mesh(0));
-        const std::vector<int> sides = qs::bake::tile_sizes_by_area(qs::remesh::patch_area_shares(charts), 256);
+        const std::vector<int> sides = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), 256);
         std::vector<double> per_patch(sides.size());
         for (size_t p = 0; p < sides.size(); ++p) per_patch[p] = sides[p] - 1.0;
         const auto etd = qs::remesh::chart_density(d.chart, per_patch);

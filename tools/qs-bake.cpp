@@ -154,13 +154,14 @@ int main(int argc, char** argv) {
       check_positions(*samplers.back(), c, rm.set.positions[i], (fs::path(folder) / rm.outputs[i]).string());
     }
     // One layout for the whole set (qs-morph blends the maps texel by texel): with --tiles area each
-    // patch's tile side follows the square root of its largest share of a mesh's surface.
+    // patch's tile side follows the square root of the surface it covers at its median face's
+    // density (patch_texel_shares: its area share for an evenly mapped patch), the largest over the set.
     std::vector<double> side_minus_one(static_cast<size_t>(c.num_patches), size - 1.0);
     qs::bake::AtlasLayout layout;
     if (tiles == "area") {
       std::vector<const qs::dissect::Chart*> charts;
       for (const auto& dm : ds.meshes) charts.push_back(&dm.dissection.chart);
-      opt.tile_sizes = qs::bake::tile_sizes_by_area(qs::remesh::patch_area_shares(charts), size);
+      opt.tile_sizes = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), size);
       layout = qs::bake::make_atlas_layout(opt.tile_sizes, size, gutter);
       for (int p = 0; p < c.num_patches; ++p) side_minus_one[static_cast<size_t>(p)] = layout.tile_side(p) - 1.0;
     } else {

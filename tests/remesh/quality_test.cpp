@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "qs/core/error.h"
@@ -207,6 +208,38 @@ TEST(DensitySpread, ChartDensityWithACountPerPatch) {
   qs::dissect::Chart e = c;
   e.patches.resize(3);
   EXPECT_THROW(qs::remesh::patch_area_shares({&c, &e}), qs::InvalidInput);
+}
+
+TEST(DensitySpread, PatchTexelSharesFollowTheMedianFace) {
+  // Two patches, each two triangles over the unit square (uv area 0.5 each). Patch 1 is evenly
+  // mapped (3D areas 1 and 1): its share is its area share, 2 / 6. Patch 0 has 3D areas 1 and 3:
+  // uv / 3D = 0.5 and 1/6; the area-weighted median is 1/6 (the larger face), so it covers
+  // 1 / (1/6) = 6 units at that density: 6 / 6 = 1 (its area share would be 4 / 6).
+  qs::dissect::Chart c;
+  auto tri = [&](double a, double b, const qs::Vec3& o) {  // a right triangle of legs a, b: area ab/2
+    const int v = c.mesh.num_vertices();
+    c.mesh.positions.push_back(o);
+    c.mesh.positions.push_back(o + qs::Vec3(a, 0, 0));
+    c.mesh.positions.push_back(o + qs::Vec3(0, b, 0));
+    c.mesh.faces.push_back({v, v + 1, v + 2});
+  };
+  tri(1, 2, {0, 0, 0});
+  tri(2, 3, {10, 0, 0});
+  tri(1, 2, {20, 0, 0});
+  tri(1, 2, {30, 0, 0});
+  c.face_patch = {0, 0, 1, 1};
+  const std::array<qs::Vec2, 3> lower = {qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(0, 1)};
+  const std::array<qs::Vec2, 3> upper = {qs::Vec2(1, 0), qs::Vec2(1, 1), qs::Vec2(0, 1)};
+  c.face_uv = {lower, upper, lower, upper};
+  c.patches.resize(2);
+  const auto t = qs::remesh::patch_texel_shares({&c});
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_NEAR(t[0], 1.0, 1e-12);
+  EXPECT_NEAR(t[1], 2.0 / 6.0, 1e-12);
+  const auto a = qs::remesh::patch_area_shares({&c});
+  EXPECT_NEAR(a[0], 4.0 / 6.0, 1e-12);
+  EXPECT_NEAR(a[1], 2.0 / 6.0, 1e-12);
+  EXPECT_THROW(qs::remesh::patch_texel_shares({}), qs::InvalidInput);
 }
 
 TEST(DensitySpread, RemeshOfASphereIsFairlyEven) {

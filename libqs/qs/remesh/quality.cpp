@@ -171,4 +171,55 @@ std::vector<double> patch_area_shares(const std::vector<const dissect::Chart*>& 
   return out;
 }
 
+std::vector<double> patch_texel_shares(const std::vector<const dissect::Chart*>& charts) {
+  if (charts.empty()) throw InvalidInput("patch texel shares: no charts");
+  const size_t np = charts.front()->patches.size();
+  std::vector<double> out(np, 0.0);
+  for (size_t m = 0; m < charts.size(); ++m) {
+    const dissect::Chart& chart = *charts[m];
+    check_faces(chart.mesh, "patch texel shares");
+    if (chart.patches.size() != np || chart.face_patch.size() != chart.mesh.faces.size() ||
+        chart.face_uv.size() != chart.mesh.faces.size())
+      throw InvalidInput("patch texel shares: chart " + std::to_string(m) + " has " +
+                         std::to_string(chart.patches.size()) + " patches, " + std::to_string(chart.face_patch.size()) +
+                         " face patch ids and " + std::to_string(chart.face_uv.size()) + " uv triples for " +
+                         std::to_string(chart.mesh.faces.size()) + " faces; chart 0 has " + std::to_string(np) +
+                         " patches");
+    // Per patch the (uv area / 3D area, 3D area) of its faces.
+    std::vector<std::vector<std::pair<double, double>>> ratio(np);
+    double total = 0;
+    for (int f = 0; f < chart.mesh.num_faces(); ++f) {
+      const int p = chart.face_patch[static_cast<size_t>(f)];
+      if (p < 0 || p >= static_cast<int>(np))
+        throw InvalidInput("patch texel shares: chart " + std::to_string(m) + ", face " + std::to_string(f) +
+                           " is in patch " + std::to_string(p) + "; expected 0.." + std::to_string(np - 1));
+      const double a = face_area(chart.mesh, f);
+      if (!(a > 0)) continue;
+      total += a;
+      const auto& uv = chart.face_uv[static_cast<size_t>(f)];
+      const Vec2 e1 = uv[1] - uv[0], e2 = uv[2] - uv[0];
+      ratio[static_cast<size_t>(p)].emplace_back(0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x()) / a, a);
+    }
+    if (!(total > 0) || !std::isfinite(total))
+      throw InvalidInput("patch texel shares: chart " + std::to_string(m) + " has no finite positive area");
+    for (size_t p = 0; p < np; ++p) {
+      auto& r = ratio[p];
+      if (r.empty()) continue;  // no area: no texels needed beyond the minimum tile
+      std::sort(r.begin(), r.end());
+      double weight = 0;
+      for (const auto& x : r) weight += x.second;
+      double acc = 0, median = r.back().first;
+      for (const auto& x : r) {
+        acc += x.second;
+        if (acc >= 0.5 * weight) {
+          median = x.first;
+          break;
+        }
+      }
+      if (median > 0) out[p] = std::max(out[p], 1.0 / (median * total));
+    }
+  }
+  return out;
+}
+
 }  // namespace qs::remesh

@@ -54,4 +54,13 @@ DensitySpread chart_density(const dissect::Chart& chart, const std::vector<doubl
 /// \throws InvalidInput for no charts, charts with other patch counts, or a chart with no area.
 std::vector<double> patch_area_shares(const std::vector<const dissect::Chart*>& charts);
 
+/// What each patch's texture tile must cover, as a share of its mesh's surface, for an even texel
+/// density: 1 / (median of uv area / 3D area over the patch's faces, weighted by 3D area) divided
+/// by the mesh's area, the largest over the charts. For an evenly mapped patch (uv area in
+/// proportion to 3D area) it equals the patch's area share; for a distorted map it follows the
+/// density of the patch's median face, not its mean, so that a squeezed corner does not set the
+/// tile size of the whole patch. A patch without area gets 0.
+/// \throws InvalidInput for no charts, charts with other patch counts, or a chart with no area.
+std::vector<double> patch_texel_shares(const std::vector<const dissect::Chart*>& charts);
+
 }  // namespace qs::remesh
