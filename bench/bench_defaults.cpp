@@ -3,7 +3,10 @@
 // remesh's mean error (Metro two-sided, % of the original's bounding-box diagonal, 20000 samples
 // per direction as qs-remesh measures it), the level-4 remesh's smallest-angle shares and median,
 // the level-5 remesh's vertex-density spread (p95 / p5 over the surface) and the texel-density
-// spread of a normal-map atlas (chart density, p95 / p5).
+// spread of a normal-map atlas (chart density, p95 / p5). Each candidate's second row ("/even")
+// measures the same dissection with the even remesh (qs-remesh --even: about the uniform level's
+// face count spread by area) and 256-texel tiles sized by area (qs-bake --tiles area), with the
+// even level-5 face count relative to the uniform one in the time column.
 //   usage: qs-bench-defaults [MESH_DIR] [CANDIDATES] [MESH_FILTER]
 //   MESH_DIR default ../shared/meshes; CANDIDATES a comma-separated list of candidate names (default
 //   all; "default" is DissectOptions{} as compiled); MESH_FILTER a substring of the file names.
@@ -17,11 +20,13 @@
 #include <string>
 #include <vector>
 
+#include "qs/bake/atlas.h"
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
+#include "qs/remesh/adaptive.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 
@@ -107,6 +112,7 @@ int main(int argc, char** argv) {
     int meshes = 0;
     double err = 0, u10 = 0, med = 0, time = 0;
     double worst_vsp = 0, worst_tsp = 0, worst_u10 = 0, worst_med = 90;
+    double heads_tsp_lo = 1e300, heads_tsp_hi = 0;  // igea, mannequin, max_planck, venus
   };
   std::map<std::string, Sum> sums;
   for (const auto& f : files) {
@@ -146,21 +152,56 @@ int main(int argc, char** argv) {
         s.worst_tsp = std::max(s.worst_tsp, td.spread);
         s.worst_u10 = std::max(s.worst_u10, 100 * a.under_10);
         s.worst_med = std::min(s.worst_med, a.median);
+        const std::string stem = f.stem().string();
+        const bool head = stem.rfind("igea", 0) == 0 || stem.rfind("mannequin", 0) == 0 ||
+                          stem.rfind("max_planck", 0) == 0 || stem.rfind("venus_100k", 0) == 0;
+        if (head) s.heads_tsp_lo = std::min(s.heads_tsp_lo, td.spread), s.heads_tsp_hi = std::max(s.heads_tsp_hi, td.spread);
+
+        // The same dissection, sampled by area: the even remesh and area-sized tiles.
+        const std::vector<const qs::dissect::Chart*> charts = {&d.chart};
+        const auto e4 = qs::remesh::remesh_even(charts, 4).remesh;
+        const auto ea = qs::remesh::smallest_angle_stats(e4.mesh(0));
+        const auto e5 = qs::remesh::remesh_even(charts, 5).remesh;
+        const auto ee = qs::metro::metro(d.chart.mesh, e5.mesh(0), mo);
+        const double eerr = 100 * ee.mean / ee.diagonal;
+        const auto evd = qs::remesh::vertex_density(e5.mesh(0));
+        const std::vector<int> sides = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), 256);
+        std::vector<double> per_patch(sides.size());
+        for (size_t p = 0; p < sides.size(); ++p) per_patch[p] = sides[p] - 1.0;
+        const auto etd = qs::remesh::chart_density(d.chart, per_patch);
+        const double face_ratio =
+            static_cast<double>(e5.connectivity.faces.size()) / static_cast<double>(r5.connectivity.faces.size());
+        std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
+                    (c.name + "/even").c_str(), d.chart.patches.size(), eerr, 100 * ea.under_5, 100 * ea.under_10,
+                    100 * ea.under_20, ea.median, evd.spread, etd.spread, face_ratio);
+        std::fflush(stdout);
+        Sum& es = sums[c.name + "/even"];
+        ++es.meshes;
+        es.err += eerr, es.u10 += 100 * ea.under_10, es.med += ea.median, es.time += face_ratio;
+        es.worst_vsp = std::max(es.worst_vsp, evd.spread);
+        es.worst_tsp = std::max(es.worst_tsp, etd.spread);
+        es.worst_u10 = std::max(es.worst_u10, 100 * ea.under_10);
+        es.worst_med = std::min(es.worst_med, ea.median);
+        if (head)
+          es.heads_tsp_lo = std::min(es.heads_tsp_lo, etd.spread), es.heads_tsp_hi = std::max(es.heads_tsp_hi, etd.spread);
       } catch (const qs::Error& e) {
         std::printf("%-22s %-12s error: %s\n", f.filename().c_str(), c.name.c_str(), e.what());
       }
     }
   }
   std::printf("\nsummary over the meshes: mean of err5, mean and worst <10, mean and worst median angle, worst vsp, "
-              "worst tsp, total dissection time\n");
-  std::printf("%-12s %6s %8s %7s %7s %6s %6s %8s %8s %8s\n", "candidate", "meshes", "err5_%", "<10", "<10max", "med",
-              "medmin", "vsp_max", "tsp_max", "time_s");
-  for (const auto& c : cands) {
-    const Sum& s = sums[c.name];
-    if (s.meshes == 0) continue;
-    std::printf("%-12s %6d %8.4f %7.2f %7.2f %6.1f %6.1f %8.2f %8.2f %8.2f\n", c.name.c_str(), s.meshes,
-                s.err / s.meshes, s.u10 / s.meshes, s.worst_u10, s.med / s.meshes, s.worst_med, s.worst_vsp,
-                s.worst_tsp, s.time);
-  }
+              "worst tsp, the heads' tsp range, total dissection time (/even: mean face ratio even / uniform)\n");
+  std::printf("%-17s %6s %8s %7s %7s %6s %6s %8s %8s %13s %8s\n", "candidate", "meshes", "err5_%", "<10", "<10max", "med",
+              "medmin", "vsp_max", "tsp_max", "heads_tsp", "time_s");
+  for (const auto& c : cands)
+    for (const std::string name : {c.name, c.name + "/even"}) {
+      const Sum& s = sums[name];
+      if (s.meshes == 0) continue;
+      char heads[32] = "-";
+      if (s.heads_tsp_hi > 0) std::snprintf(heads, sizeof heads, "%.2f-%.2f", s.heads_tsp_lo, s.heads_tsp_hi);
+      std::printf("%-17s %6d %8.4f %7.2f %7.2f %6.1f %6.1f %8.2f %8.2f %13s %8.3f\n", name.c_str(), s.meshes,
+                  s.err / s.meshes, s.u10 / s.meshes, s.worst_u10, s.med / s.meshes, s.worst_med, s.worst_vsp,
+                  s.worst_tsp, heads, name == c.name ? s.time : s.time / s.meshes);
+    }
   return 0;
 }

@@ -23,7 +23,7 @@ echo "== qs-dissect: one common dissection (landmarks from examples/<stem>.landm
 "$tools/qs-dissect" "${meshes[@]}" -o "$out/dissection" --report "$out/dissection-report.txt"
 
 echo "== qs-remesh: uniform level 4, one connectivity for the three shapes"
-"$tools/qs-remesh" "$out/dissection" --level 4 -o "$out/remesh-L4"
+"$tools/qs-remesh" "$out/dissection" --level 4 --error -o "$out/remesh-L4"
 
 echo "== qs-bake: 128x128 normal-map tiles per patch, tangent space, OpenGL green"
 "$tools/qs-bake" "$out/remesh-L4" --size 128 -o "$out/bake"

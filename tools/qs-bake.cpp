@@ -63,6 +63,13 @@ void check_positions(const qs::remesh::ChartSampler& sampler, const qs::remesh::
     }
 }
 
+/// The smallest and largest tile side.
+std::pair<int, int> tile_range(const qs::bake::AtlasLayout& layout) {
+  int lo = layout.tile_side(0), hi = lo;
+  for (int p = 1; p < layout.num_patches; ++p) lo = std::min(lo, layout.tile_side(p)), hi = std::max(hi, layout.tile_side(p));
+  return {lo, hi};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -70,13 +77,22 @@ int main(int argc, char** argv) {
                "one atlas per mesh (a tile per patch), and a GLB with the coarse mesh, its tangents and the map.\n"
                "Exit codes: 0 ok, 1 usage, 2 invalid input, 3 i/o, 70 internal.",
                "qs-bake"};
-  std::string folder, outdir, dissection, space = "tangent", green = "opengl";
+  std::string folder, outdir, dissection, space = "tangent", green = "opengl", tiles = "area";
   std::vector<std::string> formats;
   int size = 256, gutter = 4, samples = 100000;
   bool quiet = false;
   double max_memory = qs::tools::kDefaultMaxMemoryGiB;
   app.add_option("remesh", folder, "A qs-remesh output folder (remesh.json + meshes)")->required();
-  app.add_option("--size", size, "Tile size S: texels per patch side")->capture_default_str()->check(CLI::Range(2, 16384));
+  app.add_option("--size", size,
+                 "Tile size S: texels per patch side (--tiles area: of a patch of average area; the atlas holds "
+                 "about the texels of P tiles of S x S)")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 16384));
+  app.add_option("--tiles", tiles,
+                 "Tile sizes: area (each patch's side grows with the square root of its surface area, the largest "
+                 "over the set: even texel density; shelf-packed atlas) or uniform (every tile S x S in a grid)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"area", "uniform"}));
   app.add_option("--space", space, "Normal space")->capture_default_str()->check(CLI::IsMember({"tangent", "object"}));
   app.add_option("--green", green, "Green channel convention of tangent-space maps: opengl (+Y up) or directx (-Y)")
       ->capture_default_str()
@@ -137,19 +153,29 @@ int main(int argc, char** argv) {
       samplers.push_back(std::make_unique<qs::remesh::ChartSampler>(dm.dissection.chart));
       check_positions(*samplers.back(), c, rm.set.positions[i], (fs::path(folder) / rm.outputs[i]).string());
     }
-    // The atlas, estimated before it is made: per texel the float normal and its coverage, the 8-bit
+    // One layout for the whole set (qs-morph blends the maps texel by texel): with --tiles area each
+    // patch's tile side follows the square root of the surface it covers at its median face's
+    // density (patch_texel_shares: its area share for an evenly mapped patch), the largest over the set.
+    std::vector<double> side_minus_one(static_cast<size_t>(c.num_patches), size - 1.0);
+    qs::bake::AtlasLayout layout;
+    if (tiles == "area") {
+      std::vector<const qs::dissect::Chart*> charts;
+      for (const auto& dm : ds.meshes) charts.push_back(&dm.dissection.chart);
+      opt.tile_sizes = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), size);
+      layout = qs::bake::make_atlas_layout(opt.tile_sizes, size, gutter);
+      for (int p = 0; p < c.num_patches; ++p) side_minus_one[static_cast<size_t>(p)] = layout.tile_side(p) - 1.0;
+    } else {
+      layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
+    }
+    // The atlas, checked before it is made: per texel the float normal and its coverage, the 8-bit
     // copy, the encoded PNG (and 16-bit / EXR copies), about 48 bytes; one mesh at a time.
     {
-      const double tiles = static_cast<double>(c.num_patches);
-      const double columns = std::ceil(std::sqrt(tiles)), rows = std::ceil(tiles / std::max(columns, 1.0));
-      const double side = static_cast<double>(size) + 2.0 * gutter;
-      const double texels = columns * side * rows * side;
+      const double texels = static_cast<double>(layout.width()) * layout.height();
       qs::tools::check_memory(texels * 48, max_memory,
                               "--size " + std::to_string(size) + " (an atlas of about " +
                                   std::to_string(static_cast<long long>(texels / 1e6)) + " M texels for " +
                                   std::to_string(c.num_patches) + " patches)");
     }
-    const qs::bake::AtlasLayout layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
     const double load_seconds = seconds_since(t0);
 
     if (outdir.empty()) outdir = (fs::path(folder) / ("bake-" + std::to_string(size))).string();
@@ -164,9 +190,14 @@ int main(int argc, char** argv) {
     const fs::path staging = out_folder.staging();
 
     if (!quiet)
-      std::cout << "bake " << rm.outputs.size() << " meshes, " << c.num_patches << " patches, " << size << " x " << size
-                << " tiles, gutter " << gutter << ": atlas " << layout.width() << " x " << layout.height() << " ("
-                << layout.columns << " x " << layout.rows << " tiles), " << space << " space"
+      std::cout << "bake " << rm.outputs.size() << " meshes, " << c.num_patches << " patches, "
+                << (layout.grid ? std::to_string(size) + " x " + std::to_string(size) + " tiles"
+                                : "tiles sized by area (" + std::to_string(tile_range(layout).first) + ".." +
+                                      std::to_string(tile_range(layout).second) + " texels, S = " + std::to_string(size) + ")")
+                << ", gutter " << gutter << ": atlas " << layout.width() << " x " << layout.height()
+                << (layout.grid ? " (" + std::to_string(layout.columns) + " x " + std::to_string(layout.rows) + " tiles)"
+                                : std::string(" (shelves)"))
+                << ", " << space << " space"
                 << (opt.space == qs::bake::NormalSpace::Tangent ? ", " + green + " green" : std::string()) << "\n"
                 << std::fixed << std::setprecision(3);
     nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
@@ -207,9 +238,9 @@ int main(int argc, char** argv) {
                                   {"glb_vertices", r.mesh.num_vertices()},
                                   {"glb_faces", r.mesh.num_faces()},
                                   {"glb_normal_texture", opt.space == qs::bake::NormalSpace::Tangent}};
-      // Texels per unit of surface area: (S-1)^2 per unit square of each patch, carried onto the
+      // Texels per unit of surface area: (S_p-1)^2 per unit square of patch p, carried onto the
       // surface by the chart's maps; area-weighted 5th-95th percentiles.
-      const qs::remesh::DensitySpread td = qs::remesh::chart_density(ds.meshes[i].dissection.chart, size - 1);
+      const qs::remesh::DensitySpread td = qs::remesh::chart_density(ds.meshes[i].dissection.chart, side_minus_one);
       j["texel_density"] = {{"p5", td.p5}, {"p50", td.p50}, {"p95", td.p95}, {"spread", td.spread}};
       std::ostringstream line;
       line << std::fixed << std::setprecision(3) << "  " << stem << ": bake " << bs << " s, GLB " << r.mesh.num_vertices()
@@ -243,8 +274,8 @@ int main(int argc, char** argv) {
                          {"name", names[p].name},
                          {"x", layout.tile_x(p)},
                          {"y", layout.tile_y(p)},
-                         {"width", size},
-                         {"height", size}});
+                         {"width", layout.tile_side(p)},
+                         {"height", layout.tile_side(p)}});
     nlohmann::ordered_json doc = {
         {"format", "qs-bake"},
         {"version", 1},
@@ -260,19 +291,21 @@ int main(int argc, char** argv) {
              for (auto e : extra) f.push_back(qs::bake::to_string(e));
              return f;
            }()},
+          {"tiles", tiles},
           {"samples", samples},
           {"original_normals", "angle-weighted at the input's vertices, interpolated along the input's edges and "
                                "faces at vertices inserted by the cuts"}}},
         {"atlas",
-         {{"columns", layout.columns},
+         {{"layout", layout.grid ? "grid" : "shelves"},
+          {"columns", layout.columns},
           {"rows", layout.rows},
           {"tile_size", size},
           {"gutter", gutter},
           {"width", layout.width()},
           {"height", layout.height()},
           {"encoding", "x*0.5+0.5 per channel, linear"},
-          {"texel_centres", "texel (i,j) of a tile, j from the top, is (u,v) = (i/(S-1), 1-j/(S-1))"},
-          {"texcoord", "s = (x + 0.5 + u*(S-1)) / width, t = (y + 0.5 + (1-v)*(S-1)) / height"},
+          {"texel_centres", "texel (i,j) of a patch's tile, j from the top, is (u,v) = (i/(S-1), 1-j/(S-1)), S its width"},
+          {"texcoord", "s = (x + 0.5 + u*(S-1)) / width, t = (y + 0.5 + (1-v)*(S-1)) / height, S the tile's width"},
           {"patches", patches}}},
         {"meshes", meshes}};
     qs::write_file_atomically(staging / "bake.json", qs::json_strict::dump(doc, 1) + "\n");

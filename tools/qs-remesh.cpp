@@ -47,6 +47,10 @@ void write_quad_obj(const fs::path& path, const std::vector<qs::Vec3>& positions
   file.commit();
 }
 
+int patch_count(const std::vector<const qs::dissect::Chart*>& charts) {
+  return static_cast<int>(charts.front()->patches.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -56,7 +60,7 @@ int main(int argc, char** argv) {
   std::string folder, outdir, format = "obj";
   int level = -1;
   double eps = 0;
-  bool quads = false, quiet = false, no_metro = false;
+  bool quads = false, quiet = false, no_metro = false, with_error = false;
   long metro_samples = 20000;
   double max_memory = qs::tools::kDefaultMaxMemoryGiB;
   qs::remesh::AdaptiveOptions aopt;
@@ -68,21 +72,37 @@ int main(int argc, char** argv) {
                             "diagonal, max over the set) exceeds EPS")
                  ->check(CLI::PositiveNumber);
   lvl->excludes(ad);
+  bool even = false;
+  auto* even_flag = app.add_flag("--even", even,
+                                 "With --level n: about the uniform level n's face count, spread over the surface by "
+                                 "area (balanced quadtrees split while a node covers more than 2.3 s / (P 4^n) of the "
+                                 "surface, the largest share over the set; s = the patches' largest shares summed)");
+  even_flag->needs(lvl);
   app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));
   app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
   app.add_flag("--quads", quads, "Uniform: write the grid cells as quads (OBJ only)");
   std::string diagonals = "angle";
-  app.add_option("--diagonals", diagonals,
+  auto* diag_opt = app.add_option("--diagonals", diagonals,
                  "Uniform: cut each grid cell along the diagonal with the larger smallest angle over the set (angle) "
                  "or by the fixed symmetric pattern (pattern: the face list depends on the patches and level only)")
       ->capture_default_str()
       ->check(CLI::IsMember({"angle", "pattern"}));
-  app.add_flag("--no-metro", no_metro, "Skip the error measurement against the originals");
-  app.add_option("--metro-samples", metro_samples,
-                 "Error measurement: surface samples per direction (0: qs-metro's full count, max(100000, 2 x the "
-                 "larger face count))")
-      ->capture_default_str()
-      ->check(CLI::Range(0L, 1000000000L));
+  even_flag->excludes(diag_opt);
+  // The error report is opt-in: its closest-point tree over the original costs more than the
+  // whole remesh at the usual levels (venus_100k level 5: ~0.1 s of CPU for the remesh, ~0.3 s
+  // for the report; see the README).
+  auto* err_flag = app.add_flag("--error", with_error,
+                                "Measure every output against its original (Metro two-sided mean, RMS, max; costs more "
+                                "than the remesh itself)");
+  auto* no_metro_flag =
+      app.add_flag("--no-metro", no_metro, "No error measurement (the default; kept for scripts that pass it)");
+  no_metro_flag->excludes(err_flag);
+  auto* samples_opt = app.add_option("--metro-samples", metro_samples,
+                                     "Error measurement: surface samples per direction (0: qs-metro's full count, "
+                                     "max(100000, 2 x the larger face count)); implies --error")
+                          ->capture_default_str()
+                          ->check(CLI::Range(0L, 1000000000L));
+  samples_opt->excludes(no_metro_flag);
   app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/remesh-L<n> or remesh-adaptive)");
   qs::tools::add_max_memory_option(app, max_memory);
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
@@ -90,6 +110,8 @@ int main(int argc, char** argv) {
   return qs::tools::run_tool(app, argc, argv, [&] {
     if (level < 0 && eps <= 0) throw qs::UsageError("give --level N or --adaptive EPS");
     if (quads && (level < 0 || format != "obj")) throw qs::UsageError("--quads needs --level and --format obj");
+    if (quads && even) throw qs::UsageError("--quads needs the uniform grid; drop --even");
+    no_metro = !(with_error || samples_opt->count() > 0);
     const auto t0 = Clock::now();
     const qs::dissect::LoadedDissection in = qs::dissect::read_dissection(folder);
     const auto t1 = Clock::now();
@@ -98,8 +120,8 @@ int main(int argc, char** argv) {
     if (level >= 0) {
       // Uniform level n: (2^n+1)^2 samples and 2 * 4^n triangles per patch. Per vertex: a position
       // per mesh (and its copy for writing), (patch, u, v), the JSON sites; per face: the face list,
-      // its copy and, unless --no-metro, the error measurement's tree and samples. Measured on a
-      // 42-patch level 8 (2.8M vertices): peak 1.69 GiB (0.59 GiB with --no-metro), estimated 2.0
+      // its copy and, with --error, the error measurement's tree and samples. Measured on a
+      // 42-patch level 8 (2.8M vertices): peak 1.69 GiB (0.59 GiB without --error), estimated 2.0
       // (1.0) GiB.
       const double patches = static_cast<double>(charts.front()->patches.size());
       const double side = std::ldexp(1.0, level) + 1;
@@ -111,7 +133,8 @@ int main(int argc, char** argv) {
                                   " vertices per mesh, " + std::to_string(charts.size()) + " meshes)");
     }
     if (outdir.empty())
-      outdir = (fs::path(folder) / (level >= 0 ? "remesh-L" + std::to_string(level) : std::string("remesh-adaptive"))).string();
+      outdir = (fs::path(folder) / (level >= 0 ? "remesh-L" + std::to_string(level) + (even ? "-even" : "")
+                                               : std::string("remesh-adaptive"))).string();
     // Never write over the inputs (qs-remesh D -o D is fine: the names differ).
     std::vector<fs::path> input_paths = {fs::path(folder) / "dissection.json"};
     for (const auto& m : in.meshes) input_paths.push_back(fs::path(folder) / m.chart_file);
@@ -122,7 +145,21 @@ int main(int argc, char** argv) {
     qs::Context ctx;
     qs::remesh::SemiRegularSet set;
     nlohmann::ordered_json adaptive_stats;
-    if (level >= 0) {
+    if (even) {
+      double share_sum = 0;
+      for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
+      const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, patch_count(charts), std::max(share_sum, 1.0));
+      const qs::remesh::AdaptiveRemesh ar = qs::remesh::remesh_adaptive(charts, eo, ctx);
+      set = ar.remesh;
+      adaptive_stats = {{"level", level},
+                        {"max_area", eo.max_area},
+                        {"max_level", eo.max_level},
+                        {"finest_level", ar.forest.max_level},
+                        {"area_splits", ar.stats.error_splits},
+                        {"balance_splits", ar.stats.balance_splits},
+                        {"unresolved_leaves", ar.stats.unresolved_leaves},
+                        {"leaves_per_level", ar.stats.leaves_per_level}};
+    } else if (level >= 0) {
       qs::remesh::UniformOptions uo;
       uo.quads = quads;
       uo.diagonals = diagonals == "angle" ? qs::remesh::DiagonalRule::BestAngle : qs::remesh::DiagonalRule::Pattern;
@@ -144,7 +181,9 @@ int main(int argc, char** argv) {
     const auto& c = set.connectivity;
     std::ostringstream text;
     text << std::setprecision(4);
-    text << "remesh " << (level >= 0 ? "uniform level " + std::to_string(level) : "adaptive eps " + std::to_string(eps))
+    text << "remesh "
+         << (even ? "even level " + std::to_string(level)
+                  : level >= 0 ? "uniform level " + std::to_string(level) : "adaptive eps " + std::to_string(eps))
          << ": " << c.num_vertices() << " vertices, " << c.num_faces() << " faces, " << c.num_patches
          << " patches, the same for all " << in.meshes.size() << " meshes\n";
     nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
@@ -213,16 +252,16 @@ int main(int argc, char** argv) {
                                   {"version", 1},
                                   {"dissection", fs::path(folder).filename().string()},
                                   {"dissection_path", dissection_path},
-                                  {"mode", level >= 0 ? "uniform" : "adaptive"},
+                                  {"mode", even ? "even" : level >= 0 ? "uniform" : "adaptive"},
                                   {"level", c.level},
                                   {"quads", quads},
-                                  {"diagonals", level >= 0 ? diagonals : std::string("templates")},
+                                  {"diagonals", level >= 0 && !even ? diagonals : std::string("templates")},
                                   {"vertices", c.num_vertices()},
                                   {"faces", c.num_faces()},
                                   {"base_vertices", c.num_base_vertices},
                                   {"base_edges", c.num_base_edges},
                                   {"patches", c.num_patches}};
-    if (!adaptive_stats.is_null()) doc["adaptive"] = adaptive_stats;
+    if (!adaptive_stats.is_null()) doc[even ? "even" : "adaptive"] = adaptive_stats;
     doc["meshes"] = meshes;
     doc["vertex_patch"] = sites_patch;
     doc["vertex_uv"] = sites_uv;

@@ -17,6 +17,7 @@
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
 #include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 #include "qs/shapes/shapes.h"
 
@@ -117,7 +118,7 @@ TEST(AtlasLayout, GridColumnsAndTexelCentres) {
   // Texel (i, j) centre <-> (u, v) <-> texture coordinates of that centre.
   for (int i : {0, 3, 7})
     for (int j : {0, 5, 7}) {
-      const Vec2 uv = a.texel_uv(i, j);
+      const Vec2 uv = a.texel_uv(4, i, j);
       const Vec2 px = a.pixel(4, uv);
       EXPECT_NEAR(px.x(), a.tile_x(4) + i + 0.5, 1e-12);
       EXPECT_NEAR(px.y(), a.tile_y(4) + j + 0.5, 1e-12);
@@ -125,8 +126,64 @@ TEST(AtlasLayout, GridColumnsAndTexelCentres) {
       EXPECT_NEAR(st.x() * a.width(), px.x(), 1e-9);
       EXPECT_NEAR(st.y() * a.height(), px.y(), 1e-9);
     }
-  EXPECT_EQ(a.texel_uv(0, 0), Vec2(0, 1)) << "top-left texel is u = 0, v = 1";
-  EXPECT_EQ(a.texel_uv(7, 7), Vec2(1, 0));
+  EXPECT_EQ(a.texel_uv(4, 0, 0), Vec2(0, 1)) << "top-left texel is u = 0, v = 1";
+  EXPECT_EQ(a.texel_uv(4, 7, 7), Vec2(1, 0));
+}
+
+TEST(AtlasLayout, TileSizesFollowTheSquareRootOfTheArea) {
+  // Areas 1 : 4 : 16 : 0.25 -> sides - 1 in ratio 1 : 2 : 4 : 0.5, P tiles' worth of texels.
+  const std::vector<double> area = {1, 4, 16, 0.25};
+  const std::vector<int> s = tile_sizes_by_area(area, 65);
+  ASSERT_EQ(s.size(), 4u);
+  const double unit = 64 * std::sqrt(4.0 / 21.25);
+  for (size_t p = 0; p < area.size(); ++p)
+    EXPECT_NEAR(s[p] - 1, unit * std::sqrt(area[p]), 0.5) << p;
+  // Texels per unit area, (S_p - 1)^2 / a_p, within rounding of each other.
+  for (size_t p = 1; p < area.size(); ++p) {
+    const double ratio = (s[p] - 1.0) * (s[p] - 1.0) / area[p] / ((s[0] - 1.0) * (s[0] - 1.0) / area[0]);
+    EXPECT_NEAR(ratio, 1.0, 0.1) << p;
+  }
+  EXPECT_EQ(tile_sizes_by_area({1, 1, 1}, 9), (std::vector<int>{9, 9, 9}));
+  EXPECT_EQ(tile_sizes_by_area({1, 0}, 64)[1], 4) << "at least 4 texels";
+  EXPECT_THROW(tile_sizes_by_area({}, 64), qs::InvalidInput);
+  EXPECT_THROW(tile_sizes_by_area({0, 0}, 64), qs::InvalidInput);
+  EXPECT_THROW(tile_sizes_by_area({1, -1}, 64), qs::InvalidInput);
+  EXPECT_THROW(tile_sizes_by_area({1, std::nan("")}, 64), qs::InvalidInput);
+}
+
+TEST(AtlasLayout, ShelvesHoldEveryTileOnceWithoutOverlap) {
+  const std::vector<int> sides = {17, 5, 33, 9, 9, 64, 4, 12, 33, 20};
+  const int G = 3;
+  const AtlasLayout a = make_atlas_layout(sides, 16, G);
+  EXPECT_FALSE(a.grid);
+  ASSERT_EQ(a.num_patches, 10);
+  long long used = 0;
+  for (int p = 0; p < a.num_patches; ++p) {
+    EXPECT_EQ(a.tile_side(p), sides[p]);
+    // The cell (tile and gutter) lies in the image.
+    EXPECT_GE(a.tile_x(p) - G, 0);
+    EXPECT_GE(a.tile_y(p) - G, 0);
+    EXPECT_LE(a.tile_x(p) + sides[p] + G, a.width());
+    EXPECT_LE(a.tile_y(p) + sides[p] + G, a.height());
+    used += (sides[p] + 2LL * G) * (sides[p] + 2LL * G);
+    for (int q = 0; q < p; ++q) {
+      const bool apart = a.tile_x(p) + sides[p] + G <= a.tile_x(q) - G || a.tile_x(q) + sides[q] + G <= a.tile_x(p) - G ||
+                         a.tile_y(p) + sides[p] + G <= a.tile_y(q) - G || a.tile_y(q) + sides[q] + G <= a.tile_y(p) - G;
+      EXPECT_TRUE(apart) << "cells of patches " << p << " and " << q << " overlap";
+    }
+    // Texel centres and texture coordinates as in the grid.
+    const Vec2 px = a.pixel(p, a.texel_uv(p, sides[p] - 1, 0));
+    EXPECT_NEAR(px.x(), a.tile_x(p) + sides[p] - 0.5, 1e-12);
+    EXPECT_NEAR(px.y(), a.tile_y(p) + 0.5, 1e-12);
+  }
+  EXPECT_GE(static_cast<double>(used) / (static_cast<double>(a.width()) * a.height()), 0.5) << "packing wastes half";
+  // Deterministic: the same sides give the same layout.
+  const AtlasLayout b = make_atlas_layout(sides, 16, G);
+  for (int p = 0; p < a.num_patches; ++p) EXPECT_TRUE(a.tile_x(p) == b.tile_x(p) && a.tile_y(p) == b.tile_y(p));
+  EXPECT_THROW(make_atlas_layout(std::vector<int>{}, 16, 2), qs::InvalidInput);
+  EXPECT_THROW(make_atlas_layout(std::vector<int>{8, 1}, 16, 2), qs::InvalidInput);
+  EXPECT_THROW(make_atlas_layout(std::vector<int>{8, 8}, 16, -1), qs::InvalidInput);
+  EXPECT_THROW(make_atlas_layout(std::vector<int>(100, 8192), 16, 4), qs::InvalidInput);
 }
 
 TEST(AtlasLayout, RejectsBadSizes) {
@@ -222,7 +279,7 @@ TEST(Bake, EllipsoidTexelCentresDecodeToTheTrueNormal) {
   for (int p = 0; p < L.num_patches; ++p)
     for (int j = 0; j < L.tile_size; ++j)
       for (int i = 0; i < L.tile_size; ++i) {
-        const Vec2 uv = L.texel_uv(i, j);
+        const Vec2 uv = L.texel_uv(p, i, j);
         const Vec3 truth = true_normal(f.sampler->point(p, uv));
         const auto [face, w] = find_face(r.mesh, p, uv);
         ASSERT_GE(face, 0);
@@ -245,7 +302,7 @@ TEST(Bake, ObjectSpaceTexelsAreTheTrueNormal) {
   for (int p = 0; p < r.layout.num_patches; ++p)
     for (int j = 0; j < 16; ++j)
       for (int i = 0; i < 16; ++i) {
-        const Vec3 truth = true_normal(f.sampler->point(p, r.layout.texel_uv(i, j)));
+        const Vec3 truth = true_normal(f.sampler->point(p, r.layout.texel_uv(p, i, j)));
         worst = std::max(worst, angle_deg(decode8(img, r.layout.tile_x(p) + i, r.layout.tile_y(p) + j), truth));
       }
   EXPECT_LT(worst, 1.0);
@@ -291,6 +348,52 @@ TEST(Bake, GuttersAreFilledAndBorderReadsStayClose) {
       }
     }
   }
+}
+
+TEST(Bake, AreaSizedTilesAreBakedWithGuttersAndEvenTexelDensity) {
+  const Fixture& f = sphere();
+  BakeOptions o;
+  o.tile_size = 24;
+  o.gutter = 2;
+  o.space = NormalSpace::Object;
+  const std::vector<double> share = qs::remesh::patch_area_shares({&f.dissection.chart});
+  double sum = 0;
+  for (double a : share) sum += a;
+  EXPECT_NEAR(sum, 1.0, 1e-9) << "one mesh: the shares of its surface";
+  o.tile_sizes = tile_sizes_by_area(share, o.tile_size);
+  const BakeResult r = bake(f, o);
+  const AtlasLayout& L = r.layout;
+  EXPECT_FALSE(L.grid);
+  const Rgb8Image img = quantize8(r.atlas);
+  double worst = 0;
+  for (int p = 0; p < L.num_patches; ++p) {
+    const int S = L.tile_side(p), G = L.gutter, x0 = L.tile_x(p), y0 = L.tile_y(p);
+    EXPECT_EQ(S, o.tile_sizes[p]);
+    for (int j = 0; j < S; ++j)
+      for (int i = 0; i < S; ++i) {
+        const Vec3 truth = true_normal(f.sampler->point(p, L.texel_uv(p, i, j)));
+        worst = std::max(worst, angle_deg(decode8(img, x0 + i, y0 + j), truth));
+      }
+    for (int y = y0 - G; y < y0 + S + G; ++y)
+      for (int x = x0 - G; x < x0 + S + G; ++x)
+        ASSERT_EQ(r.atlas.at(x, y), r.atlas.at(std::clamp(x, x0, x0 + S - 1), std::clamp(y, y0, y0 + S - 1)));
+  }
+  EXPECT_LT(worst, 1.5);
+  // The same atlas on one thread and on three (patches are baked in parallel).
+  BakeOptions one = o, three = o;
+  one.threads = 1;
+  three.threads = 3;
+  EXPECT_EQ(bake(f, one).atlas.texels, bake(f, three).atlas.texels);
+  for (int y = 0; y < img.height; ++y)  // outside the cells: the flat normal, a unit vector too
+    for (int x = 0; x < img.width; ++x) ASSERT_NEAR(decode8(img, x, y).norm(), 1.0, 0.02);
+  // Texel density: per patch (S_p - 1)^2 per unit square. Sizing by area evens it out.
+  std::vector<double> sized(L.num_patches);
+  for (int p = 0; p < L.num_patches; ++p) sized[p] = L.tile_side(p) - 1.0;
+  const auto even = qs::remesh::chart_density(f.dissection.chart, sized);
+  const auto grid = qs::remesh::chart_density(f.dissection.chart, o.tile_size - 1.0);
+  EXPECT_LE(even.spread, grid.spread + 1e-9);
+  EXPECT_LE(even.p5, even.p50);
+  EXPECT_LE(even.p50, even.p95);
 }
 
 TEST(Bake, DirectXFlipsGreenOnly) {

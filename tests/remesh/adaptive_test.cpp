@@ -11,6 +11,7 @@
 
 #include "qs/core/error.h"
 #include "qs/remesh/adaptive.h"
+#include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 #include "qs/shapes/shapes.h"
 #include "remesh_checks.h"
@@ -308,4 +309,76 @@ TEST(AdaptiveRemesh, BadOptions) {
   EXPECT_THROW(qs::remesh::remesh_adaptive(std::vector<qs::dissect::Chart>{}), qs::InvalidInput);
   const std::vector<const qs::dissect::Chart*> mixed = {&sphere_dissection().chart, &star_dissection().chart};
   EXPECT_THROW(qs::remesh::remesh_adaptive(mixed), qs::InvalidInput);
+}
+
+// ---- Even sampling (AdaptiveCriterion::Size, remesh_even) ------------------------------------
+
+TEST(EvenRemesh, SetIsClosedManifoldWithOneConnectivityAndDeterministic) {
+  const auto& s = pair_dissection();
+  const std::vector<const qs::dissect::Chart*> charts = {&s.meshes[0].chart, &s.meshes[1].chart};
+  const auto a = qs::remesh::remesh_even(charts, 3);
+  const auto& c = a.remesh.connectivity;
+  ASSERT_EQ(a.remesh.positions.size(), 2u);
+  EXPECT_EQ(expect_closed_manifold(c.faces, c.num_vertices()), 2);
+  for (int i = 0; i < 2; ++i) {
+    expect_valid_sphere(a.remesh.mesh(i), "even mesh " + std::to_string(i));
+    const double diag = qs::bounding_box(a.remesh.positions[i]).diagonal();
+    EXPECT_EQ(count_coincident(a.remesh.positions[i], 1e-9 * diag), 0);
+  }
+  expect_balanced_tiling(qs::remesh::build_base_topology(s.meshes[0].chart.patches), a.forest);
+  // Every leaf covers at most the bound of the surface in each mesh (none left over at the finest level).
+  EXPECT_EQ(a.stats.unresolved_leaves, 0);
+  double share_sum = 0;
+  for (double x : qs::remesh::patch_area_shares(charts)) share_sum += x;
+  EXPECT_GT(share_sum, 1.0) << "two different shapes: the largest shares add up to more than the surface";
+  EXPECT_LE(a.stats.max_leaf_error,
+            qs::remesh::even_options(3, static_cast<int>(charts[0]->patches.size()), share_sum).max_area);
+  // About the uniform level's face count (the bound grows with the share sum).
+  const double ratio = static_cast<double>(c.faces.size()) /
+                       static_cast<double>(qs::remesh::remesh_uniform(*charts[0], 3).connectivity.faces.size());
+  EXPECT_GT(ratio, 0.5);
+  EXPECT_LT(ratio, 2.0);
+  // Deterministic: the same input gives the same faces and the same positions, bit for bit.
+  const auto b = qs::remesh::remesh_even(charts, 3);
+  EXPECT_EQ(b.remesh.connectivity.faces, c.faces);
+  EXPECT_EQ(b.remesh.positions, a.remesh.positions);
+  // The set's splits include each mesh's own under the same bound (max over the set).
+  const std::set<QuadNode> all(a.forest.split.begin(), a.forest.split.end());
+  const auto o = qs::remesh::even_options(3, static_cast<int>(charts[0]->patches.size()), share_sum);
+  for (int i = 0; i < 2; ++i)
+    for (const auto& n : qs::remesh::remesh_adaptive({charts[i]}, o).forest.split) EXPECT_TRUE(all.count(n));
+}
+
+TEST(EvenRemesh, EqualPatchesGiveTheUniformLevel) {
+  // The two seed patches of a sphere split at its equator cover half the surface each, evenly
+  // mapped enough that every level-n node is under 2 / (P 4^n) and every level-(n-1) node over it.
+  const auto& chart = sphere_dissection().chart;
+  for (int level : {1, 2, 3}) {
+    const auto a = qs::remesh::remesh_even({&chart}, level);
+    qs::remesh::UniformOptions uo;  // the even remesh cuts its cells as qs-remesh's default does
+    uo.diagonals = qs::remesh::DiagonalRule::BestAngle;
+    const auto u = qs::remesh::remesh_uniform(chart, level, uo);
+    EXPECT_EQ(face_set(a.remesh.connectivity.faces), face_set(u.connectivity.faces)) << "level " << level;
+    EXPECT_EQ(a.remesh.positions[0].size(), u.positions.size());
+  }
+}
+
+TEST(EvenRemesh, SamplesFollowTheAreaNotThePatchCount) {
+  // The star blob's patches differ in size: the uniform grid gives each the same samples, the even
+  // remesh about the same count spread by area, so its vertex density is more even.
+  const auto& chart = star_dissection().chart;
+  const auto u = qs::remesh::remesh_uniform(chart, 3);
+  const auto e = qs::remesh::remesh_even({&chart}, 3);
+  const auto du = qs::remesh::vertex_density(u.mesh());
+  const auto de = qs::remesh::vertex_density(e.remesh.mesh(0));
+  EXPECT_LT(de.spread, du.spread);
+  const double ratio = static_cast<double>(e.remesh.connectivity.faces.size()) / u.connectivity.faces.size();
+  EXPECT_GT(ratio, 0.5);
+  EXPECT_LT(ratio, 2.0);
+  EXPECT_THROW(qs::remesh::even_options(-1, 4), qs::InvalidInput);
+  EXPECT_THROW(qs::remesh::even_options(2, 0), qs::InvalidInput);
+  EXPECT_THROW(qs::remesh::even_options(2, 4, 0.5), qs::InvalidInput);
+  qs::remesh::AdaptiveOptions o = qs::remesh::even_options(2, 4);
+  o.max_area = 0;
+  EXPECT_THROW(qs::remesh::remesh_adaptive(std::vector<qs::dissect::Chart>{chart}, o), qs::InvalidInput);
 }

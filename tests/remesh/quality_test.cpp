@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "qs/core/error.h"
@@ -173,6 +174,72 @@ TEST(DensitySpread, ChartDensityFollowsTheUvAreas) {
   c.face_uv.push_back(c.face_uv[1]);
   c.face_patch.push_back(0);
   EXPECT_TRUE(std::isinf(qs::remesh::chart_density(c, 4).spread));
+}
+
+TEST(DensitySpread, ChartDensityWithACountPerPatch) {
+  // Two patches of 3D area 0.5 and 2 (a triangle of each, covering half of each unit square): with
+  // the same 4 cells per side the densities are 16 and 4 (spread 4); with 4 and 8 cells per side
+  // (sides in proportion to the square root of the areas) both are 16: spread 1.
+  qs::dissect::Chart c;
+  c.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 0, 0}, {7, 0, 0}, {5, 2, 0}};
+  c.mesh.faces = {{0, 1, 2}, {3, 4, 5}};
+  c.face_patch = {0, 1};
+  c.face_uv = {{qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(0, 1)}, {qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(0, 1)}};
+  const auto same = qs::remesh::chart_density(c, 4);
+  EXPECT_NEAR(same.p5, 4, 1e-12);
+  EXPECT_NEAR(same.p95, 16, 1e-12);
+  EXPECT_NEAR(same.spread, 4, 1e-12);
+  const auto sized = qs::remesh::chart_density(c, std::vector<double>{4, 8});
+  EXPECT_NEAR(sized.p5, 16, 1e-12);
+  EXPECT_NEAR(sized.p95, 16, 1e-12);
+  EXPECT_NEAR(sized.spread, 1, 1e-12);
+  EXPECT_THROW(qs::remesh::chart_density(c, std::vector<double>{4}), qs::InvalidInput);  // patch 1 has no count
+  EXPECT_THROW(qs::remesh::chart_density(c, std::vector<double>{4, 0}), qs::InvalidInput);
+  // Shares of the surface: 0.5 / 2.5 and 2 / 2.5; for a set, the larger of each patch's shares.
+  c.patches.resize(2);
+  const auto one = qs::remesh::patch_area_shares({&c});
+  EXPECT_NEAR(one[0], 0.2, 1e-12);
+  EXPECT_NEAR(one[1], 0.8, 1e-12);
+  qs::dissect::Chart d = c;
+  for (int v = 0; v < 3; ++v) d.mesh.positions[v] *= 2;  // patch 0 now 2 of 4
+  const auto both = qs::remesh::patch_area_shares({&c, &d});
+  EXPECT_NEAR(both[0], 0.5, 1e-12);
+  EXPECT_NEAR(both[1], 0.8, 1e-12);
+  qs::dissect::Chart e = c;
+  e.patches.resize(3);
+  EXPECT_THROW(qs::remesh::patch_area_shares({&c, &e}), qs::InvalidInput);
+}
+
+TEST(DensitySpread, PatchTexelSharesFollowTheMedianFace) {
+  // Two patches, each two triangles over the unit square (uv area 0.5 each). Patch 1 is evenly
+  // mapped (3D areas 1 and 1): its share is its area share, 2 / 6. Patch 0 has 3D areas 1 and 3:
+  // uv / 3D = 0.5 and 1/6; the area-weighted median is 1/6 (the larger face), so it covers
+  // 1 / (1/6) = 6 units at that density: 6 / 6 = 1 (its area share would be 4 / 6).
+  qs::dissect::Chart c;
+  auto tri = [&](double a, double b, const qs::Vec3& o) {  // a right triangle of legs a, b: area ab/2
+    const int v = c.mesh.num_vertices();
+    c.mesh.positions.push_back(o);
+    c.mesh.positions.push_back(o + qs::Vec3(a, 0, 0));
+    c.mesh.positions.push_back(o + qs::Vec3(0, b, 0));
+    c.mesh.faces.push_back({v, v + 1, v + 2});
+  };
+  tri(1, 2, {0, 0, 0});
+  tri(2, 3, {10, 0, 0});
+  tri(1, 2, {20, 0, 0});
+  tri(1, 2, {30, 0, 0});
+  c.face_patch = {0, 0, 1, 1};
+  const std::array<qs::Vec2, 3> lower = {qs::Vec2(0, 0), qs::Vec2(1, 0), qs::Vec2(0, 1)};
+  const std::array<qs::Vec2, 3> upper = {qs::Vec2(1, 0), qs::Vec2(1, 1), qs::Vec2(0, 1)};
+  c.face_uv = {lower, upper, lower, upper};
+  c.patches.resize(2);
+  const auto t = qs::remesh::patch_texel_shares({&c});
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_NEAR(t[0], 1.0, 1e-12);
+  EXPECT_NEAR(t[1], 2.0 / 6.0, 1e-12);
+  const auto a = qs::remesh::patch_area_shares({&c});
+  EXPECT_NEAR(a[0], 4.0 / 6.0, 1e-12);
+  EXPECT_NEAR(a[1], 2.0 / 6.0, 1e-12);
+  EXPECT_THROW(qs::remesh::patch_texel_shares({}), qs::InvalidInput);
 }
 
 TEST(DensitySpread, RemeshOfASphereIsFairlyEven) {

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <set>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -50,7 +51,8 @@ fs::path BakeTool::dir_;
 
 TEST_F(BakeTool, WritesMapsGlbAndReport) {
   const fs::path out = dir_ / "bake";
-  const RunResult r = run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --format png16 exr -o " + out.string());
+  const RunResult r =
+      run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --tiles uniform --format png16 exr -o " + out.string());
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("with the map"));
   for (const char* f : {"bumpy_normal.png", "bumpy_normal16.png", "bumpy_normal.exr", "bumpy.glb", "bake.json"})
@@ -76,9 +78,43 @@ TEST_F(BakeTool, WritesMapsGlbAndReport) {
 
   // Deterministic: the same run gives the same bytes.
   const fs::path again = dir_ / "bake-again";
-  ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 -q -o " + again.string()).exit, 0);
+  ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --tiles uniform -q -o " + again.string()).exit, 0);
   EXPECT_EQ(read_all(out / "bumpy_normal.png"), read_all(again / "bumpy_normal.png"));
   EXPECT_EQ(read_all(out / "bumpy.glb"), read_all(again / "bumpy.glb"));
+}
+
+TEST_F(BakeTool, TilesSizedByAreaByDefault) {
+  const fs::path out = dir_ / "bake-area", again = dir_ / "bake-area-again", grid = dir_ / "bake-grid";
+  const RunResult r = run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --samples 20000 -o " + out.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("tiles sized by area"));
+  const auto j = nlohmann::json::parse(read_all(out / "bake.json"));
+  EXPECT_EQ(j["options"]["tiles"], "area");
+  const auto& a = j["atlas"];
+  EXPECT_EQ(a["layout"], "shelves");
+  const int W = a["width"], H = a["height"], G = a["gutter"];
+  std::set<int> sides;
+  for (const auto& t : a["patches"]) {
+    const int x = t["x"], y = t["y"], s = t["width"];
+    EXPECT_EQ(t["height"].get<int>(), s);
+    EXPECT_GE(x - G, 0);
+    EXPECT_GE(y - G, 0);
+    EXPECT_LE(x + s + G, W);
+    EXPECT_LE(y + s + G, H);
+    sides.insert(s);
+  }
+  EXPECT_GT(sides.size(), 1u) << "the bumpy sphere's patches differ in area";
+  // The map still works through the GLB's texture coordinates.
+  const auto& m = j["meshes"][0];
+  EXPECT_LT(m["shading"]["mean_deg_with_map"].get<double>(), 1.5);
+  ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --samples 0 --tiles uniform -q -o " + grid.string()).exit, 0);
+  const auto g = nlohmann::json::parse(read_all(grid / "bake.json"));
+  EXPECT_EQ(g["atlas"]["layout"], "grid");
+  EXPECT_LE(m["texel_density"]["spread"].get<double>(), g["meshes"][0]["texel_density"]["spread"].get<double>());
+  ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --samples 20000 -q -o " + again.string()).exit, 0);
+  EXPECT_EQ(read_all(out / "bumpy_normal.png"), read_all(again / "bumpy_normal.png"));
+  EXPECT_EQ(read_all(out / "bumpy.glb"), read_all(again / "bumpy.glb"));
+  EXPECT_EQ(run_tool("qs-bake", remesh().string() + " --tiles square -q -o " + (dir_ / "bad").string()).exit, 1);
 }
 
 TEST_F(BakeTool, GlbPassesTheKhronosValidator) {

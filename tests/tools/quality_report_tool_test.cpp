@@ -86,6 +86,24 @@ TEST_F(QualityReport, RemeshReportsAnglesDensityAndErrorSamples) {
   EXPECT_NEAR(vd["spread"].get<double>(), vd["p95"].get<double>() / vd["p5"].get<double>(), 1e-9);
 }
 
+TEST_F(QualityReport, ErrorReportIsOptIn) {
+  const fs::path plain = dir_ / "plain", with = dir_ / "with";
+  const RunResult r = run_tool("qs-remesh", (dir_ / "d").string() + " --level 2 -o " + plain.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("error mean")));
+  EXPECT_FALSE(read_json(plain / "remesh.json")["meshes"][0].contains("error"));
+  const RunResult e = run_tool("qs-remesh", (dir_ / "d").string() + " --level 2 --error -o " + with.string());
+  ASSERT_EQ(e.exit, 0) << e.out;
+  EXPECT_THAT(e.out, HasSubstr("error mean"));
+  const auto err = read_json(with / "remesh.json")["meshes"][0]["error"];
+  EXPECT_EQ(err["samples_per_direction"], 20000);
+  EXPECT_GT(err["mean_percent"].get<double>(), 0.0);
+  // The same meshes either way: the report only measures.
+  EXPECT_EQ(qs::io::read_mesh(plain / "egg.obj").mesh.positions, qs::io::read_mesh(with / "egg.obj").mesh.positions);
+  EXPECT_EQ(run_tool("qs-remesh", (dir_ / "d").string() + " --level 2 --error --no-metro").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", (dir_ / "d").string() + " --level 2 --metro-samples 100 --no-metro").exit, 1);
+}
+
 TEST_F(QualityReport, AngleDiagonalsAreNoWorseThanThePattern) {
   const fs::path pa = dir_ / "pattern", an = dir_ / "angle";
   ASSERT_EQ(run_tool("qs-remesh", (dir_ / "d").string() + " --level 4 --diagonals pattern --no-metro -q -o " + pa.string()).exit, 0);
@@ -113,7 +131,7 @@ TEST_F(QualityReport, BakeReportsTexelDensity) {
   for (int size : {17, 33}) {
     const fs::path out = dir_ / ("bake" + std::to_string(size));
     const RunResult r =
-        run_tool("qs-bake", rm.string() + " --size " + std::to_string(size) + " --samples 0 -o " + out.string());
+        run_tool("qs-bake", rm.string() + " --size " + std::to_string(size) + " --tiles uniform --samples 0 -o " + out.string());
     ASSERT_EQ(r.exit, 0) << r.out;
     EXPECT_THAT(r.out, HasSubstr("texels per unit area, 5th-95th percentile"));
     const auto doc = read_json(out / "bake.json");

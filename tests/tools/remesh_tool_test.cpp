@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <iterator>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -38,7 +39,7 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
   double last_error = 1e9;
   for (int level : {2, 4}) {
     const fs::path out = dir_ / ("L" + std::to_string(level));
-    const RunResult r = run_tool("qs-remesh", d.string() + " --level " + std::to_string(level) + " -o " + out.string());
+    const RunResult r = run_tool("qs-remesh", d.string() + " --level " + std::to_string(level) + " --error -o " + out.string());
     ASSERT_EQ(r.exit, 0) << r.out;
     const auto ra = qs::io::read_mesh(out / "a.obj"), rb = qs::io::read_mesh(out / "b.obj");
     EXPECT_EQ(ra.mesh.faces, rb.mesh.faces) << "the set must share one face list";
@@ -56,6 +57,30 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
   const RunResult ad = run_tool("qs-remesh", d.string() + " --adaptive 0.002 -q -o " + (dir_ / "ad").string());
   ASSERT_EQ(ad.exit, 0) << ad.out;
   EXPECT_EQ(qs::io::read_mesh(dir_ / "ad" / "a.obj").mesh.faces, qs::io::read_mesh(dir_ / "ad" / "b.obj").mesh.faces);
+  // --even: samples by area, one face list, closed and manifold, the same bytes twice.
+  const RunResult ev = run_tool("qs-remesh", d.string() + " --level 3 --even -o " + (dir_ / "ev").string());
+  ASSERT_EQ(ev.exit, 0) << ev.out;
+  EXPECT_THAT(ev.out, HasSubstr("remesh even level 3"));
+  const auto ea = qs::io::read_mesh(dir_ / "ev" / "a.obj"), eb = qs::io::read_mesh(dir_ / "ev" / "b.obj");
+  EXPECT_EQ(ea.mesh.faces, eb.mesh.faces);
+  for (const auto* m : {&ea.mesh, &eb.mesh}) {
+    const auto v = qs::mesh::validate(*m);
+    EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report("even", v.report);
+  }
+  {
+    std::ifstream in(dir_ / "ev" / "remesh.json");
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["mode"], "even");
+    EXPECT_EQ(j["even"]["level"], 3);
+    EXPECT_EQ(j["diagonals"], "templates");
+    EXPECT_FALSE(j["meshes"][0].contains("error"));
+  }
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --even -q -o " + (dir_ / "ev2").string()).exit, 0);
+  std::ifstream f1(dir_ / "ev" / "a.obj"), f2(dir_ / "ev2" / "a.obj");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(f1), {}), std::string(std::istreambuf_iterator<char>(f2), {}));
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --adaptive 0.01 --even").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --quads").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --diagonals pattern").exit, 1);
 }
 
 TEST_F(RemeshTool, ExitCodes) {

@@ -115,14 +115,27 @@ BakeResult bake_normal_map(const ChartSampler& sampler, const remesh::SemiRegula
                            const std::vector<Vec3>& positions, const BakeOptions& options, const Context& context) {
   BakeResult r;
   r.options = options;
-  r.layout = make_atlas_layout(sampler.num_patches(), options.tile_size, options.gutter);
+  if (options.tile_sizes.empty()) {
+    r.layout = make_atlas_layout(sampler.num_patches(), options.tile_size, options.gutter);
+  } else {
+    if (static_cast<int>(options.tile_sizes.size()) != sampler.num_patches())
+      throw InvalidInput("bake: " + std::to_string(options.tile_sizes.size()) + " tile sizes for " +
+                         std::to_string(sampler.num_patches()) + " patches; give one per patch (or none)");
+    r.layout = make_atlas_layout(options.tile_sizes, options.tile_size, options.gutter);
+  }
   r.mesh = split_by_patch(connectivity, positions, sampler.topology());
   const AtlasLayout& L = r.layout;
   const SplitMesh& m = r.mesh;
-  const int S = L.tile_size, np = L.num_patches, W = L.width();
+  const int np = L.num_patches, W = L.width();
   r.atlas.width = W;
   r.atlas.height = L.height();
-  r.atlas.texels.assign(static_cast<size_t>(W) * r.atlas.height * 3, 0.0f);
+  // Texels outside every tile's cell hold the flat normal (0, 0, 1); the tiles overwrite the rest.
+  r.atlas.texels.resize(static_cast<size_t>(W) * r.atlas.height * 3);
+  for (size_t i = 0; i < r.atlas.texels.size(); i += 3) {
+    r.atlas.texels[i] = 0.0f;
+    r.atlas.texels[i + 1] = 0.0f;
+    r.atlas.texels[i + 2] = 1.0f;
+  }
 
   // Faces per patch; per split vertex its bitangent w (N x T).
   std::vector<std::vector<int>> patch_faces(np);
@@ -139,7 +152,7 @@ BakeResult bake_normal_map(const ChartSampler& sampler, const remesh::SemiRegula
 
   // The gutter of a tile: each texel of its cell outside the tile copies the nearest tile texel.
   auto fill_gutter = [&](int p) {
-    const int G = L.gutter, x0 = L.tile_x(p), y0 = L.tile_y(p);
+    const int G = L.gutter, x0 = L.tile_x(p), y0 = L.tile_y(p), S = L.tile_side(p);
     for (int y = y0 - G; y < y0 + S + G; ++y) {
       const bool inside_row = y >= y0 && y < y0 + S;
       const int sy = std::clamp(y, y0, y0 + S - 1);
@@ -153,6 +166,7 @@ BakeResult bake_normal_map(const ChartSampler& sampler, const remesh::SemiRegula
     }
   };
   auto bake_patch = [&](int p, std::vector<char>& covered) {
+    const int S = L.tile_side(p);
     const double d = S - 1;
     const int x0 = L.tile_x(p), y0 = L.tile_y(p);
     const std::vector<ChartSampler::Location> where = sampler.locate_grid(p, S, 0.0, 1.0 / d);
@@ -262,16 +276,6 @@ BakeResult bake_normal_map(const ChartSampler& sampler, const remesh::SemiRegula
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
 
-  // Cells without a patch hold the flat normal (0, 0, 1).
-  const int P = L.pitch();
-  for (int cell = np; cell < L.columns * L.rows; ++cell) {
-    const int cx = (cell % L.columns) * P, cy = (cell / L.columns) * P;
-    for (int y = cy; y < cy + P; ++y)
-      for (int x = cx; x < cx + P; ++x) {
-        float* out = &r.atlas.texels[3 * (static_cast<size_t>(y) * W + x)];
-        out[0] = 0, out[1] = 0, out[2] = 1;
-      }
-  }
   context.report("bake", 1.0);
   return r;
 }

@@ -30,7 +30,10 @@ const char* to_string(NormalSpace s);   ///< "tangent", "object"
 const char* to_string(GreenChannel g);  ///< "opengl", "directx"
 
 struct BakeOptions {
-  int tile_size = 256;     ///< S texels per tile side, >= 2
+  int tile_size = 256;     ///< S texels per tile side, >= 2 (with tile_sizes: only recorded)
+  /// Per patch its tile side S_p (atlas.h's packed layout, e.g. tile_sizes_by_area); empty: every
+  /// patch gets tile_size (the grid). Give the same sizes to every mesh of a set: one layout.
+  std::vector<int> tile_sizes;
   int gutter = 4;          ///< texels around each tile, filled by extending the tile's edge texels
   NormalSpace space = NormalSpace::Tangent;
   GreenChannel green = GreenChannel::OpenGL;  ///< tangent space only

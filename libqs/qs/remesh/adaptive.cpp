@@ -8,6 +8,7 @@
 
 #include "qs/core/error.h"
 #include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 
 namespace qs::remesh {
@@ -158,23 +159,81 @@ struct Sample {
   Vec3 x;
 };
 
+/// sin of the smallest angle of triangle (a, b, c) (as uniform.cpp's): the angle opposite the
+/// shortest edge. 0 for a degenerate triangle.
+double sin_smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, bc = c - b, ca = a - c;
+  const double lab = ab.squaredNorm(), lbc = bc.squaredNorm(), lca = ca.squaredNorm();
+  const double twice_area = ab.cross(ca).norm();
+  double denom2;
+  if (lab <= lbc && lab <= lca) denom2 = lbc * lca;
+  else if (lbc <= lca) denom2 = lab * lca;
+  else denom2 = lab * lbc;
+  return denom2 > 0 ? twice_area / std::sqrt(denom2) : 0.0;
+}
+
+/// Re-cuts every leaf without a T-vertex along the diagonal whose two triangles have the larger
+/// smallest angle over the set (uniform.h's DiagonalRule::BestAngle, with the same exceptions: a
+/// leaf of level 0, a leaf at a patch corner that is a base vertex of valence 2, and at level 1 a
+/// leaf of a patch with such a corner keep the pattern's diagonal, whose other diagonal another
+/// patch may join too). Faces are in adaptive_connectivity's order.
+void choose_leaf_diagonals(const BaseTopology& t, const QuadForest& forest, const Forest& f,
+                           SemiRegularConnectivity& c, const std::vector<std::vector<Vec3>>& positions) {
+  size_t face = 0;
+  for (const auto& n : forest.leaves) {
+    int nt = 0;
+    for (int d = 0; d < 4; ++d) nt += f.is_split(f.neighbour(n, d));
+    const size_t first = face;
+    face += nt == 0 ? 2 : nt == 1 ? 3 : 4 + nt;
+    if (nt != 0 || n.level == 0) continue;
+    const int size = 1 << n.level;
+    if ((n.i == 0 || n.i == size - 1) && (n.j == 0 || n.j == size - 1)) {
+      const int k = n.j == 0 ? (n.i == 0 ? 0 : 1) : (n.i == 0 ? 3 : 2);
+      if (t.valence[t.quads[n.patch][k]] < 3) continue;
+      if (size == 2) {
+        bool free = true;
+        for (int q = 0; q < 4; ++q) free = free && t.valence[t.quads[n.patch][q]] >= 3;
+        if (!free) continue;
+      }
+    }
+    Tri& f0 = c.faces[first];
+    Tri& f1 = c.faces[first + 1];
+    const bool diag02 = node_diagonal02(t, n);
+    const int v00 = f0[0], v10 = f0[1];
+    const int v11 = diag02 ? f0[2] : f1[1], v01 = diag02 ? f1[2] : f0[2];
+    double keep = 1e300, other = 1e300;
+    for (const auto& x : positions) {
+      const Vec3 &a = x[v00], &b = x[v10], &cc = x[v11], &d = x[v01];
+      const double q02 = std::min(sin_smallest_angle(a, b, cc), sin_smallest_angle(a, cc, d));
+      const double q13 = std::min(sin_smallest_angle(a, b, d), sin_smallest_angle(b, cc, d));
+      keep = std::min(keep, diag02 ? q02 : q13);
+      other = std::min(other, diag02 ? q13 : q02);
+    }
+    if (!(other > keep)) continue;
+    if (diag02) f0 = {v00, v10, v01}, f1 = {v10, v11, v01};
+    else f0 = {v00, v10, v11}, f1 = {v00, v11, v01};
+  }
+}
+
 // Per mesh: the samplers and the chart vertices of each patch with their uv there.
 struct MeshData {
   const ChartSampler* sampler = nullptr;
   std::vector<Sample> samples;      // patch by patch
   std::vector<int> patch_begin;     // #P + 1
   double inv_diagonal = 0;
+  double inv_area = 0;              // 1 / the chart's surface area
 };
 
-MeshData gather_samples(const ChartSampler& sampler) {
+// `with_vertices` false (the size rule needs no chart vertices): every patch's range is empty.
+MeshData gather_samples(const ChartSampler& sampler, bool with_vertices) {
   const auto& chart = sampler.chart();
   struct Entry {
     int patch, vertex;
     Vec2 uv;
   };
   std::vector<Entry> e;
-  e.reserve(3 * chart.mesh.faces.size());
-  for (int f = 0; f < chart.mesh.num_faces(); ++f)
+  if (with_vertices) e.reserve(3 * chart.mesh.faces.size());
+  for (int f = 0; f < (with_vertices ? chart.mesh.num_faces() : 0); ++f)
     for (int k = 0; k < 3; ++k) e.push_back({chart.face_patch[f], chart.mesh.faces[f][k], chart.face_uv[f][k]});
   std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {
     return a.patch != b.patch ? a.patch < b.patch : a.vertex < b.vertex;
@@ -190,6 +249,9 @@ MeshData gather_samples(const ChartSampler& sampler) {
   for (int p = 0; p < sampler.num_patches(); ++p) md.patch_begin[p + 1] += md.patch_begin[p];
   const double diag = sampler.bbox_diagonal();
   md.inv_diagonal = diag > 0 ? 1.0 / diag : 0.0;
+  double area = 0;
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) area += face_area(chart.mesh, f);
+  md.inv_area = area > 0 ? 1.0 / area : 0.0;
   return md;
 }
 
@@ -230,22 +292,36 @@ class Refiner {
       ++stats_.evaluated_nodes;
       const bool d02 = node_diagonal02(t_, n);
       double error = 0;
-      for (size_t m = 0; m < nm; ++m) {
-        const auto& c = corners[m];
-        // The node's triangles: (C0,C1,C2), (C0,C2,C3) or (C0,C1,C3), (C1,C2,C3).
-        auto dist2 = [&](const Vec3& x) {
-          if (d02) return std::min(point_triangle_distance2(x, c[0], c[1], c[2]), point_triangle_distance2(x, c[0], c[2], c[3]));
-          return std::min(point_triangle_distance2(x, c[0], c[1], c[3]), point_triangle_distance2(x, c[1], c[2], c[3]));
-        };
-        double worst = 0;
-        for (int s = ranges[m][0]; s < ranges[m][1]; ++s) worst = std::max(worst, dist2(meshes_[m].samples[s].x));
-        for (int k = 0; k < 5; ++k) worst = std::max(worst, dist2(mids[m][k]));
-        error = std::max(error, std::sqrt(worst) * meshes_[m].inv_diagonal);
+      const double bound = o_.criterion == AdaptiveCriterion::Size ? o_.max_area : o_.epsilon;
+      if (o_.criterion == AdaptiveCriterion::Size) {
+        // A_C(q): the node's share of the surface, from its 3 x 3 grid points (8 triangles).
+        auto tri = [](const Vec3& a, const Vec3& b, const Vec3& c) { return 0.5 * (b - a).cross(c - a).norm(); };
+        for (size_t m = 0; m < nm; ++m) {
+          const auto& c = corners[m];
+          const auto& x = mids[m];  // M0 (bottom), M1 (right), M2 (top), M3 (left), centre
+          const double area = tri(c[0], x[0], x[4]) + tri(c[0], x[4], x[3]) + tri(x[0], c[1], x[1]) +
+                              tri(x[0], x[1], x[4]) + tri(x[4], x[1], c[2]) + tri(x[4], c[2], x[2]) +
+                              tri(x[3], x[4], x[2]) + tri(x[3], x[2], c[3]);
+          error = std::max(error, area * meshes_[m].inv_area);
+        }
+      } else {
+        for (size_t m = 0; m < nm; ++m) {
+          const auto& c = corners[m];
+          // The node's triangles: (C0,C1,C2), (C0,C2,C3) or (C0,C1,C3), (C1,C2,C3).
+          auto dist2 = [&](const Vec3& x) {
+            if (d02) return std::min(point_triangle_distance2(x, c[0], c[1], c[2]), point_triangle_distance2(x, c[0], c[2], c[3]));
+            return std::min(point_triangle_distance2(x, c[0], c[1], c[3]), point_triangle_distance2(x, c[1], c[2], c[3]));
+          };
+          double worst = 0;
+          for (int s = ranges[m][0]; s < ranges[m][1]; ++s) worst = std::max(worst, dist2(meshes_[m].samples[s].x));
+          for (int k = 0; k < 5; ++k) worst = std::max(worst, dist2(mids[m][k]));
+          error = std::max(error, std::sqrt(worst) * meshes_[m].inv_diagonal);
+        }
       }
-      if (error > o_.epsilon && can_split) split = true;
+      if (error > bound && can_split) split = true;
       if (!split) {
         stats_.max_leaf_error = std::max(stats_.max_leaf_error, error);
-        if (error > o_.epsilon) {
+        if (error > bound) {
           ++stats_.unresolved_leaves;
           stats_.max_unresolved_error = std::max(stats_.max_unresolved_error, error);
         }
@@ -388,7 +464,11 @@ SemiRegularConnectivity adaptive_connectivity(const BaseTopology& topology, cons
 
 AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts, const AdaptiveOptions& options,
                                const Context& context) {
-  if (!(options.epsilon > 0) || !std::isfinite(options.epsilon))
+  if (options.criterion == AdaptiveCriterion::Size) {
+    if (!(options.max_area > 0) || !std::isfinite(options.max_area))
+      throw InvalidInput("remesh: the even remesh's area bound must be a positive share of the surface, got " +
+                         std::to_string(options.max_area));
+  } else if (!(options.epsilon > 0) || !std::isfinite(options.epsilon))
     throw InvalidInput("remesh: epsilon must be a positive number (a fraction of the bounding-box diagonal, e.g. "
                        "0.0025), got " + std::to_string(options.epsilon));
   if (options.max_level < 0 || options.max_level > kMaxAdaptiveLevel)
@@ -401,7 +481,7 @@ AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts,
   const std::vector<ChartSampler> samplers = set_samplers(charts, context);
   const BaseTopology& topology = samplers[0].topology();
   std::vector<MeshData> meshes;
-  for (const auto& s : samplers) meshes.push_back(gather_samples(s));
+  for (const auto& s : samplers) meshes.push_back(gather_samples(s, options.criterion == AdaptiveCriterion::Error));
 
   AdaptiveRemesh out;
   Forest forest(topology, std::max(options.max_level, 1));
@@ -422,6 +502,11 @@ AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts,
     context.report("remesh", 0.8 + 0.2 * m / samplers.size());
     out.remesh.positions.push_back(sample_positions(samplers[m], out.remesh.connectivity, context));
   }
+  if (options.best_angle_diagonals) {
+    Forest f(topology, std::max(out.forest.max_level, 1));
+    for (const auto& n : out.forest.split) f.split(n);
+    choose_leaf_diagonals(topology, out.forest, f, out.remesh.connectivity, out.remesh.positions);
+  }
   context.report("remesh", 1.0);
   return out;
 }
@@ -431,6 +516,31 @@ AdaptiveRemesh remesh_adaptive(const std::vector<dissect::Chart>& charts, const 
   std::vector<const dissect::Chart*> ptrs;
   for (const auto& c : charts) ptrs.push_back(&c);
   return remesh_adaptive(ptrs, options, context);
+}
+
+AdaptiveOptions even_options(int level, int patches, double share_sum) {
+  if (level < 0 || level > kMaxAdaptiveLevel)
+    throw InvalidInput("remesh: even level " + std::to_string(level) + " is out of range; expected 0.." +
+                       std::to_string(kMaxAdaptiveLevel));
+  if (patches < 1) throw InvalidInput("remesh: " + std::to_string(patches) + " patches; expected at least 1");
+  if (!(share_sum >= 1) || !std::isfinite(share_sum))
+    throw InvalidInput("remesh: the patches' largest shares of the surface add up to " + std::to_string(share_sum) +
+                       "; expected a finite number >= 1");
+  AdaptiveOptions o;
+  o.criterion = AdaptiveCriterion::Size;
+  o.max_area = kEvenAreaFactor * share_sum / (static_cast<double>(patches) * std::ldexp(1.0, 2 * level));
+  o.min_level = 0;
+  o.max_level = std::min(level + 6, kMaxAdaptiveLevel);
+  o.best_angle_diagonals = true;
+  return o;
+}
+
+AdaptiveRemesh remesh_even(const std::vector<const dissect::Chart*>& charts, int level, const Context& context) {
+  if (charts.empty() || charts.front() == nullptr) throw InvalidInput("remesh: no charts to remesh");
+  double sum = 0;
+  for (double a : patch_area_shares(charts)) sum += a;
+  return remesh_adaptive(charts, even_options(level, static_cast<int>(charts.front()->patches.size()), std::max(sum, 1.0)),
+                         context);
 }
 
 }  // namespace qs::remesh

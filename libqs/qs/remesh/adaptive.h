@@ -26,6 +26,15 @@
 // Refinement: a node of level l is split when l < min_level, or when E_C(q) > epsilon and
 // l < max_level.
 //
+// Even sampling (AdaptiveCriterion::Size, remesh_even): instead of E_C, a node is split while its
+// share of the surface, A_C(q) = max over the meshes of area(q) / area(mesh), exceeds max_area
+// (and l < max_level). area(q) is the area of the 8 triangles over q's 3 x 3 level-(l+1) grid
+// points (corners, side midpoints, centre) in that mesh, area(mesh) the chart's surface area. So
+// leaves cover about the same area whatever the size of their patch: samples follow the surface,
+// not the patch count. remesh_even picks max_area = kEvenAreaFactor / (P 4^n) for a level n: a set
+// whose P patches are equal and evenly mapped gets exactly the uniform level-n faces (a level-n
+// node covers 1 / (P 4^n) of the surface, its parent 4 / (P 4^n)).
+//
 // Balancing (2:1, edge neighbours): for every existing node at level k >= 2, the four same-level
 // edge neighbours of its parent must exist (be nodes of the trees); a missing one is created by
 // splitting its ancestors. The edge neighbour of a node across a patch side is found through the
@@ -58,11 +67,24 @@ namespace qs::remesh {
 
 inline constexpr int kMaxAdaptiveLevel = 12;
 
+/// The even remesh's bound for a level n is kEvenAreaFactor / (P 4^n) of the surface (see the top
+/// of this file). Any factor in (1, 4) gives equal, evenly mapped patches exactly the uniform level
+/// n; 2.3 gives the 26 shared meshes about the uniform level's face count (2 gave 1.14x on average).
+inline constexpr double kEvenAreaFactor = 2.3;
+
+/// What splits a quadtree node: its error (the paper's eq. 7) or its share of the surface.
+enum class AdaptiveCriterion { Error, Size };
+
 struct AdaptiveOptions {
-  double epsilon = 0.0025;  ///< bound on E_C (normalized by the bounding-box diagonal); > 0.
+  AdaptiveCriterion criterion = AdaptiveCriterion::Error;
+  double epsilon = 0.0025;  ///< Error: bound on E_C (normalized by the bounding-box diagonal); > 0.
                             ///< 0.0025 is the paper's figure 17
+  double max_area = 0;      ///< Size: bound on A_C (a share of the surface, 0..1); > 0 with Size
   int min_level = 0;        ///< every patch is refined at least this far
   int max_level = 6;        ///< no node is split beyond this level; <= kMaxAdaptiveLevel
+  /// Cut each leaf without a T-vertex along the diagonal with the larger smallest angle over the
+  /// set (uniform.h's DiagonalRule::BestAngle, same exceptions) instead of the pattern's.
+  bool best_angle_diagonals = false;
 };
 
 /// A quadtree node: (level, i, j) of a patch (see the top of this file).
@@ -90,7 +112,7 @@ QuadForest balance_forest(const BaseTopology& topology, const std::vector<QuadNo
 SemiRegularConnectivity adaptive_connectivity(const BaseTopology& topology, const QuadForest& forest);
 
 struct AdaptiveStats {
-  int evaluated_nodes = 0;       ///< nodes whose E_C was measured
+  int evaluated_nodes = 0;       ///< nodes whose E_C (or A_C with Size) was measured
   int error_splits = 0;          ///< nodes split by the refinement rule
   int balance_splits = 0;        ///< nodes split only to keep neighbours within one level
   int unresolved_leaves = 0;     ///< leaves at max_level whose E_C still exceeds epsilon
@@ -115,5 +137,17 @@ AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts,
                                const Context& context = {});
 AdaptiveRemesh remesh_adaptive(const std::vector<dissect::Chart>& charts, const AdaptiveOptions& options = {},
                                const Context& context = {});
+
+/// Options of the even remesh for a level n (see the top of this file): criterion Size, max_area
+/// = kEvenAreaFactor * share_sum / (P 4^n), max_level = min(n + 6, kMaxAdaptiveLevel), min_level 0,
+/// best-angle diagonals. share_sum is the sum over the patches of their largest share of a mesh's
+/// surface over the set (patch_area_shares; 1 for one mesh): a set's leaves follow the largest
+/// share, so the bound grows with it to keep about the uniform level's face count.
+/// \throws InvalidInput for a level outside 0..kMaxAdaptiveLevel, patches < 1 or share_sum < 1.
+AdaptiveOptions even_options(int level, int patches, double share_sum = 1.0);
+
+/// The even remesh for a level n: remesh_adaptive with even_options(n, patch count, the sum of
+/// patch_area_shares). About the uniform level n's face count, spread over the surface by area.
+AdaptiveRemesh remesh_even(const std::vector<const dissect::Chart*>& charts, int level, const Context& context = {});
 
 }  // namespace qs::remesh

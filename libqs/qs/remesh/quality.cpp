@@ -106,16 +106,31 @@ DensitySpread chart_density(const dissect::Chart& chart, double samples_per_side
   if (!(samples_per_side > 0) || !std::isfinite(samples_per_side))
     throw InvalidInput("chart density: samples per side is " + std::to_string(samples_per_side) +
                        "; expected a positive number");
+  size_t patches = chart.patches.size();
+  for (int p : chart.face_patch) patches = std::max(patches, static_cast<size_t>(std::max(p, 0)) + 1);
+  return chart_density(chart, std::vector<double>(patches, samples_per_side));
+}
+
+DensitySpread chart_density(const dissect::Chart& chart, const std::vector<double>& samples_per_side) {
+  for (size_t p = 0; p < samples_per_side.size(); ++p)
+    if (!(samples_per_side[p] > 0) || !std::isfinite(samples_per_side[p]))
+      throw InvalidInput("chart density: samples per side of patch " + std::to_string(p) + " is " +
+                         std::to_string(samples_per_side[p]) + "; expected a positive number");
   check_faces(chart.mesh, "chart density");
-  if (chart.face_uv.size() != chart.mesh.faces.size())
-    throw InvalidInput("chart density: " + std::to_string(chart.face_uv.size()) + " uv triples for " +
+  if (chart.face_uv.size() != chart.mesh.faces.size() || chart.face_patch.size() != chart.mesh.faces.size())
+    throw InvalidInput("chart density: " + std::to_string(chart.face_uv.size()) + " uv triples and " +
+                       std::to_string(chart.face_patch.size()) + " patch ids for " +
                        std::to_string(chart.mesh.faces.size()) + " faces");
-  const double k = samples_per_side * samples_per_side;
   std::vector<std::pair<double, double>> vw;
   vw.reserve(chart.mesh.faces.size());
   for (int f = 0; f < chart.mesh.num_faces(); ++f) {
     const double a = face_area(chart.mesh, f);
     if (!(a > 0)) continue;
+    const int p = chart.face_patch[static_cast<size_t>(f)];
+    if (p < 0 || p >= static_cast<int>(samples_per_side.size()))
+      throw InvalidInput("chart density: face " + std::to_string(f) + " is in patch " + std::to_string(p) + ", but " +
+                         std::to_string(samples_per_side.size()) + " patches have a sample count");
+    const double k = samples_per_side[static_cast<size_t>(p)] * samples_per_side[static_cast<size_t>(p)];
     const auto& uv = chart.face_uv[static_cast<size_t>(f)];
     const Vec2 e1 = uv[1] - uv[0], e2 = uv[2] - uv[0];
     const double uv_area = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
@@ -124,6 +139,87 @@ DensitySpread chart_density(const dissect::Chart& chart, double samples_per_side
   if (vw.empty())
     throw InvalidInput("chart density: the chart has no area (" + std::to_string(chart.mesh.num_faces()) + " faces)");
   return weighted_spread(std::move(vw));
+}
+
+std::vector<double> patch_area_shares(const std::vector<const dissect::Chart*>& charts) {
+  if (charts.empty()) throw InvalidInput("patch areas: no charts");
+  const size_t np = charts.front()->patches.size();
+  std::vector<double> out(np, 0.0);
+  for (size_t m = 0; m < charts.size(); ++m) {
+    const dissect::Chart& chart = *charts[m];
+    check_faces(chart.mesh, "patch areas");
+    if (chart.patches.size() != np || chart.face_patch.size() != chart.mesh.faces.size())
+      throw InvalidInput("patch areas: chart " + std::to_string(m) + " has " + std::to_string(chart.patches.size()) +
+                         " patches and " + std::to_string(chart.face_patch.size()) + " face patch ids for " +
+                         std::to_string(chart.mesh.faces.size()) + " faces; chart 0 has " + std::to_string(np) +
+                         " patches");
+    std::vector<double> area(np, 0.0);
+    double total = 0;
+    for (int f = 0; f < chart.mesh.num_faces(); ++f) {
+      const int p = chart.face_patch[static_cast<size_t>(f)];
+      if (p < 0 || p >= static_cast<int>(np))
+        throw InvalidInput("patch areas: chart " + std::to_string(m) + ", face " + std::to_string(f) + " is in patch " +
+                           std::to_string(p) + "; expected 0.." + std::to_string(np - 1));
+      const double a = face_area(chart.mesh, f);
+      area[static_cast<size_t>(p)] += a;
+      total += a;
+    }
+    if (!(total > 0) || !std::isfinite(total))
+      throw InvalidInput("patch areas: chart " + std::to_string(m) + " has no finite positive area");
+    for (size_t p = 0; p < np; ++p) out[p] = std::max(out[p], area[p] / total);
+  }
+  return out;
+}
+
+std::vector<double> patch_texel_shares(const std::vector<const dissect::Chart*>& charts) {
+  if (charts.empty()) throw InvalidInput("patch texel shares: no charts");
+  const size_t np = charts.front()->patches.size();
+  std::vector<double> out(np, 0.0);
+  for (size_t m = 0; m < charts.size(); ++m) {
+    const dissect::Chart& chart = *charts[m];
+    check_faces(chart.mesh, "patch texel shares");
+    if (chart.patches.size() != np || chart.face_patch.size() != chart.mesh.faces.size() ||
+        chart.face_uv.size() != chart.mesh.faces.size())
+      throw InvalidInput("patch texel shares: chart " + std::to_string(m) + " has " +
+                         std::to_string(chart.patches.size()) + " patches, " + std::to_string(chart.face_patch.size()) +
+                         " face patch ids and " + std::to_string(chart.face_uv.size()) + " uv triples for " +
+                         std::to_string(chart.mesh.faces.size()) + " faces; chart 0 has " + std::to_string(np) +
+                         " patches");
+    // Per patch the (uv area / 3D area, 3D area) of its faces.
+    std::vector<std::vector<std::pair<double, double>>> ratio(np);
+    double total = 0;
+    for (int f = 0; f < chart.mesh.num_faces(); ++f) {
+      const int p = chart.face_patch[static_cast<size_t>(f)];
+      if (p < 0 || p >= static_cast<int>(np))
+        throw InvalidInput("patch texel shares: chart " + std::to_string(m) + ", face " + std::to_string(f) +
+                           " is in patch " + std::to_string(p) + "; expected 0.." + std::to_string(np - 1));
+      const double a = face_area(chart.mesh, f);
+      if (!(a > 0)) continue;
+      total += a;
+      const auto& uv = chart.face_uv[static_cast<size_t>(f)];
+      const Vec2 e1 = uv[1] - uv[0], e2 = uv[2] - uv[0];
+      ratio[static_cast<size_t>(p)].emplace_back(0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x()) / a, a);
+    }
+    if (!(total > 0) || !std::isfinite(total))
+      throw InvalidInput("patch texel shares: chart " + std::to_string(m) + " has no finite positive area");
+    for (size_t p = 0; p < np; ++p) {
+      auto& r = ratio[p];
+      if (r.empty()) continue;  // no area: no texels needed beyond the minimum tile
+      std::sort(r.begin(), r.end());
+      double weight = 0;
+      for (const auto& x : r) weight += x.second;
+      double acc = 0, median = r.back().first;
+      for (const auto& x : r) {
+        acc += x.second;
+        if (acc >= 0.5 * weight) {
+          median = x.first;
+          break;
+        }
+      }
+      if (median > 0) out[p] = std::max(out[p], 1.0 / (median * total));
+    }
+  }
+  return out;
 }
 
 }  // namespace qs::remesh

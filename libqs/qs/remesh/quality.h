@@ -2,6 +2,8 @@
 // Shape and sampling measures of a remesh (issue 13): the smallest-angle distribution of its
 // triangles, and how evenly samples (remesh vertices, normal-map texels) cover the surface.
 
+#include <vector>
+
 #include "qs/core/mesh.h"
 #include "qs/dissect/dissection.h"
 
@@ -43,5 +45,22 @@ DensitySpread vertex_density(const TriMesh& mesh);
 /// with S - 1 (S the tile size) the texel density of a normal-map atlas.
 /// \throws InvalidInput for samples_per_side <= 0 or a chart with no area.
 DensitySpread chart_density(const dissect::Chart& chart, double samples_per_side);
+
+/// The same with a count per patch (index = patch; e.g. S_p - 1 for an atlas whose tiles differ).
+/// \throws InvalidInput for a count <= 0, or a face in a patch without a count.
+DensitySpread chart_density(const dissect::Chart& chart, const std::vector<double>& samples_per_side);
+
+/// Each patch's share of its mesh's surface area (0..1), the largest over the charts of a set.
+/// \throws InvalidInput for no charts, charts with other patch counts, or a chart with no area.
+std::vector<double> patch_area_shares(const std::vector<const dissect::Chart*>& charts);
+
+/// What each patch's texture tile must cover, as a share of its mesh's surface, for an even texel
+/// density: 1 / (median of uv area / 3D area over the patch's faces, weighted by 3D area) divided
+/// by the mesh's area, the largest over the charts. For an evenly mapped patch (uv area in
+/// proportion to 3D area) it equals the patch's area share; for a distorted map it follows the
+/// density of the patch's median face, not its mean, so that a squeezed corner does not set the
+/// tile size of the whole patch. A patch without area gets 0.
+/// \throws InvalidInput for no charts, charts with other patch counts, or a chart with no area.
+std::vector<double> patch_texel_shares(const std::vector<const dissect::Chart*>& charts);
 
 }  // namespace qs::remesh

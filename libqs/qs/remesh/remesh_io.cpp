@@ -59,8 +59,8 @@ LoadedRemesh read_remesh(const fs::path& folder) {
   r.dissection_folder = doc.contains("dissection_path") ? folder / string_field(doc, "dissection_path", path)
                                                         : folder.parent_path();
   r.mode = string_field(doc, "mode", path);
-  if (r.mode != "uniform" && r.mode != "adaptive" && r.mode != "merge")
-    throw InvalidInput(path.string() + ": \"mode\" must be \"uniform\", \"adaptive\" or \"merge\", not \"" + r.mode +
+  if (r.mode != "uniform" && r.mode != "adaptive" && r.mode != "even" && r.mode != "merge")
+    throw InvalidInput(path.string() + ": \"mode\" must be \"uniform\", \"adaptive\", \"even\" or \"merge\", not \"" + r.mode +
                        "\"");
   if (doc.contains("quads") && !doc["quads"].is_boolean())
     throw InvalidInput(path.string() + ": \"quads\" must be true or false");
