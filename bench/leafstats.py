@@ -49,10 +49,10 @@ def main():
         big = area[over[0]] if over else 0.0
         print(f"{os.path.basename(m['file'])}: {len(m['patches'])} patches, {len(over)} over tau "
               f"({100 * sum(area[i] for i in over):.0f}% of area), largest over-tau leaf {100 * big:.1f}% of area, "
-              f"max stretch {m['max_stretch']:.4g}")
+              f"max stretch {m['max_stretch'] if m['max_stretch'] is None else format(m['max_stretch'], '.4g')}")
         for i in over[:a.top]:
             p = m['patches'][i]
-            print(f"  {p['name']:>18} {100 * area[i]:5.2f}%  stretch {p['stretch']:.3g}  "
+            print(f"  {p['name']:>18} {100 * area[i]:5.2f}%  stretch {p['stretch'] if p['stretch'] is None else format(p['stretch'], '.3g')}  "
                   f"{p.get('stop_reason', '')}  {p['faces']} faces")
 
 
