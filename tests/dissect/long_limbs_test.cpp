@@ -2,6 +2,7 @@
 // where a quinary split can only slice it lengthwise. The stop rules keep such a layout small and
 // leave no large leaf over tau: a small over-tau patch is not split (min_split_area), a large one
 // still over tau after the repair is split even without progress (force_split_area).
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <vector>
 
+#include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
 #include "qs/mesh/validate.h"
 #include "qs/shapes/shapes.h"
@@ -166,6 +168,28 @@ TEST(LongLimbs, MinSplitAreaKeepsSmallPatchesOverTauWhole) {
   EXPECT_EQ(l_off.small_area_leaves, 0);
   EXPECT_GT(l_on.small_area_leaves, 0) << "the test should exercise the rule";
   EXPECT_LT(l_on.patches, l_off.patches);
+}
+
+TEST(LongLimbs, AreaFractionsOutsideZeroOneAreRejected) {
+  const qs::TriMesh m = qs::shapes::icosphere(2);
+  for (double bad : {-0.1, 1.5, std::nan("")}) {
+    qs::dissect::DissectOptions o;
+    o.min_split_area = bad;
+    try {
+      qs::dissect::dissect(m, std::nullopt, o);
+      ADD_FAILURE() << "min_split_area " << bad << " accepted";
+    } catch (const qs::InvalidInput& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("min_split_area"));
+    }
+    o = {};
+    o.force_split_area = bad;
+    try {
+      qs::dissect::dissect(m, std::nullopt, o);
+      ADD_FAILURE() << "force_split_area " << bad << " accepted";
+    } catch (const qs::InvalidInput& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("force_split_area"));
+    }
+  }
 }
 
 }  // namespace

@@ -191,7 +191,8 @@ Dissection dissect(const TriMesh& mesh, const std::optional<std::array<int, 4>>&
 /// mesh at one peak point of the aligned parameter domain (the peak of the mesh with the greatest
 /// stretch), after the features inside it were moved to their mean (u,v) over the set by
 /// warp::warp_square. \throws InvalidInput for a feature missing from a mesh, features on
-/// different seed patches or on a cut line, features too close; SolverError as dissect().
+/// different seed patches or on a cut line, features too close, tau below 1, min_split_area or
+/// force_split_area outside [0, 1]; SolverError as dissect().
 DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options = {},
                           const Context& context = {});
 
