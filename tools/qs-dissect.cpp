@@ -106,6 +106,16 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000));
   app.add_flag("--refine-slide-borders", refine_opt.slide_borders,
                "With --refine-maps: let patch-side vertices slide along their sides too (slower; see README)");
+  app.add_option("--min-split-area", opt.min_split_area,
+                 "Do not split a patch over tau (bijective) that holds less than this fraction of its mesh's area; "
+                 "the leaf repair takes it (0: off; fewer slivers along limbs)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--force-split-area", opt.force_split_area,
+                 "Split a patch still over tau after repair that holds at least this fraction of its mesh's area, "
+                 "even when splitting made no progress (0: off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
@@ -116,6 +126,9 @@ int main(int argc, char** argv) {
                            std::to_string(meshes.size()) + " meshes; give one per mesh, in the same order");
     if (std::isnan(opt.tau) || std::isnan(opt.max_patch_area))
       throw qs::UsageError(std::string(std::isnan(opt.tau) ? "--tau" : "--max-area") + " must be a number, not nan");
+    if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
+      throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
+                           " must be a number, not nan");
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());

@@ -28,6 +28,8 @@ TEST(DissectDefaults, AreTheDocumentedOnes) {
   EXPECT_EQ(o.split_stretch_rounds, 0);
   EXPECT_EQ(o.max_depth, 6);
   EXPECT_EQ(o.min_faces_to_split, 150);
+  EXPECT_EQ(o.min_split_area, 0.01);    // README, qs-dissect, "Bodies and long limbs"
+  EXPECT_EQ(o.force_split_area, 0.03);
 }
 
 TEST(DissectDefaults, SmoothShapeGetsAreaCappedPatches) {

@@ -271,6 +271,7 @@ TEST(RelaxSeedLoop, CurvesDoNotPassThroughVerticesToAvoid) {
   const RelaxedLoop free = qs::dissect::relax_seed_loop(m, loop);
   // The input vertices the unconstrained curves pass through (besides the seeds).
   RelaxOptions options;
+  options.keep_sides = false;  // a curve may pass on either side of them (see the next test)
   for (const auto& p : free.loop.paths)
     for (std::size_t k = 1; k + 1 < p.size(); ++k)
       if (p[k] < m.num_vertices()) options.avoid.push_back(p[k]);
@@ -281,6 +282,35 @@ TEST(RelaxSeedLoop, CurvesDoNotPassThroughVerticesToAvoid) {
   const std::set<int> avoid(options.avoid.begin(), options.avoid.end());
   for (const auto& p : r.loop.paths)
     for (std::size_t k = 1; k + 1 < p.size(); ++k) EXPECT_EQ(avoid.count(p[k]), 0u) << "vertex " << p[k];
+}
+
+TEST(RelaxSeedLoop, KeepsVerticesToAvoidOnTheirSideOfTheLoop) {
+  // Input vertices that the unconstrained relaxation moves to the other side of the loop: given
+  // as vertices to avoid, they must stay where the input loop has them, the steps that would
+  // move them being refused with a reason.
+  const TriMesh m = qs::shapes::bumpy_sphere(0.2, 5, 3);
+  const SeedLoop loop = qs::dissect::trace_seed_loop(m, qs::dissect::choose_seeds(m));
+  const RelaxedLoop free = qs::dissect::relax_seed_loop(m, loop);
+  std::vector<int> all(m.num_vertices());
+  for (int v = 0; v < m.num_vertices(); ++v) all[v] = v;
+  const std::vector<int> before = qs::dissect::sides_of_vertices(m, loop, all);
+  const std::vector<int> after = qs::dissect::sides_of_vertices(free.mesh, free.loop, all);
+  RelaxOptions options;
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (before[v] >= 0 && after[v] >= 0 && before[v] != after[v]) options.avoid.push_back(v);
+  ASSERT_FALSE(options.avoid.empty()) << "the test needs a relaxation that moves a curve across vertices";
+  const RelaxedLoop r = qs::dissect::relax_seed_loop(m, loop, options);
+  expect_valid_result(m, loop, r);
+  const std::vector<int> kept = qs::dissect::sides_of_vertices(r.mesh, r.loop, options.avoid);
+  for (std::size_t k = 0; k < options.avoid.size(); ++k)
+    EXPECT_EQ(kept[k], before[options.avoid[k]]) << "vertex " << options.avoid[k];
+  int refused = 0;
+  for (const auto& s : r.steps)
+    if (!s.relaxed) {
+      ++refused;
+      EXPECT_THAT(s.why, HasSubstr("other side")) << s.why;
+    }
+  EXPECT_GT(refused, 0);
 }
 
 TEST(RelaxSeedLoop, IsDeterministic) {

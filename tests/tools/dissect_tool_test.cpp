@@ -71,6 +71,11 @@ TEST_F(DissectTool, ExitCodes) {
   const std::string ball = write("ball.obj", qs::shapes::icosphere(2));
   EXPECT_EQ(run_tool("qs-dissect", ball + " " + ball + " --landmarks " + ball).exit, 1);  // 1 file, 2 meshes
   EXPECT_EQ(run_tool("qs-dissect", ball + " --tau 0.5").exit, 1);
+  EXPECT_EQ(run_tool("qs-dissect", ball + " --min-split-area 1.5").exit, 1);
+  EXPECT_EQ(run_tool("qs-dissect", ball + " --force-split-area -0.1").exit, 1);
+  const RunResult nan_area = run_tool("qs-dissect", ball + " --min-split-area nan");
+  EXPECT_EQ(nan_area.exit, 1) << nan_area.out;
+  EXPECT_THAT(nan_area.out, HasSubstr("--min-split-area"));
   EXPECT_EQ(run_tool("qs-dissect", (dir_ / "missing.obj").string()).exit, 3);
   std::ofstream(dir_ / "ball.landmarks.json") << R"({"seeds": [0, 1, 1, 2]})";
   const RunResult dup = run_tool("qs-dissect", ball + " -o " + (dir_ / "b").string());

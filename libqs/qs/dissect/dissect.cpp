@@ -9,6 +9,7 @@
 // and every patch side stays shared by exactly two patches: the base domain is conforming by
 // construction, and checked anyway.
 
+#include <string>
 #include <unordered_map>
 
 #include "qs/core/error.h"
@@ -24,6 +25,7 @@ const char* stop_reason_name(StopReason r) {
     case StopReason::TooFewFaces: return "too_few_faces";
     case StopReason::SplitFailed: return "split_failed";
     case StopReason::NoProgress: return "no_progress";
+    case StopReason::SmallArea: return "small_area";
   }
   return "none";
 }
@@ -53,6 +55,12 @@ BaseDomain build_base_domain(const std::vector<PatchInfo>& patches) {
 DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
                           const Context& context) {
   if (!(options.tau >= 1.0)) throw InvalidInput("--tau must be at least 1 (the stretch of an isometry)");
+  if (!(options.min_split_area >= 0 && options.min_split_area <= 1))
+    throw InvalidInput("min_split_area is " + std::to_string(options.min_split_area) +
+                       "; expected a fraction of the surface in [0, 1] (0: off)");
+  if (!(options.force_split_area >= 0 && options.force_split_area <= 1))
+    throw InvalidInput("force_split_area is " + std::to_string(options.force_split_area) +
+                       "; expected a fraction of the surface in [0, 1] (0: off)");
   if (meshes.empty()) throw InvalidInput("no mesh to dissect");
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");

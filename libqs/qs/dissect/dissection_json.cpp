@@ -30,7 +30,9 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"predict_split", options.predict_split},
                     {"stretch_iterations", options.stretch_iterations},
                     {"max_patch_area", options.max_patch_area},
-                    {"split_stretch_rounds", options.split_stretch_rounds}};
+                    {"split_stretch_rounds", options.split_stretch_rounds},
+                    {"min_split_area", options.min_split_area},
+                    {"force_split_area", options.force_split_area}};
   if (meshes.empty()) return json_strict::dump(doc, 2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();

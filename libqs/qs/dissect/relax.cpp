@@ -253,6 +253,9 @@ RelaxedLoop relax_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const Rel
   seed_patch_of_faces(mesh, loop);  // \throws InvalidInput: not a seed loop of this mesh
   CutMesh cm(mesh);                 // \throws InvalidInput: not closed and manifold
 
+  // The side of every vertex to avoid, kept by every step (-1: on the input loop, not checked).
+  const std::vector<int> sides =
+      options.keep_sides && !options.avoid.empty() ? sides_of_vertices(mesh, loop, options.avoid) : std::vector<int>{};
   RelaxedLoop out;
   out.loop = loop;
   for (int i = 0; i < 4; ++i) out.length_before[i] = length_of(mesh.positions, loop.paths[i]);
@@ -297,10 +300,18 @@ RelaxedLoop relax_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const Rel
       check_curve(work, out.loop, i, path);
       SeedLoop candidate = out.loop;
       candidate.paths[i] = std::move(path);
+      const TriMesh work_mesh = work.to_trimesh();
       try {
-        seed_patch_of_faces(work.to_trimesh(), candidate);
+        seed_patch_of_faces(work_mesh, candidate);
       } catch (const InvalidInput& e) {
         throw StepFailure{std::string("the new curve does not cut the mesh in two: ") + e.what()};
+      }
+      if (!sides.empty()) {
+        const std::vector<int> now = sides_of_vertices(work_mesh, candidate, options.avoid);
+        for (std::size_t k = 0; k < sides.size(); ++k)
+          if (sides[k] >= 0 && now[k] != sides[k])
+            throw StepFailure{"the new curve would leave vertex " + std::to_string(options.avoid[k]) +
+                              " (to avoid) on the other side of the loop"};
       }
       cm = std::move(work);
       out.loop = std::move(candidate);

@@ -31,9 +31,13 @@ struct RelaxOptions {
   /// to min(snap, 0.01) from the end. \pre 0 <= snap < 0.5.
   double snap = 0.05;
   /// Input vertex ids the new curves must not pass through (feature points that must stay inside
-  /// a seed patch): a crossing near one splits the edge instead. A curve may still move from one
-  /// side of such a vertex to the other. \pre ids in [0, #V).
+  /// a seed patch): a crossing near one splits the edge instead. \pre ids in [0, #V).
   std::vector<int> avoid;
+  /// A step whose new curve would leave a vertex of `avoid` on the other side of the loop than
+  /// the input loop does is not taken (the curve is kept; the step says why): features must stay
+  /// in the seed patch the set's consistent loops put them in. false: a curve may move across
+  /// them (measured: the human pair with --relax 1 then exits 2, its nose changing sides).
+  bool keep_sides = true;
 };
 
 /// What happened to one curve in one pass.

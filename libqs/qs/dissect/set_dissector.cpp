@@ -145,12 +145,14 @@ DissectionSet SetDissector::run() {
   std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
   // Progress: the share of the surface area in finished leaves (cuts add faces, not area).
   double total_area = 0, done_area = 0;
-  std::vector<double> max_area;  // per mesh: opt_.max_patch_area times its surface area
+  std::vector<double> max_area;   // per mesh: opt_.max_patch_area times its surface area
+  std::vector<double> mesh_area;  // per mesh: its surface area
   for (const auto& m : in_) {
     double area = 0;
     for (int f = 0; f < m.mesh->num_faces(); ++f) area += face_area(*m.mesh, f);
     total_area += area;
     max_area.push_back(opt_.max_patch_area > 0 ? opt_.max_patch_area * area : INFINITY);
+    mesh_area.push_back(area);
   }
   while (!queue.empty()) {
     ctx_.check_cancel();
@@ -186,9 +188,39 @@ DissectionSet SetDissector::run() {
       progress = over[i] && (!ps[i].sp.bijective() || ps[i].st.area3d > max_area[i] || ps[i].st.patch < parent ||
                              (parent > 2 * opt_.tau && parent < grandparent));
     }
+    // Small patches: a node over tau only by its stretch (bijective in every mesh, under the area
+    // cap) in every mesh that is over, holding less than min_split_area of that mesh's surface,
+    // is not split; the leaf repair takes it. Along limbs whose tips are patch corners (seeds at
+    // finger and toe tips) these are lengthwise strips, and a quinary split, whose children each
+    // keep a whole side of the parent, only shaves thinner strips off them.
+    bool small = any_over && opt_.min_split_area > 0;
+    for (size_t i = 0; i < ps.size() && small; ++i)
+      if (over[i])
+        small = ps[i].sp.bijective() && ps[i].st.area3d <= max_area[i] &&
+                ps[i].st.area3d < opt_.min_split_area * mesh_area[i];
+    // Large patches: a node that made no progress but holds at least force_split_area of a mesh
+    // whose patch is still over tau after the leaf repair is split all the same (a large
+    // over-tau leaf is what a user sees; its children usually do better than the no-progress
+    // rule predicts).
+    if (any_over && !progress && !small && opt_.force_split_area > 0 && node.depth < opt_.max_depth &&
+        biggest_over >= opt_.min_faces_to_split) {
+      std::vector<char> force(ps.size(), 0);
+      Context quiet = ctx_.without_progress();
+      quiet.log = nullptr;
+      parallel_for(ps.size(), [&](size_t i) {
+        if (!over[i] || !ps[i].sp.bijective() || ps[i].st.area3d < opt_.force_split_area * mesh_area[i]) return;
+        const param::SquareParam m = minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet);
+        const double repaired =
+            m.uv.empty() ? ps[i].st.patch : param::l2_stretch(ps[i].ex.pm.positions, ps[i].ex.pm.faces, m.uv).patch;
+        force[i] = repaired > opt_.tau;
+      }, ps.size() > 1);
+      progress = std::find(force.begin(), force.end(), 1) != force.end();
+    }
     StopReason stop = StopReason::None;
     std::string detail;
-    if (any_over && !progress) {
+    if (small) {
+      stop = StopReason::SmallArea;
+    } else if (any_over && !progress) {
       stop = StopReason::NoProgress;
     } else if (any_over && node.depth < opt_.max_depth && biggest_over >= opt_.min_faces_to_split) {
       const size_t first_new_label = meshes_[0].labels();
