@@ -65,8 +65,8 @@ void run(const std::string& label, const std::vector<qs::dissect::MeshToDissect>
         const auto& f0 = s.meshes[0].features[k];
         feature_spread = std::max(feature_spread, d.features[k].patch != f0.patch ? 1.0 : (d.features[k].uv - f0.uv).norm());
       }
-    std::printf("%-44s %6zu %8ld %8zu %10.3g %8d %9zu %8d %9.2g %8.3f %10.3f\n", label.c_str(), set.size(), faces,
-                s.meshes[0].chart.patches.size(), s.max_stretch, over + nonbij, s.meshes[0].features.size(),
+    std::printf("%-44s %6zu %8ld %8zu %10.3g %4d/%-4d %9zu %8d %9.2g %8.3f %10.3f\n", label.c_str(), set.size(), faces,
+                s.meshes[0].chart.patches.size(), s.max_stretch, over, nonbij, s.meshes[0].features.size(),
                 s.warp_events, feature_spread, sec, sec / (faces / 1e4));
   } catch (const qs::Error& e) {
     std::printf("%-44s FAILED: %s\n", label.c_str(), e.what());
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::printf("%-44s %6s %8s %8s %10s %8s %9s %8s %9s %8s %10s\n", "set", "meshes", "faces", "patches", "max L2",
-              "flagged", "features", "flips", "f.spread", "time s", "s/10k f");
+              "stop/fold", "features", "flips", "f.spread", "time s", "s/10k f");
   std::map<std::string, Loaded> m;
   for (const char* f : {"horse_5k.obj", "camel_4k_fixed.obj", "cat_sumner_14k.obj", "lion_sumner_10k.obj",
                         "max_planck_11k.obj", "igea_17k.off", "mannequin_head_23k.off", "venus_100k.off",
