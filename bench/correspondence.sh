@@ -3,7 +3,8 @@
 # (landmarks given), then measured with `qs-metro --correspondence` against its exact ground truth.
 #
 #   usage: bench/correspondence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-correspondence)
-#   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000)
+#   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000),
+#          DISSECT_ARGS (extra qs-dissect options for every pair, e.g. "--geodesic-seed-curves")
 #
 # Pairs (data made here, nothing committed but the SMPL landmark file):
 #   gen-sS        generated pair (qs-family, seed S = 1, 2, 3): two warps of one base, own tessellations
@@ -23,6 +24,7 @@ OUT=${2:-out/bench-correspondence}
 TOOLS=${QS_TOOLS:-build/tools}
 SAMPLES=${SAMPLES:-100000}
 FACES=${FACES:-8000}
+read -r -a DISSECT_EXTRA <<< "${DISSECT_ARGS:-}"
 LM=bench/correspondence/smpl.landmarks.json
 mkdir -p "$OUT"
 RESULTS="$OUT/results.tsv"
@@ -37,7 +39,7 @@ run_pair() {
   maps=("$@")
   local t0 t1 rc
   t0=$(date +%s.%N)
-  "$TOOLS/qs-dissect" "${meshes[@]}" --landmarks "${lms[@]}" -o "$dir" --quiet --report "$dir.report.txt" \
+  "$TOOLS/qs-dissect" "${meshes[@]}" --landmarks "${lms[@]}" "${DISSECT_EXTRA[@]}" -o "$dir" --quiet --report "$dir.report.txt" \
       > "$dir.dissect.log" 2>&1
   rc=$?
   t1=$(date +%s.%N)

@@ -104,6 +104,7 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
       // Then solve the mean-value map again with the features pinned where the warp put them,
       // and keep whichever folds less (ties: the warp).
       param::SquareParamOptions po;
+      po.weights = p.weights;
       for (size_t k = 0; k < nf; ++k) po.pinned.emplace_back(p.features[k].second, warped.uv[p.features[k].second]);
       Context quiet = ctx_.without_progress();
       quiet.log = nullptr;  // its fold warning is expected here: the folds are compared below

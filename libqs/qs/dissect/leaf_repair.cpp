@@ -62,6 +62,7 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
   // back onto their aligned (u,v): the spread-out map folds far less under the warp.
   param::SquareParamOptions po;
   po.stretch_iterations = rounds;
+  po.weights = p.weights;
   param::SquareParam min_sp;
   try {
     min_sp = param::parameterize_square(p.ex.pm, po, context);
