@@ -21,7 +21,7 @@ struct GeodesicLoopOptions {
   /// Input vertex ids the curves must not pass through or cross over (features that must stay on
   /// their side of the loop). \pre ids in [0, #V).
   std::vector<int> avoid;
-  /// Bound on the rounds of vertex flips per curve (each round tries every bend of the curve).
+  /// Bound on the vertex flips per curve: max_rounds times the edges of its edge path.
   int max_rounds = 64;
 };
 
