@@ -80,6 +80,11 @@ int main(int argc, char** argv) {
   app.add_option("--relax", opt.relax_rounds, "Rounds of seed-curve relaxation (paper 3.3; off by default, see README)")
       ->capture_default_str()
       ->check(CLI::Range(0, 16));
+  bool cotan = false;
+  app.add_flag("--geodesic-seed-curves", opt.geodesic_seed_curves,
+               "Straighten the seed curves into geodesics cut into the mesh (less dependent on the tessellation; see README)");
+  app.add_flag("--cotan", cotan,
+               "Cotangent weights on each patch's intrinsic Delaunay triangulation instead of mean-value weights (experimental, see README)");
   app.add_flag("--predict-split", opt.predict_split,
                "Choose each split by the children's stretch predicted from the parent's map (experimental, see README)");
   app.add_option("--optimize-stretch", opt.stretch_iterations,
@@ -129,6 +134,7 @@ int main(int argc, char** argv) {
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");
+    opt.intrinsic_cotan = cotan;
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());

@@ -700,4 +700,40 @@ TEST(SquareParamTest, StretchMinimizationRepairsAFingerSqueezedToZeroArea) {
 }
 
 }  // namespace
+
+// Cotangent weights on the intrinsic Delaunay triangulation: a flat patch, jittered (so some edges
+// are not Delaunay and get flipped) and moved rigidly into 3D, maps onto itself (harmonic maps
+// reproduce affine functions), the flips counted; the map is bijective.
+TEST(IntrinsicCotan, AFlatJitteredSquareMapsOntoItself) {
+  PatchMesh p = grid_patch(13, 13, 1, 1, 0.35);
+  std::vector<Vec3> flat = p.positions;
+  for (Vec3& x : p.positions) x = rigid(x);
+  SquareParamOptions o;
+  o.weights = InteriorWeights::IntrinsicCotan;
+  const SquareParam sp = parameterize_square(p, o);
+  EXPECT_GT(sp.intrinsic_flips, 0);
+  EXPECT_TRUE(sp.bijective());
+  EXPECT_NEAR(sp.uv_area_sum, 1.0, 1e-12);
+  double worst = 0;
+  for (size_t v = 0; v < flat.size(); ++v) worst = std::max(worst, (sp.uv[v] - flat[v].head<2>()).norm());
+  EXPECT_LT(worst, 1e-9);
+  // Mean-value weights flip nothing.
+  EXPECT_EQ(parameterize_square(p).intrinsic_flips, 0);
+}
+
+// On a curved patch both weights give a bijective map; the intrinsic triangulation of an already
+// Delaunay mesh (an icosphere's) needs few flips.
+TEST(IntrinsicCotan, AHemisphereMapsBijectivelyWithAndWithoutStretchMinimization) {
+  const PatchMesh p = hemisphere_patch(4);
+  for (int rounds : {0, 5}) {
+    SquareParamOptions o;
+    o.weights = InteriorWeights::IntrinsicCotan;
+    o.stretch_iterations = rounds;
+    const SquareParam sp = parameterize_square(p, o);
+    EXPECT_TRUE(sp.bijective()) << sp.flipped_faces << " flipped, " << sp.zero_area_faces << " zero-area";
+    EXPECT_NEAR(sp.uv_area_sum, 1.0, 1e-9);
+    EXPECT_LT(sp.intrinsic_flips, static_cast<int>(p.faces.size()) / 10);
+  }
+}
+
 }  // namespace qs::param

@@ -62,6 +62,34 @@ TEST_F(DissectTool, WritesTheChartAndTheJsonContract) {
   EXPECT_EQ(bytes(out / "blob.chart.ply"), bytes(out2 / "blob.chart.ply"));
 }
 
+// Issue 17's options: geodesic seed curves and intrinsic cotangent weights, alone and together:
+// exit 0, every leaf bijective, the output deterministic.
+TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
+  const qs::TriMesh mesh = qs::shapes::bumpy_sphere(0.15, 4, 4);
+  const std::string in = write("bumpy.obj", mesh);
+  auto bytes = [](const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  for (const std::string opts : {"--geodesic-seed-curves", "--cotan", "--geodesic-seed-curves --cotan"}) {
+    SCOPED_TRACE(opts);
+    const fs::path out = dir_ / "o1", out2 = dir_ / "o2";
+    fs::remove_all(out);
+    fs::remove_all(out2);
+    const RunResult r = run_tool("qs-dissect", in + " " + opts + " -q -o " + out.string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    ASSERT_EQ(run_tool("qs-dissect", in + " " + opts + " -q -o " + out2.string()).exit, 0);
+    EXPECT_EQ(bytes(out / "dissection.json"), bytes(out2 / "dissection.json"));
+    EXPECT_EQ(bytes(out / "bumpy.chart.ply"), bytes(out2 / "bumpy.chart.ply"));
+    std::ifstream js(out / "dissection.json");
+    const auto j = nlohmann::json::parse(js);
+    for (const auto& p : j["meshes"][0]["patches"]) {
+      EXPECT_EQ(p["flipped_faces"], 0);
+      EXPECT_EQ(p["zero_area_faces"], 0);
+    }
+  }
+}
+
 TEST_F(DissectTool, ExitCodes) {
   const std::string torus = write("torus.obj", qs::shapes::torus(12, 8));
   const RunResult bad = run_tool("qs-dissect", torus + " -o " + (dir_ / "t").string());

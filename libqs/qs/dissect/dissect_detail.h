@@ -94,6 +94,7 @@ struct Param {
   param::SquareParam sp;
   param::Stretch st;
   std::vector<std::pair<int, int>> features;  // (feature index, local vertex), by feature index
+  param::InteriorWeights weights = param::InteriorWeights::MeanValue;  // of every solve of this patch
 };
 
 // The dissection state of one mesh of the set: the cut mesh and the faces of every tree node.

@@ -104,10 +104,16 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
       // Then solve the mean-value map again with the features pinned where the warp put them,
       // and keep whichever folds less (ties: the warp).
       param::SquareParamOptions po;
+      po.weights = p.weights;
       for (size_t k = 0; k < nf; ++k) po.pinned.emplace_back(p.features[k].second, warped.uv[p.features[k].second]);
       Context quiet = ctx_.without_progress();
       quiet.log = nullptr;  // its fold warning is expected here: the folds are compared below
-      const param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, quiet);
+      param::SquareParam pinned = param::parameterize_square(p.ex.pm, po, quiet);
+      if (!pinned.bijective() && po.weights != param::InteriorWeights::MeanValue) {
+        po.weights = param::InteriorWeights::MeanValue;  // cotangent weights folded: mean-value too
+        param::SquareParam mv = param::parameterize_square(p.ex.pm, po, quiet);
+        if (mv.flipped_faces + mv.zero_area_faces < pinned.flipped_faces + pinned.zero_area_faces) pinned = std::move(mv);
+      }
       if (pinned.flipped_faces + pinned.zero_area_faces < warped.flipped_faces + warped.zero_area_faces) {
         warped = pinned;
         pinned_solves[i] = 1;

@@ -62,6 +62,7 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
   // back onto their aligned (u,v): the spread-out map folds far less under the warp.
   param::SquareParamOptions po;
   po.stretch_iterations = rounds;
+  po.weights = p.weights;
   param::SquareParam min_sp;
   try {
     min_sp = param::parameterize_square(p.ex.pm, po, context);
@@ -89,7 +90,12 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
     if (e.code() == ErrorCode::Internal) throw;  // cancelled, or a bug
     return {};  // a singular system or features the warp cannot place: keep the given map
   }
-  if (!min_sp.bijective()) return {};
+  if (!min_sp.bijective()) {
+    if (p.weights == param::InteriorWeights::MeanValue) return {};
+    Param mv = p;  // cotangent weights folded: try mean-value weights before giving up
+    mv.weights = param::InteriorWeights::MeanValue;
+    return minimized_leaf(mv, rounds, context);
+  }
   return min_sp;
 }
 

@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 #include <vector>
+#include "qs/dissect/geodesic_loop.h"
 #include "qs/dissect/relax.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/warp/warp.h"
@@ -177,6 +178,22 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop) {
   const std::array<int, 4> seeds = loop.seeds;
   seeds_ = seeds;
   TriMesh tm = cm_.to_trimesh();
+  if (opt_.geodesic_seed_curves) {
+    // Issue 17: the four curves become geodesics cut into the mesh, the same curves on the surface
+    // for any tessellation. New vertices are appended, so input and feature ids stay valid.
+    GeodesicLoopOptions go;
+    go.avoid = feature_vertex_;
+    GeodesicLoop g = straighten_seed_loop(tm, loop, go, ctx_);
+    for (const std::string& why : g.why)
+      if (!why.empty()) ctx_.info(name_ + ": seed " + why);
+    if (g.straightened[0] || g.straightened[1] || g.straightened[2] || g.straightened[3]) {
+      tm = std::move(g.mesh);
+      loop = std::move(g.loop);
+      cm_ = CutMesh(tm);
+      grow();
+      feature_of_.resize(cm_.num_vertices(), -1);
+    }
+  }
   if (opt_.relax_rounds > 0) {
     // Paper 3.3: each seed curve becomes the straight line of the map of the mesh cut along the
     // other three. New vertices are appended, so input and feature ids stay valid.
@@ -213,7 +230,19 @@ Param MeshDissector::parameterize(const Node& node) {
       if (h >= 0 && interior_edge(h, node.label)) split_edge(h, 0.5);
     }
   }
-  p.sp = param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
+  p.weights = opt_.intrinsic_cotan ? param::InteriorWeights::IntrinsicCotan : param::InteriorWeights::MeanValue;
+  param::SquareParamOptions base;
+  base.weights = p.weights;
+  p.sp = param::parameterize_square(p.ex.pm, base, ctx_.without_progress());
+  if (p.weights != param::InteriorWeights::MeanValue && !p.sp.bijective()) {
+    // Cotangent weights guarantee a bijection of the intrinsic Delaunay triangulation only: where
+    // the patch's own triangles fold (slivers of the cuts), this patch keeps mean-value weights.
+    param::SquareParam mv = param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
+    if (mv.flipped_faces + mv.zero_area_faces < p.sp.flipped_faces + p.sp.zero_area_faces) {
+      p.sp = std::move(mv);
+      p.weights = param::InteriorWeights::MeanValue;
+    }
+  }
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
   collect_features(p);
   // A map squeezed to zero area (a long protrusion) that holds features is spread out by stretch
@@ -223,6 +252,7 @@ Param MeshDissector::parameterize(const Node& node) {
   const bool squeezed = !p.sp.bijective() && !p.features.empty();
   if (squeezed || (opt_.split_stretch_rounds > 0 && p.st.patch > opt_.tau)) {
     param::SquareParamOptions po;
+    po.weights = p.weights;
     po.stretch_iterations = squeezed ? std::max(opt_.split_stretch_rounds, kRepairRounds) : opt_.split_stretch_rounds;
     try {
       param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());

@@ -317,6 +317,116 @@ Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const
   return cache.perm * y;
 }
 
+/// A triangulation of the patch's vertices given by edge lengths only (Fisher, Springborn, Schroeder,
+/// Bobenko 2007): it starts as the patch itself and is flipped to the intrinsic Delaunay
+/// triangulation of the same surface. Half-edge h = 3 f + c runs from faces[f][c] to
+/// faces[f][(c+1)%3], has length len[h] and opposite twin[h] (-1 on the border).
+struct IntrinsicMesh {
+  std::vector<Tri> faces;
+  std::vector<double> len;
+  std::vector<int> twin;
+  int flips = 0;
+};
+
+/// cot of the angle opposite side a in the triangle with sides a, b, c; +-kMaxCot when the
+/// triangle has no area (the sign of the cosine decides).
+constexpr double kMaxCot = 1e12;
+double cot_opposite(double a, double b, double c) {
+  const double num = b * b + c * c - a * a;  // 2bc cos
+  // 16 A^2 by Heron's formula in its stable form (sides sorted).
+  double x = a, y = b, z = c;
+  if (x < y) std::swap(x, y);
+  if (x < z) std::swap(x, z);
+  if (y < z) std::swap(y, z);
+  const double h16 = (x + (y + z)) * (z - (x - y)) * (z + (x - y)) * (x + (y - z));
+  const double den = h16 > 0 ? std::sqrt(h16) : 0.0;  // 4 A
+  if (!(den > 0)) return num < 0 ? -kMaxCot : kMaxCot;
+  return std::clamp(num / den, -kMaxCot, kMaxCot);  // (2bc cos) / (4A) * 2 / 2 = cos / sin
+}
+
+/// cot of the corner opposite half-edge h in its face.
+double cot_at(const IntrinsicMesh& m, int h) {
+  const int f = h / 3, c = h % 3;
+  return cot_opposite(m.len[h], m.len[3 * f + (c + 1) % 3], m.len[3 * f + (c + 2) % 3]);
+}
+
+/// Flips the patch to its intrinsic Delaunay triangulation (border edges stay). Every interior
+/// edge ends with cot a + cot b >= -1e-12 (up to a bound of 50 flips per edge).
+IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, double min_len) {
+  IntrinsicMesh m;
+  m.faces = patch.faces;
+  m.twin = he.twin;
+  const int nh = 3 * static_cast<int>(m.faces.size());
+  m.len.resize(nh);
+  for (int h = 0; h < nh; ++h)
+    m.len[h] = std::max(min_len, (patch.positions[he_to(m.faces, h)] - patch.positions[he_from(m.faces, h)]).norm());
+  // Symmetric lengths: both half-edges of an edge get the same value.
+  for (int h = 0; h < nh; ++h)
+    if (m.twin[h] > h) m.len[m.twin[h]] = m.len[h];
+  std::vector<int> stack;
+  std::vector<char> queued(nh, 0);
+  for (int h = 0; h < nh; ++h)
+    if (m.twin[h] > h) {
+      stack.push_back(h);
+      queued[h] = 1;
+    }
+  const long max_flips = 50L * nh + 1000;
+  auto push = [&](int h) {
+    if (h < 0 || m.twin[h] < 0) return;
+    const int e = std::min(h, m.twin[h]);
+    if (!queued[e]) {
+      queued[e] = 1;
+      stack.push_back(e);
+    }
+  };
+  while (!stack.empty() && m.flips < max_flips) {
+    const int h = stack.back();
+    stack.pop_back();
+    queued[h] = 0;
+    const int t = m.twin[h];
+    if (t < 0) continue;
+    if (cot_at(m, h) + cot_at(m, t) >= -1e-12) continue;
+    const int f = h / 3, c = h % 3, g = t / 3, d = t % 3;
+    const int i = m.faces[f][c], j = m.faces[f][(c + 1) % 3], k = m.faces[f][(c + 2) % 3];
+    const int l = m.faces[g][(d + 2) % 3];
+    if (k == l) continue;
+    const double l_ij = m.len[h], l_jk = m.len[3 * f + (c + 1) % 3], l_ki = m.len[3 * f + (c + 2) % 3];
+    const double l_il = m.len[3 * g + (d + 1) % 3], l_lj = m.len[3 * g + (d + 2) % 3];
+    const int o_jk = m.twin[3 * f + (c + 1) % 3], o_ki = m.twin[3 * f + (c + 2) % 3];
+    const int o_il = m.twin[3 * g + (d + 1) % 3], o_lj = m.twin[3 * g + (d + 2) % 3];
+    // The new diagonal k-l: unfold the two triangles about i.
+    auto angle = [](double opp, double b, double c2) {
+      const double cs = (b * b + c2 * c2 - opp * opp) / (2 * b * c2);
+      return std::acos(std::clamp(cs, -1.0, 1.0));
+    };
+    const double th = angle(l_jk, l_ij, l_ki) + angle(l_lj, l_ij, l_il);
+    const double kl = std::max(min_len, std::sqrt(std::max(0.0, l_ki * l_ki + l_il * l_il - 2 * l_ki * l_il * std::cos(th))));
+    // f = (k, i, l), g = (l, j, k).
+    m.faces[f] = {k, i, l};
+    m.faces[g] = {l, j, k};
+    const int nf_ki = 3 * f, nf_il = 3 * f + 1, nf_lk = 3 * f + 2;
+    const int ng_lj = 3 * g, ng_jk = 3 * g + 1, ng_kl = 3 * g + 2;
+    m.len[nf_ki] = l_ki;
+    m.len[nf_il] = l_il;
+    m.len[nf_lk] = kl;
+    m.len[ng_lj] = l_lj;
+    m.len[ng_jk] = l_jk;
+    m.len[ng_kl] = kl;
+    auto link = [&](int a, int b) {
+      m.twin[a] = b;
+      if (b >= 0) m.twin[b] = a;
+    };
+    link(nf_ki, o_ki);
+    link(nf_il, o_il);
+    link(ng_lj, o_lj);
+    link(ng_jk, o_jk);
+    link(nf_lk, ng_kl);
+    ++m.flips;
+    for (int x : {nf_ki, nf_il, ng_lj, ng_jk}) push(x);
+  }
+  return m;
+}
+
 }  // namespace
 
 std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch) {
@@ -407,19 +517,40 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
   context.report("parameterize: weights", 0.0);
 
   if (ni > 0) {
-    // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
-    // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
-    // i->j is half-edge 3f+c itself, i->k is the twin of k->i (3f+(c+2)%3).
+    // The Laplacian's triangulation: the patch itself (mean-value weights) or its intrinsic
+    // Delaunay triangulation (cotangent weights).
+    const std::vector<Tri>* lap_faces = &faces;
+    const HalfEdges* lap_he = &he;
     std::vector<double> w(3 * nf, 0.0);
-    for (int f = 0; f < nf; ++f) {
-      const Tri& t = faces[f];
-      for (int c = 0; c < 3; ++c) {
-        const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
-        if (on_border[i]) continue;
-        const Vec3 eij = pos[j] - pos[i], eik = pos[k] - pos[i];
-        const double th = tan_half_angle(eij, eik);
-        w[3 * f + c] += th / std::max(eij.norm(), options.min_edge_length);
-        w[he.twin[3 * f + (c + 2) % 3]] += th / std::max(eik.norm(), options.min_edge_length);
+    IntrinsicMesh idt;
+    HalfEdges idt_he;
+    if (options.weights == InteriorWeights::IntrinsicCotan) {
+      // Cotangent weight of edge ij: (cot a + cot b) / 2 over the two corners opposite it in the
+      // intrinsic Delaunay triangulation, where both sum to at most pi: non-negative.
+      idt = intrinsic_delaunay(patch, he, options.min_edge_length);
+      result.intrinsic_flips = idt.flips;
+      idt_he = build_half_edges(nv, idt.faces);
+      lap_faces = &idt.faces;
+      lap_he = &idt_he;
+      for (int h = 0; h < 3 * nf; ++h) {
+        double x = cot_at(idt, h);
+        if (idt.twin[h] >= 0) x += cot_at(idt, idt.twin[h]);
+        w[h] = std::max(0.0, 0.5 * x);
+      }
+    } else {
+      // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
+      // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
+      // i->j is half-edge 3f+c itself, i->k is the twin of k->i (3f+(c+2)%3).
+      for (int f = 0; f < nf; ++f) {
+        const Tri& t = faces[f];
+        for (int c = 0; c < 3; ++c) {
+          const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
+          if (on_border[i]) continue;
+          const Vec3 eij = pos[j] - pos[i], eik = pos[k] - pos[i];
+          const double th = tan_half_angle(eij, eik);
+          w[3 * f + c] += th / std::max(eij.norm(), options.min_edge_length);
+          w[he.twin[3 * f + (c + 2) % 3]] += th / std::max(eik.norm(), options.min_edge_length);
+        }
       }
     }
 
@@ -427,16 +558,16 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     SymbolicCache symbolic;
     auto solve_with = [&](const std::vector<double>& ww) {
       std::vector<Eigen::Triplet<double>> triplets;
-      triplets.reserve(he.out.size() + ni);
+      triplets.reserve(lap_he->out.size() + ni);
       Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
       for (int i = 0; i < nv; ++i) {
         const int r = interior_index[i];
         if (r < 0) continue;
-        const int begin = he.out_offset[i], end = he.out_offset[i + 1];
+        const int begin = lap_he->out_offset[i], end = lap_he->out_offset[i + 1];
         double wmax = 0;
         bool finite = true;
         for (int k = begin; k < end; ++k) {
-          const double x = ww[he.out[k]];
+          const double x = ww[lap_he->out[k]];
           finite = finite && std::isfinite(x);
           wmax = std::max(wmax, x);
         }
@@ -445,8 +576,8 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
         const double floor_w = kRelativeWeightFloor * wmax;
         double diag = 0;
         for (int k = begin; k < end; ++k) {
-          const int h = he.out[k];
-          const int j = he_to(faces, h);
+          const int h = lap_he->out[k];
+          const int j = he_to(*lap_faces, h);
           const double x = uniform ? 1.0 : std::max(ww[h], floor_w);
           diag += x;
           if (interior_index[j] >= 0) triplets.emplace_back(r, interior_index[j], -x);
@@ -510,14 +641,14 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
         for (int f = 0; f < nf; ++f)
           for (int c = 0; c < 3; ++c) {
             double& x = w[3 * f + c];
-            x /= sigma[faces[f][(c + 1) % 3]];
-            row_max[faces[f][c]] = std::max(row_max[faces[f][c]], x);
+            x /= sigma[(*lap_faces)[f][(c + 1) % 3]];
+            row_max[(*lap_faces)[f][c]] = std::max(row_max[(*lap_faces)[f][c]], x);
           }
         // Rows rescaled to a largest weight of 1 (the map does not change): repeated divisions
         // would otherwise underflow.
         for (int f = 0; f < nf; ++f)
           for (int c = 0; c < 3; ++c)
-            if (row_max[faces[f][c]] > 0) w[3 * f + c] /= row_max[faces[f][c]];
+            if (row_max[(*lap_faces)[f][c]] > 0) w[3 * f + c] /= row_max[(*lap_faces)[f][c]];
         try {
           solve_with(w);
         } catch (const SolverError&) {

@@ -31,6 +31,20 @@ enum class LuOrdering {
   Colamd,
 };
 
+/// The interior weights of the parameterization's Laplacian.
+enum class InteriorWeights {
+  /// Floater's mean-value weights on the patch's own triangles: positive, but they depend on how
+  /// the surface is triangulated, not only on its shape.
+  MeanValue,
+  /// Cotangent (harmonic) weights on the intrinsic Delaunay triangulation of the patch (its edges
+  /// flipped by lengths alone until every interior edge is Delaunay; Fisher et al. 2007,
+  /// Bobenko-Springborn 2007): non-negative, so Tutte's guarantee holds for that triangulation,
+  /// and a discretization of the harmonic map of the surface that converges under refinement.
+  /// The original triangles' images are counted all the same (they may fold where the intrinsic
+  /// triangulation differs).
+  IntrinsicCotan,
+};
+
 struct SquareParamOptions {
   double min_edge_length = 1e-12;  ///< shorter 3D edges get this length in the weights (> 0)
   /// Border spacing floor, relative: on each side, every border edge counts as at least this
@@ -47,6 +61,7 @@ struct SquareParamOptions {
   /// it stops early when the patch stretch falls by less than 1%, and the lowest-stretch
   /// bijective map is kept. 0: the plain mean-value map.
   int stretch_iterations = 0;
+  InteriorWeights weights = InteriorWeights::MeanValue;
 };
 
 /// A UV face with |signed area| <= this counts as zero-area (and neither as flipped).
@@ -58,6 +73,7 @@ struct SquareParam {
   int flipped_faces = 0;    ///< UV faces with signed area < -kZeroUvArea (computed, never assumed)
   int zero_area_faces = 0;  ///< UV faces with |signed area| <= kZeroUvArea
   double uv_area_sum = 0;   ///< sum of signed UV areas; 1 for a valid map
+  int intrinsic_flips = 0;  ///< edge flips to the intrinsic Delaunay triangulation (IntrinsicCotan)
   bool bijective() const { return flipped_faces == 0 && zero_area_faces == 0; }
 };
 
