@@ -191,6 +191,8 @@ TEST(Pipeline, WarpedMorphOfAGeneratedPairKeepsClosedFramesAndExactEnds) {
   EXPECT_GE(m.anchors.size(), 2u);
   EXPECT_GT(m.source_folds.min_det, 0);
   EXPECT_GT(m.target_folds.min_det, 0);
+  EXPECT_FALSE(m.bones.empty());  // one matched branch: the part warp
+  EXPECT_GT(m.bone_min_det, 0);
   EXPECT_EQ(blend_field(m, 0.0).values, m.source_sdf.values);  // the ends are the inputs' fields
   for (double t : {0.0, 0.5, 1.0}) {
     const MeshStats s = mesh_stats(frame_mesh(m, blend_field(m, t), t));
