@@ -104,7 +104,7 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
 
 /// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
 /// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
-/// smoothed by 4 Jacobi steps, inverted by Newton steps). Boundary samples are kept outside
+/// smoothed by 32 Jacobi steps, inverted by Newton steps). Boundary samples are kept outside
 /// (>= one spacing); outside regions that do not reach the boundary (cavities, which neither input
 /// has) are filled, and inside islands of at most 8 samples (specks below the grid's resolution)
 /// dropped, both along the edges of the polygonization's tetrahedra.
