@@ -14,8 +14,11 @@ namespace qs::dfi {
 namespace {
 
 constexpr size_t kSpeck = 8;      // inside islands of at most this many samples are dropped
-constexpr int kBoneSmoothing = 32;  // Jacobi steps on each frame's bone displacement (measured: 4 leaves
-                                   // handles where the warp folds, 64 thins legs until they detach)
+// Jacobi steps on each frame's bone displacement on a 75-cell bone grid (a 150-cell morph),
+// scaled with the square of the cells for other grids so that the smoothing radius stays the same
+// in space (measured on horse -> camel at 150: 4 leave handles where the warp folds, 64 thin the
+// legs until they detach).
+constexpr double kBoneSmoothing = 32;
 Displacement frame_bone_warp(const std::vector<Bone>& bones, const Grid& geometry, double s, int threads);
 
 // Volume centroid of a closed outward mesh (signed tetrahedra about the bounding-box centre).
@@ -246,8 +249,11 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
     for (double s : {0.5, 1.0})
       m.bone_min_det = std::min({m.bone_min_det, min_jacobian(frame_bone_warp(m.bones, m.bone_grid, s, o.sdf.threads)),
                                  min_jacobian(frame_bone_warp(back, m.bone_grid, s, o.sdf.threads))});
-    ctx.report("warp", 1.0);
-    return;
+    if (m.bone_min_det > 0) {
+      ctx.report("warp", 1.0);
+      return;
+    }
+    m.bones.clear();  // the part warp folds: the linear warp below (bone_min_det says why)
   }
   m.source_warp = extend_displacement(v0, dest0);
   m.target_warp = extend_displacement(v1, dest1);
@@ -357,7 +363,8 @@ void smooth_displacement(Displacement& d, int steps) {
 // bone changes).
 Displacement frame_bone_warp(const std::vector<Bone>& bones, const Grid& geometry, double s, int threads) {
   Displacement d = bone_displacement(bones, geometry, s, threads);
-  smooth_displacement(d, kBoneSmoothing);
+  const double cells = std::max({geometry.dims[0], geometry.dims[1], geometry.dims[2]}) - 3.0;
+  smooth_displacement(d, std::max(1, static_cast<int>(std::lround(kBoneSmoothing * (cells / 75) * (cells / 75)))));
   return d;
 }
 

@@ -49,7 +49,8 @@ struct MorphOptions {
   int anchors_per_branch = 3;    ///< interior anchors sampled on each matched branch
   /// The rotation-aware part warp (bones.h): each matched branch pair cut into this many segments
   /// whose transforms are interpolated as-rigidly-as-possible; 0: the linear warp of the transport
-  /// displacement (warp.h), which is also what runs when no branch is matched.
+  /// displacement (warp.h), which is also what runs when no branch is matched or the part warp
+  /// folds (a Jacobian determinant <= 0 at s = 0.5 or 1, after its smoothing).
   int bone_segments = 8;
   double prune_fraction = 0.08;  ///< skeleton spurs shorter than this times the source's bounding-box
                                  ///< diagonal are pruned (prune_skeleton)
@@ -94,7 +95,9 @@ struct PreparedMorph {
   // of source_warp / target_warp.
   std::vector<Bone> bones;             ///< source -> target segments
   Grid bone_grid;                      ///< where the per-frame displacements are sampled (values unused)
-  double bone_min_det = 1;             ///< smallest Jacobian determinant of the warps at s = 0.5 and 1
+  double bone_min_det = 1;             ///< smallest Jacobian determinant of the part warps (both ways,
+                                       ///< s = 0.5 and 1); <= 0: they fold, bones is left empty and the
+                                       ///< linear warp runs
 };
 
 /// \pre both meshes closed, manifold, outward oriented, one component (qs::mesh::validate with
@@ -104,7 +107,7 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
 
 /// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
 /// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
-/// smoothed by 32 Jacobi steps, inverted by Newton steps). Boundary samples are kept outside
+/// smoothed by Jacobi steps (32 on a 150-cell grid), inverted by Newton steps). Boundary samples are kept outside
 /// (>= one spacing); outside regions that do not reach the boundary (cavities, which neither input
 /// has) are filled, and inside islands of at most 8 samples (specks below the grid's resolution)
 /// dropped, both along the edges of the polygonization's tetrahedra.
