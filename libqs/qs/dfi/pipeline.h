@@ -109,7 +109,7 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
 /// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
 /// smoothed by Jacobi steps (32 on a 150-cell grid), inverted by Newton steps). Boundary samples are kept outside
 /// (>= one spacing); outside regions that do not reach the boundary (cavities, which neither input
-/// has) are filled, and inside islands of at most 8 samples (specks below the grid's resolution)
+/// has) are filled, and for 0 < t < 1 inside islands of at most 8 samples (specks below the grid's resolution)
 /// dropped, both along the edges of the polygonization's tetrahedra.
 Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
 
