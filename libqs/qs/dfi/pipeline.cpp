@@ -269,10 +269,11 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
 // Inside samples for the positive (outside) samples that no path of positive samples along the
 // edges of the Kuhn tetrahedra (the 14 neighbours of the polygonization's lattice) joins to the
 // grid's boundary: such a region's zero set would be an inner shell, a cavity, which neither input
-// has (both are one closed component). With drop_specks (not at the ends, where they are the
-// inputs' own thin parts), also outside samples for islands of at most kSpeck inside samples
-// (below the grid's resolution). Returns the number of samples changed.
-size_t fill_cavities(Grid& g, bool drop_specks) {
+// has (both are one closed component); and outside samples for islands of at most kSpeck inside
+// samples (below the grid's resolution). Only between the ends: at the ends a pocket that the
+// sampling closes (between an elephant's ear and head) and a speck are the inputs' own.
+// Returns the number of samples changed.
+size_t fill_cavities(Grid& g) {
   const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   std::vector<char> out(g.size(), 0);
   std::vector<size_t> stack;
@@ -307,7 +308,6 @@ size_t fill_cavities(Grid& g, bool drop_specks) {
     }
   // Islands of at most kSpeck inside samples (joined the same way): specks below the grid's
   // resolution that a fold of the warp leaves, not parts of either shape.
-  if (!drop_specks) return changed;
   std::vector<char> seen(g.size(), 0);
   std::vector<size_t> island;
   const float outside = static_cast<float>(g.spacing);
@@ -442,7 +442,7 @@ Grid blend_field(const PreparedMorph& m, double t, int threads) {
       for (int i = 0; i < g.dims[0]; ++i)
         if (i == 0 || j == 0 || k == 0 || i == g.dims[0] - 1 || j == g.dims[1] - 1 || k == g.dims[2] - 1)
           g.values[g.index(i, j, k)] = std::max(g.values[g.index(i, j, k)], floor);
-  fill_cavities(g, t > 0 && t < 1);
+  if (t > 0 && t < 1) fill_cavities(g);  // the ends stay the inputs' fields as sampled
   return g;
 }
 

@@ -108,9 +108,9 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
 /// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
 /// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
 /// smoothed by Jacobi steps (32 on a 150-cell grid), inverted by Newton steps). Boundary samples are kept outside
-/// (>= one spacing); outside regions that do not reach the boundary (cavities, which neither input
-/// has) are filled, and for 0 < t < 1 inside islands of at most 8 samples (specks below the grid's resolution)
-/// dropped, both along the edges of the polygonization's tetrahedra.
+/// (>= one spacing). For 0 < t < 1, outside regions that do not reach the boundary (cavities,
+/// which neither input has) are filled, and inside islands of at most 8 samples (specks below the
+/// grid's resolution) dropped, both along the edges of the polygonization's tetrahedra.
 Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
 
 /// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the
