@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "qs/core/error.h"
 #include "qs/dfi/harmonic.h"
@@ -57,6 +58,18 @@ TEST(Skeleton, CapsuleSkeletonIsAPathAlongItsAxis) {
   ASSERT_EQ(b.size(), 1u);
   EXPECT_GT(b[0].length, 1.2);  // most of the axis
   EXPECT_NEAR(b[0].at(s, 0.5).x(), 0.0, 0.15);
+}
+
+TEST(Skeleton, SameMeshSameSkeletonWhateverWasAllocatedBefore) {
+  const TriMesh m = capsule(1.0, 0.3);
+  const Skeleton a = curve_skeleton(m);
+  std::vector<std::unique_ptr<std::vector<double>>> clutter;  // change the heap between the calls
+  for (int i = 0; i < 2000; ++i) clutter.push_back(std::make_unique<std::vector<double>>(1 + i % 37));
+  for (int i = 0; i < 2000; i += 3) clutter[i].reset();
+  const Skeleton b = curve_skeleton(m);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  EXPECT_EQ(a.edges, b.edges);
+  for (size_t i = 0; i < a.nodes.size(); ++i) EXPECT_EQ(a.nodes[i], b.nodes[i]) << i;
 }
 
 TEST(Skeleton, TorusSkeletonIsACycle) {

@@ -118,9 +118,7 @@ std::vector<int> part_labels(const VoxelSet& v, const Skeleton& s, const std::ve
   return label;
 }
 
-// Skeletons of both shapes, pruned, and their branches. Computed before any threaded work: CGAL's
-// skeletonization orders some steps by memory address, so its result depends on the process's
-// allocation history, which worker threads make depend on timing (see skeleton.h).
+// Skeletons of both shapes, pruned, and their branches.
 void build_skeletons(PreparedMorph& m, const TriMesh& source, const TriMesh& moved, const MorphOptions& o,
                      const Context& ctx) {
   ctx.report("skeletons", 0.0);

@@ -17,10 +17,10 @@ struct Skeleton {
 };
 
 /// \pre mesh closed, manifold, oriented (any genus). \throws SolverError when CGAL fails.
-/// CGAL's skeletonization copies the mesh into a pointer-based structure and orders some steps by
-/// address: the same mesh gives the same skeleton after the same allocation history (the same
-/// process run), not after any (measured: 267 then 248 nodes for horse_5k called twice in one
-/// process). Callers that need reproducible files call it before any multi-threaded work.
+/// CGAL's skeletonization collapses edges in the order of their handles' addresses; its
+/// containers allocate from an arena of their own (skeleton.cpp), in allocation order, so the
+/// result depends on the mesh alone, not on what the process allocated before (with the default
+/// allocator horse_5k gave 267 then 248 nodes when called twice in one process).
 Skeleton curve_skeleton(const TriMesh& mesh);
 
 /// A skeleton path between two feature nodes (degree != 2), through nodes of degree 2. A cycle
