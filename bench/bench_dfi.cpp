@@ -1,7 +1,7 @@
 // qs-dfi benchmark (issue 16): for each pair of ../shared/meshes and each method (the
 // skeleton-guided warp with per-part transport, the same with one global transport, the plain
-// blend), the correspondence (distance fields, skeletons, matching, harmonic fields, transport,
-// warp) and every frame at a 150^3 grid (targets: correspondence < 60 s, < 10 s per frame on a
+// blend; "/parts" or "/linear" says which warp ran), the correspondence (distance fields,
+// skeletons, matching, harmonic fields, transport, warp) and every frame at a 150^3 grid (targets: correspondence < 60 s, < 10 s per frame on a
 // 2-core machine), endpoints against the inputs (Hausdorff in voxels), the
 // topology of every frame, the middle frame's volume against the endpoints' mean (in morph space),
 // the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
                                    {"cat-koala", "cat_16k.obj", "koala_7k.obj"}};
   std::printf("dfi benchmark: methods %s, --align similarity, grid %d, %d frames, %u hardware threads\n", methods.c_str(),
               grid, frames, std::thread::hardware_concurrency());
-  std::printf("%-15s %-7s %9s %8s %8s %8s %9s %14s %10s %8s  %s\n", "pair", "method", "corr. s", "frame s", "max fr s",
+  std::printf("%-15s %-14s %9s %8s %8s %8s %9s %14s %10s %8s  %s\n", "pair", "method", "corr. s", "frame s", "max fr s",
               "ends vox", "1 comp", "mid vol/mean", "smooth", "threads", "genus per frame");
   for (const Pair& p : pairs) {
     if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), p.name) == wanted.end()) continue;
@@ -137,7 +137,9 @@ int main(int argc, char** argv) {
                       dfi::blend_field(m, 0.5, 1).values == dfi::blend_field(m, 0.5, 2).values;
     char mid[32];
     std::snprintf(mid, sizeof mid, "%.3f", mid_volume / mean_end);
-    std::printf("%-15s %-7s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), method.c_str(), fields_s,
+    // Which warp ran: the part warp (bones) or the linear one (no matched branch, or it folds).
+    const std::string label = method + (m.warp ? (m.bones.empty() ? "/linear" : "/parts") : "");
+    std::printf("%-15s %-14s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), label.c_str(), fields_s,
                 total / frames, worst, end_vox, one_component, frames, mid, smooth.c_str(), same ? "same" : "DIFFER",
                 genera.c_str());
     std::fflush(stdout);

@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
   int frames = 11, grid = 150, threads = 0, band = 3;
   double fps = 12;
   bool no_warp = false, exact_endpoints = false, quiet = false, global_transport = false;
-  int anchors_per_branch = 3, emd_voxels = 1500;
+  int anchors_per_branch = 3, emd_voxels = 1500, bone_segments = 8;
   app.add_option("SOURCE", source_file, "Source mesh (.obj .off .ply .stl), closed, any genus")->required();
   app.add_option("TARGET", target_file, "Target mesh, closed, any genus")->required();
   app.add_option("--frames", frames, "Frames K, from t = 0 to t = 1 inclusive (default 11)")
@@ -114,6 +114,9 @@ int main(int argc, char** argv) {
                                                 "matches")->expected(2);
   app.add_option("--anchors-per-branch", anchors_per_branch, "Anchors sampled inside each matched branch "
                                                              "(default 3)")->check(CLI::Range(0, 50));
+  app.add_option("--bone-segments", bone_segments, "Segments per matched branch of the rotation-aware part warp "
+                                                   "(default 8); 0: the linear warp of the transport displacement")
+      ->check(CLI::Range(0, 100));
   app.add_option("--emd-voxels", emd_voxels, "Interior voxels per shape for the correspondence (default 1500)")
       ->check(CLI::Range(50, 20000));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
@@ -138,6 +141,7 @@ int main(int argc, char** argv) {
     opt.sdf.band = band;
     opt.sdf.threads = threads;
     opt.warp = !no_warp;
+    opt.bone_segments = bone_segments;
     opt.part_transport = !global_transport;
     opt.anchors_per_branch = anchors_per_branch;
     opt.emd_voxels = emd_voxels;
@@ -253,6 +257,9 @@ int main(int argc, char** argv) {
                                   {"parts", morph.parts},
                                   {"cost", morph.transport_cost},
                                   {"harmonic_agreement", morph.harmonic_agreement},
+                                  {"warp", morph.bones.empty() ? "linear" : "parts"},
+                                  {"bones", morph.bones.size()},
+                                  {"bones_min_det", morph.bone_min_det},
                                   {"folds", {{"source_min_det", morph.source_folds.min_det},
                                              {"target_min_det", morph.target_folds.min_det},
                                              {"source_smoothing_steps", morph.source_folds.smoothing_steps},
@@ -262,7 +269,8 @@ int main(int argc, char** argv) {
         << " nodes, " << morph.matching.nodes.size() << " node and " << morph.matching.branches.size()
         << " branch matches, " << morph.anchors.size() << " anchors, " << morph.parts << " part(s), "
         << morph.source_voxels << " / " << morph.target_voxels << " voxels, fold check min det "
-        << std::min(morph.source_folds.min_det, morph.target_folds.min_det);
+        << (morph.bones.empty() ? std::min(morph.source_folds.min_det, morph.target_folds.min_det) : morph.bone_min_det)
+        << (morph.bones.empty() ? ", linear warp" : ", part warp with " + std::to_string(morph.bones.size()) + " bones");
       say(m.str());
     }
     if (glb) {

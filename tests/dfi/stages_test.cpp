@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "qs/core/error.h"
 #include "qs/dfi/harmonic.h"
@@ -57,6 +58,18 @@ TEST(Skeleton, CapsuleSkeletonIsAPathAlongItsAxis) {
   ASSERT_EQ(b.size(), 1u);
   EXPECT_GT(b[0].length, 1.2);  // most of the axis
   EXPECT_NEAR(b[0].at(s, 0.5).x(), 0.0, 0.15);
+}
+
+TEST(Skeleton, SameMeshSameSkeletonWhateverWasAllocatedBefore) {
+  const TriMesh m = capsule(1.0, 0.3);
+  const Skeleton a = curve_skeleton(m);
+  std::vector<std::unique_ptr<std::vector<double>>> clutter;  // change the heap between the calls
+  for (int i = 0; i < 2000; ++i) clutter.push_back(std::make_unique<std::vector<double>>(1 + i % 37));
+  for (int i = 0; i < 2000; i += 3) clutter[i].reset();
+  const Skeleton b = curve_skeleton(m);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  EXPECT_EQ(a.edges, b.edges);
+  for (size_t i = 0; i < a.nodes.size(); ++i) EXPECT_EQ(a.nodes[i], b.nodes[i]) << i;
 }
 
 TEST(Skeleton, TorusSkeletonIsACycle) {
@@ -191,6 +204,8 @@ TEST(Pipeline, WarpedMorphOfAGeneratedPairKeepsClosedFramesAndExactEnds) {
   EXPECT_GE(m.anchors.size(), 2u);
   EXPECT_GT(m.source_folds.min_det, 0);
   EXPECT_GT(m.target_folds.min_det, 0);
+  EXPECT_FALSE(m.bones.empty());  // one matched branch: the part warp
+  EXPECT_GT(m.bone_min_det, 0);
   EXPECT_EQ(blend_field(m, 0.0).values, m.source_sdf.values);  // the ends are the inputs' fields
   for (double t : {0.0, 0.5, 1.0}) {
     const MeshStats s = mesh_stats(frame_mesh(m, blend_field(m, t), t));

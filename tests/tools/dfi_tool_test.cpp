@@ -102,3 +102,30 @@ TEST_F(DfiTool, WarpReportsSkeletonsMatchesAnchorsAndFolds) {
   EXPECT_GT(j["correspondence"]["source_voxels"].get<int>(), 50);
   for (const auto& f : j["frames"]) EXPECT_GT(f["volume"].get<double>(), 0);
 }
+
+TEST_F(DfiTool, PartWarpGivesTheSameBytesOnOneOrTwoThreads) {
+  // A capsule-like ellipsoid to a longer one: one matched branch, so the part warp (bones) runs.
+  const std::string a = write("pa.obj", qs::shapes::ellipsoid(1.2, 0.4, 0.4, 3));
+  const std::string b = write("pb.obj", qs::shapes::ellipsoid(1.6, 0.35, 0.3, 3));
+  std::string bytes[2][2];
+  for (int t = 1; t <= 2; ++t) {
+    const fs::path out = dir_ / ("p" + std::to_string(t));
+    const RunResult r = run_tool("qs-dfi", a + " " + b + " --frames 3 --grid 24 --emd-voxels 300 -q --threads " +
+                                               std::to_string(t) + " -o " + out.string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    const auto j = nlohmann::json::parse(std::ifstream(out / "dfi.json"));
+    EXPECT_EQ(j["correspondence"]["warp"], "parts");
+    EXPECT_GT(j["correspondence"]["bones"].get<int>(), 0);
+    for (const auto& f : j["frames"]) {
+      EXPECT_EQ(f["components"], 1);
+      EXPECT_EQ(f["genus"], 0);
+    }
+    int k = 0;
+    for (const char* f : {"frame_0001.obj", "dfi.json"}) {
+      std::ifstream x(out / f);
+      bytes[t - 1][k++] = std::string(std::istreambuf_iterator<char>(x), {});
+    }
+  }
+  EXPECT_EQ(bytes[0][0], bytes[1][0]);
+  EXPECT_EQ(bytes[0][1], bytes[1][1]);
+}

@@ -53,9 +53,28 @@ SkeletonMatching match_skeletons(const Skeleton& s0, const std::vector<Branch>& 
     match1[j] = i;
     m.nodes.push_back({i, j, false, ""});
   }
-  // Branches whose ends are matched to the ends of a target branch; the closest length ratio wins.
-  std::vector<char> used1(b1.size(), 0);
+  // The paper's cases 1-3: a branch with a terminal end goes with the target branch that holds the
+  // terminal's match (a terminal lies on exactly one branch), whatever its other end.
+  std::vector<char> used0(b0.size(), 0), used1(b1.size(), 0);
   for (int p = 0; p < static_cast<int>(b0.size()); ++p) {
+    const Branch& br = b0[p];
+    for (const int end : {br.a, br.b}) {
+      if (used0[p] || d0[end] != 1 || match0[end] < 0 || d1[match0[end]] != 1) continue;
+      const int t = match0[end];
+      for (int q = 0; q < static_cast<int>(b1.size()); ++q) {
+        if (used1[q] || (b1[q].a != t && b1[q].b != t)) continue;
+        // Same direction when the terminal sits at the same end of both branches.
+        const bool reversed = (end == br.a) != (b1[q].a == t);
+        used0[p] = used1[q] = 1;
+        m.branches.push_back({p, q, reversed});
+        break;
+      }
+    }
+  }
+  // Case 6: branches whose two ends are matched to the ends of a target branch; the closest length
+  // ratio wins.
+  for (int p = 0; p < static_cast<int>(b0.size()); ++p) {
+    if (used0[p]) continue;
     const Branch& br = b0[p];
     const int ta = match0[br.a], tb = match0[br.b];
     if (ta < 0 || tb < 0) continue;
@@ -84,6 +103,8 @@ SkeletonMatching match_skeletons(const Skeleton& s0, const std::vector<Branch>& 
       m.branches.push_back({p, best, best_rev});
     }
   }
+  std::sort(m.branches.begin(), m.branches.end(),
+            [](const BranchPair& x, const BranchPair& y) { return x.source < y.source; });
   return m;
 }
 

@@ -7,7 +7,9 @@
 // a terminal only to a terminal and a junction only to a junction (the paper votes over
 // node-pair embeddings; ours is the nearest-first rule, which the alignment makes meaningful).
 // Forced pairs (named landmarks on both shapes) are matched first, whatever their kind.
-// A source branch is matched to a target branch whose two end nodes are matched to its own.
+// Branches (the paper's figure 5): a branch with a terminal end is matched to the target branch
+// that holds the terminal's match (cases 1-3, whatever the other ends); a branch between two
+// junctions to a target branch whose two ends are matched to its own (case 6).
 
 #include <string>
 #include <vector>

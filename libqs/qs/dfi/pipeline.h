@@ -9,14 +9,16 @@
 // With the warp (the default), prepare_morph also builds the paper's correspondence: curve
 // skeletons of both shapes, branch matching, anchors along matched branches, harmonic fields on
 // the interior voxels of a coarse grid, the transport per matched part (or globally, the
-// ablation), and from it a displacement field per shape, checked for folds. Frame t then blends
-// the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
+// ablation), and from it a displacement field per shape, checked for folds; where branches are
+// matched, the rotation-aware part warp of bones.h replaces that displacement. Frame t then
+// blends the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
 
 #include <string>
 #include <vector>
 
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
+#include "qs/dfi/bones.h"
 #include "qs/dfi/grid.h"
 #include "qs/dfi/harmonic.h"
 #include "qs/dfi/matching.h"
@@ -45,6 +47,11 @@ struct MorphOptions {
   bool warp = true;              ///< the skeleton-guided warp; false: the plain blend
   bool part_transport = true;    ///< transport per matched part (the paper); false: one global solve
   int anchors_per_branch = 3;    ///< interior anchors sampled on each matched branch
+  /// The rotation-aware part warp (bones.h): each matched branch pair cut into this many segments
+  /// whose transforms are interpolated as-rigidly-as-possible; 0: the linear warp of the transport
+  /// displacement (warp.h), which is also what runs when no branch is matched or the part warp
+  /// folds (a Jacobian determinant <= 0 at s = 0.5 or 1, after its smoothing).
+  int bone_segments = 8;
   double prune_fraction = 0.08;  ///< skeleton spurs shorter than this times the source's bounding-box
                                  ///< diagonal are pruned (prune_skeleton)
   int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
@@ -84,6 +91,13 @@ struct PreparedMorph {
                                        ///< vectors are within 0.002 * #anchors (the paper's figure 10)
   Displacement source_warp, target_warp;
   FoldCheck source_folds, target_folds;
+  // The rotation-aware part warp (when bone_segments > 0 and a branch is matched): used instead
+  // of source_warp / target_warp.
+  std::vector<Bone> bones;             ///< source -> target segments
+  Grid bone_grid;                      ///< where the per-frame displacements are sampled (values unused)
+  double bone_min_det = 1;             ///< smallest Jacobian determinant of the part warps (both ways,
+                                       ///< s = 0.5 and 1); <= 0: they fold, bones is left empty and the
+                                       ///< linear warp runs
 };
 
 /// \pre both meshes closed, manifold, outward oriented, one component (qs::mesh::validate with
@@ -92,7 +106,11 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
                             const Context& ctx = {});
 
 /// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
-/// morph has a warp. Boundary samples are kept outside (>= one spacing).
+/// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
+/// smoothed by Jacobi steps (32 on a 150-cell grid), inverted by Newton steps). Boundary samples are kept outside
+/// (>= one spacing). For 0 < t < 1, outside regions that do not reach the boundary (cavities,
+/// which neither input has) are filled, and inside islands of at most 8 samples (specks below the
+/// grid's resolution) dropped, both along the edges of the polygonization's tetrahedra.
 Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
 
 /// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the

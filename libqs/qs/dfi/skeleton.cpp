@@ -1,6 +1,56 @@
 // The one translation unit that instantiates CGAL's mean curvature flow skeletonization.
 #include "qs/dfi/skeleton.h"
 
+#include <sys/mman.h>
+
+#include <cstddef>
+#include <memory>
+#include <new>
+
+// CGAL's skeletonization copies the mesh into a Polyhedron_3 and collapses edges in the order of a
+// std::set of edge handles, that is by memory address: with the default allocator the skeleton
+// depends on what the process allocated and freed before (horse_5k: 267 then 248 nodes when called
+// twice in one process). Its containers take their allocator from CGAL_ALLOCATOR; ours hands out
+// memory from one reserved range in allocation order, so addresses, and with them the skeleton,
+// depend on the mesh alone. Frees are no-ops; the range is unmapped after each skeleton.
+namespace qs::dfi::skeleton_arena {
+struct Arena {
+  char* base = nullptr;
+  size_t size = 0, used = 0;
+};
+inline thread_local Arena* current = nullptr;
+inline bool owns(const void* p) {
+  return current && static_cast<const char*>(p) >= current->base && static_cast<const char*>(p) < current->base + current->size;
+}
+template <class T>
+struct Allocator {
+  using value_type = T;
+  Allocator() = default;
+  template <class U>
+  Allocator(const Allocator<U>&) {}
+  template <class U>
+  struct rebind {
+    using other = Allocator<U>;
+  };
+  T* allocate(size_t n) {
+    if (!current) return std::allocator<T>().allocate(n);
+    const size_t align = alignof(T) > alignof(std::max_align_t) ? alignof(T) : alignof(std::max_align_t);
+    const size_t start = (current->used + align - 1) / align * align;
+    if (n > (current->size - start) / sizeof(T)) throw std::bad_alloc();
+    current->used = start + n * sizeof(T);
+    return reinterpret_cast<T*>(current->base + start);
+  }
+  void deallocate(T* p, size_t n) {
+    if (!owns(p)) std::allocator<T>().deallocate(p, n);
+  }
+  template <class U>
+  bool operator==(const Allocator<U>&) const { return true; }
+  template <class U>
+  bool operator!=(const Allocator<U>&) const { return false; }
+};
+}  // namespace qs::dfi::skeleton_arena
+#define CGAL_ALLOCATOR(T) qs::dfi::skeleton_arena::Allocator<T>
+
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/extract_mean_curvature_flow_skeleton.h>
@@ -30,10 +80,28 @@ Skeleton curve_skeleton(const TriMesh& mesh) {
       throw InvalidInput("skeleton: face " + std::to_string(f) + " cannot be added (not a manifold oriented surface)");
   }
   Skeletonization::Skeleton sk;
-  try {
-    CGAL::extract_mean_curvature_flow_skeleton(sm, sk);
-  } catch (const std::exception& e) {
-    throw SolverError(std::string("skeleton: CGAL's mean curvature flow failed: ") + e.what());
+  {
+    // The arena: 4 GiB of address space, pages committed as they are touched.
+    skeleton_arena::Arena arena;
+    arena.size = size_t(4) << 30;
+    void* base = mmap(nullptr, arena.size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    if (base == MAP_FAILED) throw SolverError("skeleton: cannot reserve address space for CGAL's skeletonization");
+    arena.base = static_cast<char*>(base);
+    struct Guard {
+      skeleton_arena::Arena& a;
+      ~Guard() {
+        skeleton_arena::current = nullptr;
+        munmap(a.base, a.size);
+      }
+    } guard{arena};
+    skeleton_arena::current = &arena;
+    try {
+      CGAL::extract_mean_curvature_flow_skeleton(sm, sk);
+    } catch (const std::bad_alloc&) {
+      throw SolverError("skeleton: CGAL's mean curvature flow used more than 4 GiB");
+    } catch (const std::exception& e) {
+      throw SolverError(std::string("skeleton: CGAL's mean curvature flow failed: ") + e.what());
+    }
   }
   Skeleton out;
   const auto n = boost::num_vertices(sk);

@@ -145,7 +145,56 @@ Vec3 displacement_at(const Displacement& d, const Vec3& p) {
   return v;
 }
 
+// The displacement at p and its gradient (rows: components) within p's cell.
+Vec3 displacement_and_gradient(const Displacement& d, const Vec3& p, Eigen::Matrix3d& grad) {
+  const Grid& g = d.u[0];
+  const Vec3 q = (p - g.origin) / g.spacing;
+  int c[3];
+  double f[3];
+  for (int a = 0; a < 3; ++a) {
+    const double x = std::clamp(q[a], 0.0, static_cast<double>(g.dims[a] - 1));
+    c[a] = std::min(static_cast<int>(std::floor(x)), g.dims[a] - 2);
+    f[a] = x - c[a];
+  }
+  Vec3 v = Vec3::Zero();
+  grad.setZero();
+  for (int corner = 0; corner < 8; ++corner) {
+    const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;
+    const double wx = dx ? f[0] : 1 - f[0], wy = dy ? f[1] : 1 - f[1], wz = dz ? f[2] : 1 - f[2];
+    const size_t id = g.index(c[0] + dx, c[1] + dy, c[2] + dz);
+    const Vec3 u(d.u[0].values[id], d.u[1].values[id], d.u[2].values[id]);
+    v += wx * wy * wz * u;
+    const Vec3 dw((dx ? 1 : -1) * wy * wz, (dy ? 1 : -1) * wx * wz, (dz ? 1 : -1) * wx * wy);
+    grad += u * dw.transpose();
+  }
+  grad /= g.spacing;
+  return v;
+}
+
 }  // namespace
+
+Grid warped_field_newton(const Grid& sdf, const Displacement& d, int threads) {
+  Grid out = sdf;
+  const int nx = sdf.dims[0], ny = sdf.dims[1], nz = sdf.dims[2];
+  const double tol2 = 1e-8 * sdf.spacing * sdf.spacing;
+  parallel_chunks(nz, threads, [&](int k) {
+    Eigen::Matrix3d grad;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const Vec3 y = sdf.point(i, j, k);
+        Vec3 x = y;
+        for (int it = 0; it < 8; ++it) {
+          const Vec3 r = x + displacement_and_gradient(d, x, grad) - y;
+          if (r.squaredNorm() < tol2) break;
+          const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() + grad;
+          const double det = a.determinant();
+          x -= det > 0.05 ? Vec3(a.inverse() * r) : r;
+        }
+        out.values[sdf.index(i, j, k)] = static_cast<float>(sdf.sample(x));
+      }
+  });
+  return out;
+}
 
 Grid warped_field(const Grid& sdf, const Displacement& d, double s, int threads) {
   Grid out = sdf;

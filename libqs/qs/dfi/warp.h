@@ -43,4 +43,9 @@ FoldCheck remove_folds(Displacement& d, double min_det_wanted = 0.05, int max_st
 /// The field sdf warped by s u: value at y = sdf(x) where x + s u(x) = y (fixed point, 6 steps).
 Grid warped_field(const Grid& sdf, const Displacement& d, double s, int threads = 0);
 
+/// The field sdf warped by u (s = 1): value at y = sdf(x) where x + u(x) = y, by at most 8 Newton steps
+/// with the gradient of u's trilinear interpolation (a plain fixed-point step where I + grad u is
+/// nearly singular); converges for displacements that rotate (where the fixed point does not).
+Grid warped_field_newton(const Grid& sdf, const Displacement& d, int threads = 0);
+
 }  // namespace qs::dfi
