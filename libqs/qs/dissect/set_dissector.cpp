@@ -173,7 +173,6 @@ DissectionSet SetDissector::run() {
   DissectionSet out;
   std::map<std::string, std::vector<int>> refined_faces;  // node name -> faces added per mesh
   std::vector<size_t> refined_total(nm, 0);                // faces added per mesh
-  std::map<std::string, int> folds_before;                 // node name -> folds at its last evaluation
   std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
   // Progress: the share of the surface area in finished leaves (cuts add faces, not area).
   double total_area = 0, done_area = 0;
@@ -248,25 +247,18 @@ DissectionSet SetDissector::run() {
       }, ps.size() > 1);
       progress = std::find(force.begin(), force.end(), 1) != force.end();
     }
-    // Folds outrank the depth bound: a node whose map still folds in some mesh after its local
-    // refinements (below) is split up to kFoldExtraDepth levels past max_depth. A feature deep in
-    // a long protrusion with no seed at its tip (a tail tip) stays in the centre child of every
-    // split, squeezed by the mean-value map, and a warp that moves it to its counterparts'
+    // Folds outrank the depth bound for a squeezed protrusion tip (see squeezed_tip): such a node
+    // is split up to kFoldExtraDepth levels past max_depth instead of being refined. A feature
+    // deep in a long protrusion with no seed at its tip (a tail tip) stays in the centre child of
+    // every split, squeezed by the mean-value map, and a warp that moves it to its counterparts'
     // position folds the rings around it; each split cuts the protrusion across a little closer
-    // to the tip, until the feature's patch is small enough to align and untangle.
-    // Refinement counts as spent when a round did not reduce the folds (summed over the set).
+    // to the tip, until the feature's patch is small enough to align and untangle. Below the
+    // extra levels a folded node keeps splitting (it exists only for its folds); at the last
+    // one, local refinement is the last resort as everywhere else.
     bool folded = false;
-    int folds = 0;
-    for (const auto& p : ps) {
-      folded = folded || !p.sp.bijective();
-      folds += p.sp.flipped_faces + p.sp.zero_area_faces;
-    }
-    bool refinement_spent = node.refinements >= kMaxRefinements || node.depth > opt_.max_depth;
-    if (const auto it = folds_before.find(node.name); node.refinements > 0 && it != folds_before.end())
-      refinement_spent = refinement_spent || folds >= it->second;
-    folds_before[node.name] = folds;
+    for (const auto& p : ps) folded = folded || !p.sp.bijective();
     const int depth_limit =
-        opt_.max_depth + (folded && (refinement_spent || squeezed_tip(ps)) ? kFoldExtraDepth : 0);
+        opt_.max_depth + (folded && (node.depth > opt_.max_depth || squeezed_tip(ps)) ? kFoldExtraDepth : 0);
     StopReason stop = StopReason::None;
     std::string detail;
     if (small) {
@@ -367,15 +359,6 @@ DissectionSet SetDissector::run() {
         queue.push_front(std::move(again));
         continue;
       }
-    }
-    // A folded node at the depth bound that refinement cannot help (any more) gets its extra
-    // levels: evaluated again as if its refinements were spent, it is split.
-    if (folded && stop == StopReason::MaxDepth && node.refinements < kMaxRefinements &&
-        node.depth < opt_.max_depth + kFoldExtraDepth && biggest_over >= opt_.min_faces_to_split) {
-      std::vector<Node> again = nodes;
-      for (auto& n : again) n.refinements = kMaxRefinements;
-      queue.push_front(std::move(again));
-      continue;
     }
     out.tree.push_back(tn);
     for (size_t i = 0; i < meshes_.size(); ++i) {
