@@ -13,9 +13,13 @@
 
 namespace qs::dissect::detail {
 
+// Batches of 10 Gauss-Seidel sweeps per untangling round (see untangle).
+constexpr int kUntangleBatches = 20;
+
 // Local untangling of a folded map: the free vertices of folded faces and two rings around them
 // move to the average of their neighbours (Gauss-Seidel), the border and `fixed` vertices stay.
-// Repeated while folds remain (at most `rounds` times). Returns the map with fewer folds.
+// Each round smooths until the map is bijective or kUntangleBatches * 10 sweeps are done; repeated
+// while folds remain (at most `rounds` times). Returns the map with fewer folds.
 param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam& in, const std::vector<char>& fixed,
                             int rounds) {
   const int nv = static_cast<int>(pm.positions.size());
@@ -42,14 +46,19 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
           for (int w : nb[v]) grown[w] = 1;
       mark.swap(grown);
     }
-    for (int sweep = 0; sweep < 10; ++sweep)
-      for (int v = 0; v < nv; ++v) {
-        if (!mark[v] || pinned[v] || nb[v].empty()) continue;
-        Vec2 c = Vec2::Zero();
-        for (int w : nb[v]) c += cur.uv[w];
-        cur.uv[v] = c / static_cast<double>(nb[v].size());
-      }
-    param::count_uv_faces(pm.faces, cur);
+    // Gauss-Seidel converges slowly on a region of many rings (the rings around a feature deep in a
+    // squeezed protrusion): up to kUntangleBatches batches of 10 sweeps, until no fold is left.
+    for (int batch = 0; batch < kUntangleBatches; ++batch) {
+      for (int sweep = 0; sweep < 10; ++sweep)
+        for (int v = 0; v < nv; ++v) {
+          if (!mark[v] || pinned[v] || nb[v].empty()) continue;
+          Vec2 c = Vec2::Zero();
+          for (int w : nb[v]) c += cur.uv[w];
+          cur.uv[v] = c / static_cast<double>(nb[v].size());
+        }
+      param::count_uv_faces(pm.faces, cur);
+      if (cur.bijective()) break;
+    }
     if (cur.flipped_faces + cur.zero_area_faces < best.flipped_faces + best.zero_area_faces) best = cur;
   }
   return best;
