@@ -9,7 +9,9 @@
 // even level-5 face count relative to the uniform one in the time column.
 //   usage: qs-bench-defaults [MESH_DIR] [CANDIDATES] [MESH_FILTER]
 //   MESH_DIR default ../shared/meshes; CANDIDATES a comma-separated list of candidate names (default
-//   all; "default" is DissectOptions{} as compiled); MESH_FILTER a substring of the file names.
+//   all; "default" is DissectOptions{} as compiled; relax* and cotan* also set the uniform remesh's
+//   grid relaxation, UniformOptions::relax, which the "/even" rows do not use); MESH_FILTER a
+//   substring of the file names.
 
 #include <algorithm>
 #include <chrono>
