@@ -9,7 +9,9 @@
 // even level-5 face count relative to the uniform one in the time column.
 //   usage: qs-bench-defaults [MESH_DIR] [CANDIDATES] [MESH_FILTER]
 //   MESH_DIR default ../shared/meshes; CANDIDATES a comma-separated list of candidate names (default
-//   all; "default" is DissectOptions{} as compiled); MESH_FILTER a substring of the file names.
+//   all; "default" is DissectOptions{} as compiled; relax* and cotan* also set the uniform remesh's
+//   grid relaxation, UniformOptions::relax, which the "/even" rows do not use); MESH_FILTER a
+//   substring of the file names.
 
 #include <algorithm>
 #include <chrono>
@@ -40,7 +42,14 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 struct Candidate {
   std::string name;
   qs::dissect::DissectOptions options;
+  double relax = qs::remesh::UniformOptions{}.relax;  ///< the uniform remesh's grid relaxation
 };
+
+qs::dissect::DissectOptions cotan() {
+  qs::dissect::DissectOptions o;
+  o.intrinsic_cotan = true;
+  return o;
+}
 
 qs::dissect::DissectOptions make(double tau, double max_area, int stretch_iterations, int split_stretch) {
   qs::dissect::DissectOptions o;
@@ -61,6 +70,12 @@ std::vector<Candidate> candidates() {
       {"a15s10x3", make(3, 0.15, 10, 3)},
       {"t2a15s10", make(2, 0.15, 10, 0)},
       {"t2.5a10s10", make(2.5, 0.10, 10, 0)},
+      // Remesh grid relaxation (UniformOptions::relax) on the default dissection, and cotan maps.
+      {"relax0", qs::dissect::DissectOptions{}, 0.0},
+      {"relax50", qs::dissect::DissectOptions{}, 0.5},
+      {"relax90", qs::dissect::DissectOptions{}, 0.9},
+      {"cotan", cotan(), 0.0},
+      {"cotan_relax90", cotan(), 0.9},
   };
 }
 
@@ -99,10 +114,11 @@ int main(int argc, char** argv) {
       files.push_back(e.path());
   }
   std::sort(files.begin(), files.end());
-  std::printf("candidates (tau, max patch area, leaf stretch rounds, split-stretch rounds):\n");
+  std::printf("candidates (tau, max patch area, leaf stretch rounds, split-stretch rounds, cotan, remesh grid relax):\n");
   for (const auto& c : cands)
-    std::printf("  %-12s tau %.2f, max-area %.3g, optimize-stretch %d, split-stretch %d\n", c.name.c_str(),
-                c.options.tau, c.options.max_patch_area, c.options.stretch_iterations, c.options.split_stretch_rounds);
+    std::printf("  %-12s tau %.2f, max-area %.3g, optimize-stretch %d, split-stretch %d, cotan %d, relax %.2f\n",
+                c.name.c_str(), c.options.tau, c.options.max_patch_area, c.options.stretch_iterations,
+                c.options.split_stretch_rounds, int(c.options.intrinsic_cotan), c.relax);
   std::printf("\nerr5 = level-5 mean error (%% of diagonal); <5/<10/<20 = %% of level-4 faces with a smallest angle "
               "under 5/10/20 deg, med = median (deg); vsp = level-5 vertex-density spread p95/p5; tsp = texel-density "
               "spread p95/p5; time = dissection s\n\n");
@@ -131,6 +147,7 @@ int main(int argc, char** argv) {
         const double time = seconds_since(t0);
         qs::remesh::UniformOptions uo;  // as qs-remesh cuts the cells
         uo.diagonals = qs::remesh::DiagonalRule::BestAngle;
+        uo.relax = c.relax;
         const auto r4 = qs::remesh::remesh_uniform(d.chart, 4, uo);
         const auto a = qs::remesh::smallest_angle_stats(r4.mesh());
         const auto r5 = qs::remesh::remesh_uniform(d.chart, 5, uo);

@@ -88,6 +88,14 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"angle", "pattern"}));
   even_flag->excludes(diag_opt);
+  double grid_relax = qs::remesh::UniformOptions{}.relax;
+  auto* relax_opt = app.add_option("--grid-relax", grid_relax,
+                 "Uniform: move the grid samples toward equal 3D spacing along every patch side (0 = the regular "
+                 "grid u = i/2^n; same connectivity, (u,v) written to remesh.json)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, qs::remesh::kMaxGridRelax));
+  even_flag->excludes(relax_opt);
+  ad->excludes(relax_opt);
   // The error report is opt-in: its closest-point tree over the original costs more than the
   // whole remesh at the usual levels (venus_100k level 5: ~0.1 s of CPU for the remesh, ~0.3 s
   // for the report; see the README).
@@ -163,6 +171,7 @@ int main(int argc, char** argv) {
       qs::remesh::UniformOptions uo;
       uo.quads = quads;
       uo.diagonals = diagonals == "angle" ? qs::remesh::DiagonalRule::BestAngle : qs::remesh::DiagonalRule::Pattern;
+      uo.relax = grid_relax;
       set = qs::remesh::remesh_uniform(charts, level, uo, ctx);
     } else {
       aopt.epsilon = eps;
@@ -256,6 +265,7 @@ int main(int argc, char** argv) {
                                   {"level", c.level},
                                   {"quads", quads},
                                   {"diagonals", level >= 0 && !even ? diagonals : std::string("templates")},
+                                  {"grid_relax", level >= 0 && !even ? grid_relax : 0.0},
                                   {"vertices", c.num_vertices()},
                                   {"faces", c.num_faces()},
                                   {"base_vertices", c.num_base_vertices},

@@ -365,3 +365,137 @@ TEST(ChartSampler, GridLocationAgreesWithPointLocation) {
       EXPECT_LT((sampler.position(l) - sampler.point(1, qs::Vec2(0.025 + a * 0.05, 0.025 + b * 0.05))).norm(), 1e-12);
     }
 }
+
+// --- Grid relaxation (UniformOptions::relax, issue 13) ---
+
+namespace {
+
+qs::remesh::UniformOptions relaxed(double relax, qs::remesh::DiagonalRule rule = qs::remesh::DiagonalRule::Pattern) {
+  qs::remesh::UniformOptions o;
+  o.relax = relax;
+  o.diagonals = rule;
+  return o;
+}
+
+}  // namespace
+
+TEST(UniformRelax, KeepsTheConnectivityAndAValidClosedSurface) {
+  for (const auto* d : {&sphere_dissection(), &star_dissection()}) {
+    for (int level = 0; level <= 4; ++level) {
+      SCOPED_TRACE("level " + std::to_string(level));
+      const auto plain = qs::remesh::remesh_uniform(d->chart, level);
+      const auto r = qs::remesh::remesh_uniform(d->chart, level, relaxed(0.9));
+      const auto& c = r.connectivity;
+      EXPECT_EQ(c.faces, plain.connectivity.faces);  // only (u, v) and positions move
+      EXPECT_EQ(c.vertex_patch, plain.connectivity.vertex_patch);
+      EXPECT_EQ(expect_closed_manifold(c.faces, c.num_vertices()), 2);
+      if (level > 0) expect_valid_sphere(r.mesh(), "relaxed");
+      const double diag = qs::bounding_box(d->chart.mesh.positions).diagonal();
+      EXPECT_EQ(count_coincident(r.positions, 1e-9 * diag), 0);
+      const auto t = qs::remesh::build_base_topology(d->chart.patches);
+      for (int b = 0; b < t.num_vertices; ++b) {
+        EXPECT_EQ(r.positions[b], d->chart.mesh.positions[t.chart_vertex[b]]);
+        EXPECT_EQ(c.vertex_uv[b], plain.connectivity.vertex_uv[b]);  // corners stay exact
+      }
+      // Every vertex lies on the chart at its recorded (patch, u, v).
+      const qs::remesh::ChartSampler sampler(d->chart);
+      for (int v = 0; v < c.num_vertices(); ++v) {
+        const auto& uv = c.vertex_uv[v];
+        ASSERT_TRUE(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1) << "vertex " << v;
+        EXPECT_EQ(sampler.point(c.vertex_patch[v], uv), r.positions[v]) << "vertex " << v;
+      }
+    }
+  }
+}
+
+TEST(UniformRelax, GridLinesStayMonotoneAndSidesAreShared) {
+  // In every patch, rows increase in u and columns in v (no fold of the grid in the square); a
+  // side sample seen from the twin patch is the mirrored fraction of the same sample, so both
+  // patches' grids meet at the same 3D points.
+  const auto& chart = star_dissection().chart;
+  const qs::remesh::ChartSampler sampler(chart);
+  const int level = 4, n = 16;
+  const auto r = qs::remesh::remesh_uniform(chart, level, relaxed(0.9));
+  const auto& c = r.connectivity;
+  const auto& t = sampler.topology();
+  const qs::remesh::UniformNumbering num(t, level);
+  int moved = 0;
+  for (int p = 0; p < sampler.num_patches(); ++p)
+    for (int j = 1; j < n; ++j)
+      for (int i = 1; i < n; ++i) {
+        const auto& uv = c.vertex_uv[num.vertex(p, i, j)];
+        EXPECT_GT(uv.x(), c.vertex_uv[num.vertex(p, i - 1, j)].x() * (i > 1)) << p << " " << i << " " << j;
+        EXPECT_GT(uv.y(), c.vertex_uv[num.vertex(p, i, j - 1)].y() * (j > 1)) << p << " " << i << " " << j;
+        if (std::abs(uv.x() - double(i) / n) > 1e-6) ++moved;
+      }
+  EXPECT_GT(moved, 0) << "the star's sides are unevenly stretched: some samples must move";
+  // Side samples from the twin: the point at the mirrored side fraction is the same 3D point.
+  for (int e = 0; e < t.num_edges(); ++e) {
+    const auto owner = t.edge_sides[e][0], twin = t.edge_sides[e][1];
+    for (int s = 1; s < n; ++s) {
+      const std::int64_t v = num.vertex(owner.patch, owner.side == 0 ? s : owner.side == 1 ? n : owner.side == 2 ? n - s : 0,
+                                        owner.side == 0 ? 0 : owner.side == 1 ? s : owner.side == 2 ? n : n - s);
+      const auto& uv = c.vertex_uv[v];
+      const double f = owner.side == 0 ? uv.x() : owner.side == 1 ? uv.y() : owner.side == 2 ? 1 - uv.x() : 1 - uv.y();
+      const double g = 1.0 - f;  // the twin's own side fraction
+      const qs::Vec2 tuv = twin.side == 0 ? qs::Vec2(g, 0) : twin.side == 1 ? qs::Vec2(1, g)
+                                                        : twin.side == 2 ? qs::Vec2(1 - g, 1) : qs::Vec2(0, 1 - g);
+      EXPECT_NEAR((sampler.point(twin.patch, tuv) - r.positions[v]).norm(), 0.0, 1e-12) << "edge " << e << " sample " << s;
+    }
+  }
+}
+
+TEST(UniformRelax, SetSharesOneGridAndIsDeterministic) {
+  const auto& s = pair_dissection();
+  const std::vector<const qs::dissect::Chart*> charts = {&s.meshes[0].chart, &s.meshes[1].chart};
+  const auto o = relaxed(0.9, qs::remesh::DiagonalRule::BestAngle);
+  const auto a = qs::remesh::remesh_uniform(charts, 3, o), b = qs::remesh::remesh_uniform(charts, 3, o);
+  EXPECT_EQ(a.connectivity.faces, b.connectivity.faces);
+  EXPECT_EQ(a.connectivity.vertex_uv, b.connectivity.vertex_uv);
+  EXPECT_EQ(a.positions, b.positions);
+  for (int i = 0; i < 2; ++i) {
+    expect_valid_sphere(a.mesh(i), "set mesh " + std::to_string(i));
+    const qs::remesh::ChartSampler sampler(*charts[i]);
+    for (int v = 0; v < a.connectivity.num_vertices(); ++v)
+      EXPECT_EQ(sampler.point(a.connectivity.vertex_patch[v], a.connectivity.vertex_uv[v]), a.positions[i][v]);
+  }
+}
+
+TEST(UniformRelax, CellsOfAnElongatedPatchGetCloserToSquares) {
+  // An ellipsoid's two seed patches: the map squeezes the long ends, so the regular grid's cells
+  // there are long and thin. Relaxed, the mean |log(cell aspect)| in 3D falls (measured 0.150 -> 0.138).
+  const auto m = qs::shapes::ellipsoid(3, 1, 0.6, 3);
+  qs::dissect::DissectOptions o;
+  o.max_patch_area = 0;
+  const auto d = qs::dissect::dissect(m, equator_seeds(m), o);
+  ASSERT_EQ(d.chart.patches.size(), 2u);
+  const int level = 4, n = 16;
+  auto anisotropy = [&](const qs::remesh::SemiRegular& r) {
+    const auto t = qs::remesh::build_base_topology(d.chart.patches);
+    const qs::remesh::UniformNumbering num(t, level);
+    double sum = 0;
+    for (int p = 0; p < t.num_patches(); ++p)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          auto x = [&](int a, int b) { return r.positions[num.vertex(p, a, b)]; };
+          const double su = (x(i + 1, j) - x(i, j)).norm() + (x(i + 1, j + 1) - x(i, j + 1)).norm();
+          const double sv = (x(i, j + 1) - x(i, j)).norm() + (x(i + 1, j + 1) - x(i + 1, j)).norm();
+          sum += std::abs(std::log(su / sv));
+        }
+    return sum / (t.num_patches() * n * n);
+  };
+  const double before = anisotropy(qs::remesh::remesh_uniform(d.chart, level));
+  const double after = anisotropy(qs::remesh::remesh_uniform(d.chart, level, relaxed(1.0)));
+  EXPECT_LT(after, 0.97 * before) << "before " << before << ", after " << after;
+}
+
+TEST(UniformRelax, RefusesAnOutOfRangeValue) {
+  for (double bad : {-0.1, 2.5, std::nan("")}) {
+    try {
+      qs::remesh::remesh_uniform(sphere_dissection().chart, 2, relaxed(bad));
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const qs::InvalidInput& e) {
+      EXPECT_THAT(e.what(), HasSubstr("grid relaxation"));
+    }
+  }
+}

@@ -93,3 +93,36 @@ TEST_F(RemeshTool, ExitCodes) {
   EXPECT_EQ(run_tool("qs-remesh", (dir_ / "bad").string()).exit, 1);  // neither --level nor --adaptive
   EXPECT_EQ(run_tool("qs-remesh", (dir_ / "bad").string() + " --level 2 --adaptive 0.01").exit, 1);
 }
+
+TEST_F(RemeshTool, GridRelaxKeepsTheFaceListMovesTheSamplesAndIsDeterministic) {
+  qs::io::write_mesh(dir_ / "a.obj", qs::shapes::ellipsoid(2.5, 1, 0.6, 4));
+  qs::io::write_mesh(dir_ / "b.obj", qs::shapes::bumpy_sphere(0.05, 3, 4));
+  const fs::path d = dir_ / "ab.dissection";
+  ASSERT_EQ(run_tool("qs-dissect", (dir_ / "a.obj").string() + " " + (dir_ / "b.obj").string() + " -q -o " + d.string()).exit, 0);
+  auto remesh = [&](const std::string& args, const std::string& name) {
+    const RunResult r = run_tool("qs-remesh", d.string() + " --level 3 --diagonals pattern -q " + args + " -o " +
+                                                  (dir_ / name).string());
+    EXPECT_EQ(r.exit, 0) << r.out;
+    std::ifstream in(dir_ / name / "remesh.json");
+    return nlohmann::json::parse(in);
+  };
+  const auto plain = remesh("", "r0"), relaxed = remesh("--grid-relax 1", "r1");
+  remesh("--grid-relax 1", "r1b");
+  EXPECT_EQ(plain["grid_relax"].get<double>(), 0.0);
+  EXPECT_EQ(relaxed["grid_relax"].get<double>(), 1.0);
+  EXPECT_EQ(relaxed["vertex_patch"], plain["vertex_patch"]);
+  EXPECT_NE(relaxed["vertex_uv"], plain["vertex_uv"]) << "the ellipsoid's squeezed map must move some samples";
+  for (const char* m : {"a.obj", "b.obj"}) {
+    const auto p0 = qs::io::read_mesh(dir_ / "r0" / m), p1 = qs::io::read_mesh(dir_ / "r1" / m);
+    EXPECT_EQ(p1.mesh.faces, p0.mesh.faces) << m;  // same connectivity (pattern diagonals)
+    const auto v = qs::mesh::validate(p1.mesh);
+    EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report(m, v.report);
+    std::ifstream f1(dir_ / "r1" / m), f2(dir_ / "r1b" / m);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(f1), {}), std::string(std::istreambuf_iterator<char>(f2), {}));
+  }
+  EXPECT_EQ(qs::io::read_mesh(dir_ / "r1" / "a.obj").mesh.faces, qs::io::read_mesh(dir_ / "r1" / "b.obj").mesh.faces);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --grid-relax 2.5").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --grid-relax -1").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --grid-relax 1").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --adaptive 0.01 --grid-relax 1").exit, 1);
+}

@@ -188,14 +188,153 @@ void choose_best_angle_diagonals(const BaseTopology& topology, SemiRegularConnec
       }
 }
 
+/// Cells per side of the probe grid that measures each patch's map (UniformOptions::relax).
+constexpr int kProbeCells = 16;
+/// Largest |log| of a cell's sample density against the regular grid's (factor 4 either way).
+constexpr double kMaxLogDensity = 1.3862943611198906;
+
+/// UniformOptions::relax: the side samples of every base edge, N + 1 fractions in the edge's
+/// (owner's) direction, first 0, last 1, strictly increasing.
+///
+/// Each patch's map is probed on a kProbeCells^2 grid in every mesh: r = log(Sv / Su), Su and Sv
+/// the 3D lengths of a probe cell's u and v sides (mean of the two opposite ones). A separable
+/// reparameterization u = U(s), v = V(t) makes the cells square when log U' - log V' = r; its
+/// least-squares fit is log U' = mean over v of r, log V' = -(mean over u of r) (each up to a
+/// constant fixed by U(1) = V(1) = 1). Their inverses (samples per unit of s, t) are the patch's
+/// preferred sample densities along u and v (mean of r over the meshes, times relax, clamped to kMaxLogDensity). A base edge's
+/// density is the mean of the preferences of its two patches along it, so that both patches
+/// sample the edge identically.
+std::vector<std::vector<double>> relaxed_edge_samples(const std::vector<const ChartSampler*>& samplers, int n,
+                                                      double relax) {
+  const BaseTopology& t = samplers[0]->topology();
+  const int np = t.num_patches(), K = kProbeCells;
+  // log density per patch along u (du) and along v (dv), K cells each.
+  std::vector<std::vector<double>> du(np, std::vector<double>(K, 0.0)), dv(np, std::vector<double>(K, 0.0));
+  std::vector<double> r(static_cast<size_t>(K) * K);
+  for (int p = 0; p < np; ++p) {
+    int counted = 0;
+    std::vector<double> fu(K, 0.0), fv(K, 0.0);
+    for (const ChartSampler* s : samplers) {
+      const auto locs = s->locate_grid(p, K + 1, 0.0, 1.0 / K);
+      std::vector<Vec3> x(locs.size());
+      for (size_t k = 0; k < locs.size(); ++k) x[k] = s->position(locs[k]);
+      auto at = [&](int i, int j) -> const Vec3& { return x[static_cast<size_t>(j) * (K + 1) + i]; };
+      bool ok = true;
+      for (int j = 0; j < K && ok; ++j)
+        for (int i = 0; i < K; ++i) {
+          const double su = 0.5 * ((at(i + 1, j) - at(i, j)).norm() + (at(i + 1, j + 1) - at(i, j + 1)).norm());
+          const double sv = 0.5 * ((at(i, j + 1) - at(i, j)).norm() + (at(i + 1, j + 1) - at(i + 1, j)).norm());
+          if (!(su > 0) || !(sv > 0) || !std::isfinite(su) || !std::isfinite(sv)) { ok = false; break; }
+          r[static_cast<size_t>(j) * K + i] = std::log(sv / su);
+        }
+      if (!ok) continue;  // a degenerate probe cell: this mesh has no say for this patch
+      ++counted;
+      for (int j = 0; j < K; ++j)
+        for (int i = 0; i < K; ++i) {
+          const double x_ = r[static_cast<size_t>(j) * K + i] / K;
+          fu[i] -= x_, fv[j] += x_;  // sample density = 1 / spacing
+        }
+    }
+    if (counted == 0) continue;
+    for (auto* f : {&fu, &fv}) {
+      double mean = 0;
+      for (double x_ : *f) mean += x_ / counted / K;
+      for (double& x_ : *f) x_ = std::clamp(relax * (x_ / counted - mean), -kMaxLogDensity, kMaxLogDensity);
+    }
+    du[p] = fu, dv[p] = fv;
+  }
+  // Log density along side k of patch p, in the side's own direction (corner k -> k + 1).
+  auto side_density = [&](int p, int k, int cell) {
+    switch (k) {
+      case 0: return du[p][cell];
+      case 1: return dv[p][cell];
+      case 2: return du[p][K - 1 - cell];
+      default: return dv[p][K - 1 - cell];
+    }
+  };
+  std::vector<std::vector<double>> out(t.num_edges(), std::vector<double>(n + 1));
+  std::vector<double> cdf(K + 1);
+  for (int e = 0; e < t.num_edges(); ++e) {
+    const PatchSide owner = t.edge_sides[e][0], twin = t.edge_sides[e][1];
+    cdf[0] = 0;
+    for (int cell = 0; cell < K; ++cell)
+      cdf[cell + 1] = cdf[cell] + std::exp(0.5 * (side_density(owner.patch, owner.side, cell) +
+                                                 side_density(twin.patch, twin.side, K - 1 - cell)));
+    const double total = cdf[K];
+    auto& x = out[e];
+    x[0] = 0.0, x[n] = 1.0;
+    int cell = 0;
+    for (int q = 1; q < n; ++q) {
+      const double target = total * q / n;
+      while (cell < K - 1 && cdf[cell + 1] <= target) ++cell;
+      const double w = (target - cdf[cell]) / (cdf[cell + 1] - cdf[cell]);
+      x[q] = std::clamp((cell + w) / K, 0.0, 1.0);
+    }
+  }
+  return out;
+}
+
+/// Rewrites the vertex_uv of a uniform connectivity by UniformOptions::relax (see uniform.h).
+void relax_grid(const std::vector<const ChartSampler*>& samplers, SemiRegularConnectivity& c, double relax) {
+  const int n = 1 << c.level;
+  if (n < 2) return;
+  const BaseTopology& t = samplers[0]->topology();
+  const auto edge = relaxed_edge_samples(samplers, n, relax);
+  // sigma(p, k, q): sample q (0..N) of side k of patch p, as a fraction along the side's own
+  // direction (corner k -> corner k + 1).
+  auto sigma = [&](int p, int k, int q) {
+    const auto& x = edge[t.side_edge[p][k]];
+    return t.side_forward[p][k] ? x[q] : 1.0 - x[n - q];
+  };
+  const UniformNumbering num(t, c.level);
+  std::vector<double> a(n + 1), b(n + 1), cc(n + 1), d(n + 1);
+  for (int p = 0; p < c.num_patches; ++p) {
+    for (int q = 0; q <= n; ++q) {
+      a[q] = sigma(p, 0, q);             // bottom (v = 0): u
+      b[q] = sigma(p, 1, q);             // right (u = 1): v
+      cc[q] = 1.0 - sigma(p, 2, n - q);  // top (v = 1): u, side 2 runs u from 1 to 0
+      d[q] = 1.0 - sigma(p, 3, n - q);   // left (u = 0): v, side 3 runs v from 1 to 0
+    }
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const std::int64_t v = num.vertex(p, i, j);
+        if (c.vertex_patch[v] != p) continue;  // recorded by a lower patch (its owner)
+        const bool bi = i == 0 || i == n, bj = j == 0 || j == n;
+        if (bi && bj) continue;  // corners stay exact
+        Vec2 uv;
+        if (j == 0) uv = Vec2(a[i], 0.0);
+        else if (j == n) uv = Vec2(cc[i], 1.0);
+        else if (i == 0) uv = Vec2(0.0, d[j]);
+        else if (i == n) uv = Vec2(1.0, b[j]);
+        else {
+          const double wu = static_cast<double>(i) / n, wv = static_cast<double>(j) / n;
+          uv = Vec2((1 - wv) * a[i] + wv * cc[i], (1 - wu) * d[j] + wu * b[j]);
+        }
+        c.vertex_uv[v] = uv;
+      }
+  }
+}
+
+void check_relax(double relax) {
+  if (!(relax >= 0 && relax <= kMaxGridRelax))
+    throw InvalidInput("remesh: grid relaxation " + std::to_string(relax) + " is out of range; expected 0.." +
+                       std::to_string(kMaxGridRelax));
+}
+
 }  // namespace
 
 SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const UniformOptions& options,
                            const Context& context) {
+  check_relax(options.relax);
   const ChartSampler sampler(chart, context);
   SemiRegular out;
   out.connectivity = uniform_connectivity(sampler.topology(), level, options);
-  out.positions = uniform_positions(sampler, out.connectivity, context);
+  if (options.relax > 0) {
+    relax_grid({&sampler}, out.connectivity, options.relax);
+    out.positions = sample_positions(sampler, out.connectivity, context);
+  } else {
+    out.positions = uniform_positions(sampler, out.connectivity, context);
+  }
   if (options.diagonals == DiagonalRule::BestAngle) {
     std::vector<std::vector<Vec3>> one{std::move(out.positions)};
     choose_best_angle_diagonals(sampler.topology(), out.connectivity, one);
@@ -231,12 +370,19 @@ std::vector<ChartSampler> set_samplers(const std::vector<const dissect::Chart*>&
 
 SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, int level,
                               const UniformOptions& options, const Context& context) {
+  check_relax(options.relax);
   const std::vector<ChartSampler> samplers = set_samplers(charts, context);
   SemiRegularSet out;
   out.connectivity = uniform_connectivity(samplers[0].topology(), level, options);
+  if (options.relax > 0) {
+    std::vector<const ChartSampler*> ptrs;
+    for (const auto& s : samplers) ptrs.push_back(&s);
+    relax_grid(ptrs, out.connectivity, options.relax);
+  }
   for (size_t m = 0; m < samplers.size(); ++m) {
     context.report("remesh", static_cast<double>(m) / samplers.size());
-    out.positions.push_back(uniform_positions(samplers[m], out.connectivity, context));
+    out.positions.push_back(options.relax > 0 ? sample_positions(samplers[m], out.connectivity, context)
+                                              : uniform_positions(samplers[m], out.connectivity, context));
   }
   if (options.diagonals == DiagonalRule::BestAngle)
     choose_best_angle_diagonals(samplers[0].topology(), out.connectivity, out.positions);

@@ -56,7 +56,23 @@ enum class DiagonalRule {
 struct UniformOptions {
   bool quads = false;  ///< also fill SemiRegularConnectivity::quads with the grid cells
   DiagonalRule diagonals = DiagonalRule::Pattern;  ///< how cells are cut (quads are not affected)
+  /// Grid relaxation (issue 13), in [0, kMaxGridRelax]; 0 keeps the regular grid u = i / N.
+  /// The connectivity does not change, only the (u, v) in vertex_uv and the positions: every
+  /// base edge gets a 1D map of its N + 1 samples, a property of the EDGE (both its patches use
+  /// it, so shared side samples stay identical), and an interior grid point (i, j) blends the
+  /// two opposite sides' maps: u = (1 - j/N) a_i + (j/N) c_i, v = (1 - i/N) d_j + (i/N) b_j
+  /// (a/c the bottom/top side's u samples, d/b the left/right side's v samples), so rows and
+  /// columns stay monotone in the square. The maps: each patch's map is probed on a 16 x 16 grid
+  /// in every mesh of the set; the separable reparameterization u = U(s), v = V(t) that makes the
+  /// probe cells closest to squares (least squares on log(|X_v| / |X_u|)) gives the patch's
+  /// preferred sample density along u and v; `relax` scales its log (1: the full fit), clamped to
+  /// a factor 4 either way of the regular spacing; an edge takes the mean of its two patches'
+  /// preferences along it. Corners stay at the patch corners.
+  double relax = 0.0;
 };
+
+/// Largest UniformOptions::relax accepted (over-relaxation up to 2x the least-squares fit).
+inline constexpr double kMaxGridRelax = 2.0;
 
 /// Vertex numbering of the uniform level-n grid of a base topology (semi_regular.h's order),
 /// as 64-bit ids so that fine levels of big base domains can be numbered too.
