@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
                "qs-dfi"};
   std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even";
   std::optional<std::string> glb;
-  int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 2;
+  int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 3;
   double fps = 12;
   bool no_warp = false, exact_endpoints = false, quiet = false, global_transport = false;
   int anchors_per_branch = 3, emd_voxels = 1500, bone_segments = 8;
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
                                      "cheap frames on a grid of half the samples) or uniform (t = f / (K - 1))")
       ->check(CLI::IsMember({"even", "uniform"}));
   app.add_option("--endpoint-refine", endpoint_refine, "The first and last frames from the input's own distance "
-                                                       "field on a grid R times finer (default 2; 1: the morph's grid)")
+                                                       "field on a grid R times finer (default 3; 1: the morph's grid)")
       ->check(CLI::Range(1, 8));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
   app.add_option("-o,--outdir", outdir, "Output folder (default dfi-out; created)");
