@@ -7,7 +7,7 @@
 // the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
 // and whether 1 and 2 threads give the same bytes.
 //
-// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
+// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--retime] [--refine-ends R] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
 // horse-knot, spot-eight, femur-elephant, horse-camel, cat-koala; default all)
 #include <algorithm>
 #include <chrono>
@@ -20,6 +20,7 @@
 
 #include "qs/core/error.h"
 #include "qs/dfi/pipeline.h"
+#include "qs/dfi/retime.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
@@ -51,14 +52,16 @@ TriMesh load(const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int grid = 150, frames = 11;
-  bool smoothness = false;
+  int grid = 150, frames = 11, refine_ends = 1;
+  bool smoothness = false, retime = false;
   std::string methods = "warp,global,blend";
   std::vector<std::string> wanted;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--smoothness")) smoothness = true;
+    else if (!std::strcmp(argv[i], "--retime")) retime = true;
+    else if (!std::strcmp(argv[i], "--refine-ends") && i + 1 < argc) refine_ends = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
     else wanted.push_back(argv[i]);
   }
@@ -92,16 +95,33 @@ int main(int argc, char** argv) {
     auto t0 = Clock::now();
     const dfi::PreparedMorph m = dfi::prepare_morph(a, b, opt);
     const double fields_s = since(t0);
+    // Frame times: uniform, or (--retime) at equal steps of the change (retime.h).
+    std::vector<double> times(frames);
+    for (int f = 0; f < frames; ++f) times[f] = f / (frames - 1.0);
+    double retime_s = 0;
+    if (retime) {
+      t0 = Clock::now();
+      times = dfi::even_frame_times(m, frames).times;
+      retime_s = since(t0);
+    }
     double total = 0, worst = 0, end_vox = 0, mid_volume = 0;
     int one_component = 0;
     std::string genera;
     std::vector<TriMesh> seq;
     for (int f = 0; f < frames; ++f) {
-      const double t = f / (frames - 1.0);
+      const double t = times[f];
       t0 = Clock::now();
-      const TriMesh morph_space = dfi::polygonize(dfi::blend_field(m, t));
-      TriMesh mesh = morph_space;  // what qs-dfi writes: the frame at its placement
-      for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, q);
+      const bool end = f == 0 || f == frames - 1;
+      TriMesh morph_space, mesh;  // mesh: what qs-dfi writes, the frame at its placement
+      if (end && refine_ends > 1) {
+        mesh = dfi::endpoint_frame(m, f == 0 ? a : b, f != 0, refine_ends);
+        morph_space = mesh;
+        if (f != 0) for (Vec3& q : morph_space.positions) q = m.target_to_source.apply(q);
+      } else {
+        morph_space = dfi::polygonize(dfi::blend_field(m, t));
+        mesh = morph_space;
+        for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, q);
+      }
       const double s = since(t0);
       total += s;
       worst = std::max(worst, s);
@@ -128,6 +148,9 @@ int main(int argc, char** argv) {
       char buf[32];
       std::snprintf(buf, sizeof buf, "%.2f", *std::max_element(d.begin(), d.end()) / sorted[sorted.size() / 2]);
       smooth = buf;
+      std::printf("%-15s consecutive Hausdorff (morph space):", p.name.c_str());
+      for (double x : d) std::printf(" %.4f", x);
+      std::printf("\n");
     }
     // Determinism: the source field and the middle frame's field on 1 and 2 threads.
     dfi::SdfOptions one = opt.sdf, two = opt.sdf;
@@ -139,6 +162,11 @@ int main(int argc, char** argv) {
     std::snprintf(mid, sizeof mid, "%.3f", mid_volume / mean_end);
     // Which warp ran: the part warp (bones) or the linear one (no matched branch, or it folds).
     const std::string label = method + (m.warp ? (m.bones.empty() ? "/linear" : "/parts") : "");
+    if (retime) {
+      std::printf("%-15s retime %.2f s, times", p.name.c_str(), retime_s);
+      for (double t : times) std::printf(" %.3f", t);
+      std::printf("\n");
+    }
     std::printf("%-15s %-14s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), label.c_str(), fields_s,
                 total / frames, worst, end_vox, one_component, frames, mid, smooth.c_str(), same ? "same" : "DIFFER",
                 genera.c_str());

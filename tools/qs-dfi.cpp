@@ -20,6 +20,7 @@
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/dfi/pipeline.h"
+#include "qs/dfi/retime.h"
 #include "qs/gltf/sequence.h"
 #include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
@@ -89,9 +90,9 @@ int main(int argc, char** argv) {
                "Writes OUTDIR/frame_NNNN.<fmt>, OUTDIR/dfi.json and optionally a GLB.\n"
                "Exit codes: 0 done, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal error.",
                "qs-dfi"};
-  std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none";
+  std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even";
   std::optional<std::string> glb;
-  int frames = 11, grid = 150, threads = 0, band = 3;
+  int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 3;
   double fps = 12;
   bool no_warp = false, exact_endpoints = false, quiet = false, global_transport = false;
   int anchors_per_branch = 3, emd_voxels = 1500, bone_segments = 8;
@@ -119,6 +120,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 100));
   app.add_option("--emd-voxels", emd_voxels, "Interior voxels per shape for the correspondence (default 1500)")
       ->check(CLI::Range(50, 20000));
+  app.add_option("--timing", timing, "Frame times: even (default: consecutive frames change about equally, from "
+                                     "cheap frames on a grid of half the samples) or uniform (t = f / (K - 1))")
+      ->check(CLI::IsMember({"even", "uniform"}));
+  app.add_option("--endpoint-refine", endpoint_refine, "The first and last frames from the input's own distance "
+                                                       "field on a grid R times finer (default 3; 1: the morph's grid)")
+      ->check(CLI::Range(1, 8));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
   app.add_option("-o,--outdir", outdir, "Output folder (default dfi-out; created)");
   app.add_option("--format", format, "Frame format: obj (default) or ply")->check(CLI::IsMember({"obj", "ply"}));
@@ -175,16 +182,37 @@ int main(int argc, char** argv) {
     fs::create_directories(outdir, ec);
     if (ec || !fs::is_directory(outdir)) throw qs::IoError(outdir + ": cannot create the output folder: " + ec.message());
 
+    // Frame times: uniform, or at equal steps of the change between cheap dense frames.
+    std::vector<double> times(frames);
+    for (int f = 0; f < frames; ++f) times[f] = static_cast<double>(f) / (frames - 1);
+    nlohmann::ordered_json timing_json{{"method", timing}};
+    if (timing == "even" && frames > 2) {
+      const auto t0 = Clock::now();
+      const qs::dfi::RetimeOptions ro;
+      const qs::dfi::Retiming r = qs::dfi::even_frame_times(morph, frames, ro, threads);
+      times = r.times;
+      timing_json["dense_samples"] = r.dense_times.size();
+      timing_json["coarsen"] = ro.coarsen;
+      timing_json["dense_t"] = r.dense_times;
+      timing_json["dense_change"] = r.dense_change;
+      std::ostringstream m;
+      m << "even frame times from " << r.dense_times.size() << " dense frames in " << std::fixed << std::setprecision(2)
+        << std::chrono::duration<double>(Clock::now() - t0).count() << " s";
+      say(m.str());
+    }
     nlohmann::ordered_json frames_json = nlohmann::ordered_json::array();
     std::vector<qs::gltf::SequenceFrame> seq;
     for (int f = 0; f < frames; ++f) {
       const auto t0 = Clock::now();
-      const double t = static_cast<double>(f) / (frames - 1);
+      const double t = times[f];
       qs::TriMesh mesh;
       bool exact = false;
       if (exact_endpoints && (f == 0 || f == frames - 1)) {
         mesh = f == 0 ? source.mesh : target.mesh;
         exact = true;
+      } else if (endpoint_refine > 1 && (f == 0 || f == frames - 1)) {
+        mesh = qs::dfi::endpoint_frame(morph, f == 0 ? source.mesh : target.mesh, f != 0, endpoint_refine, opt.sdf,
+                                       opt.polygonize);
       } else {
         mesh = qs::dfi::frame_mesh(morph, qs::dfi::blend_field(morph, t, threads), t, opt.polygonize);
       }
@@ -224,7 +252,9 @@ int main(int argc, char** argv) {
         {"source", shape_json(source, morph.source_volume)},
         {"target", shape_json(target, morph.target_volume)},
         {"options", {{"frames", frames}, {"grid", grid}, {"align", align}, {"band", band},
-                     {"exact_endpoints", exact_endpoints}, {"frame_format", format}}},
+                     {"exact_endpoints", exact_endpoints}, {"frame_format", format}, {"timing", timing},
+                     {"endpoint_refine", endpoint_refine}}},
+        {"timing", timing_json},
         {"grid", {{"dims", {g.dims[0], g.dims[1], g.dims[2]}}, {"spacing", g.spacing}, {"origin", vec_json(g.origin)}}},
         {"alignment", {{"scale", morph.target_to_source.scale},
                        {"rotation", {morph.target_to_source.rotation.row(0).eval(), morph.target_to_source.rotation.row(1).eval(),

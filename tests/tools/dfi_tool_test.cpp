@@ -101,6 +101,36 @@ TEST_F(DfiTool, WarpReportsSkeletonsMatchesAnchorsAndFolds) {
   EXPECT_GT(j["correspondence"]["folds"]["source_min_det"].get<double>(), 0);
   EXPECT_GT(j["correspondence"]["source_voxels"].get<int>(), 50);
   for (const auto& f : j["frames"]) EXPECT_GT(f["volume"].get<double>(), 0);
+  // Even frame times (the default): from 0 to 1, increasing, with the dense samples behind them.
+  EXPECT_EQ(j["timing"]["method"], "even");
+  EXPECT_GE(j["timing"]["dense_t"].size(), 9u);
+  EXPECT_EQ(j["timing"]["dense_change"].size() + 1, j["timing"]["dense_t"].size());
+  EXPECT_EQ(j["frames"][0]["t"].get<double>(), 0.0);
+  EXPECT_EQ(j["frames"][2]["t"].get<double>(), 1.0);
+  EXPECT_GT(j["frames"][1]["t"].get<double>(), 0.0);
+  EXPECT_LT(j["frames"][1]["t"].get<double>(), 1.0);
+}
+
+TEST_F(DfiTool, UniformTimingAndEndpointRefinement) {
+  const std::string a = write("ua.obj", qs::shapes::icosphere(3));
+  const std::string b = write("ub.obj", qs::shapes::torus(48, 16));
+  int ends[2] = {0, 0};
+  for (int refine = 1; refine <= 2; ++refine) {
+    const fs::path out = dir_ / ("u" + std::to_string(refine));
+    const RunResult r = run_tool("qs-dfi", a + " " + b + " --no-warp --frames 5 --grid 20 --timing uniform -q "
+                                               "--endpoint-refine " + std::to_string(refine) + " -o " + out.string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    const auto j = nlohmann::json::parse(std::ifstream(out / "dfi.json"));
+    EXPECT_EQ(j["timing"]["method"], "uniform");
+    EXPECT_EQ(j["options"]["endpoint_refine"], refine);
+    for (int f = 0; f < 5; ++f) EXPECT_DOUBLE_EQ(j["frames"][f]["t"].get<double>(), f / 4.0) << f;
+    EXPECT_EQ(j["frames"][4]["genus"], 1);
+    EXPECT_EQ(j["frames"][4]["components"], 1);
+    ends[refine - 1] = j["frames"][0]["vertices"].get<int>();
+  }
+  EXPECT_GT(ends[1], 3 * ends[0]);  // a grid twice as fine: about four times the vertices
+  const RunResult bad = run_tool("qs-dfi", a + " " + b + " --no-warp --timing sometimes -o " + (dir_ / "x").string());
+  EXPECT_EQ(bad.exit, 1) << bad.out;
 }
 
 TEST_F(DfiTool, PartWarpGivesTheSameBytesOnOneOrTwoThreads) {

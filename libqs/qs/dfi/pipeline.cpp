@@ -450,4 +450,17 @@ TriMesh frame_mesh(const PreparedMorph& m, const Grid& field, double t, const Po
   return mesh;
 }
 
+TriMesh endpoint_frame(const PreparedMorph& m, const TriMesh& input, bool is_target, int refine, const SdfOptions& sdf,
+                       const PolygonizeOptions& options) {
+  if (refine < 1 || refine > 8) throw InvalidInput("endpoint refinement is " + std::to_string(refine) + "; expected 1 to 8");
+  const double voxel = (is_target ? m.source_sdf.spacing / m.target_to_source.scale : m.source_sdf.spacing) / refine;
+  const Box3 box = bounding_box(input.positions);
+  const double longest = (box.max - box.min).maxCoeff();
+  const double cells = std::ceil(longest / voxel);
+  if (!(cells <= 2048))
+    throw InvalidInput("endpoint grid of " + std::to_string(cells) + " cells; expected at most 2048 (lower the refinement)");
+  const Grid domain = grid_over(box, std::max(8, static_cast<int>(cells)), 3);
+  return polygonize(signed_distance(input, domain, sdf), options);
+}
+
 }  // namespace qs::dfi

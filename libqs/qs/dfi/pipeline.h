@@ -117,6 +117,14 @@ Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
 /// source's at 0, the target's at 1, interpolated in between).
 TriMesh frame_mesh(const PreparedMorph& morph, const Grid& field, double t, const PolygonizeOptions& options = {});
 
+/// Frame 0 (is_target false) or frame K-1 (true) polygonized from the input's own signed distance
+/// field on a grid over the input's bounding box alone, `refine` times finer than the morph's grid
+/// (in the input's own units), in the input's coordinates (what frame_mesh gives at t = 0 or 1):
+/// parts thinner than a morph voxel (ears, tails) that the morph's grid loses. refine 1: the
+/// morph's spacing. \throws InvalidInput when refine is not 1 to 8 or the grid would exceed 2048 cells.
+TriMesh endpoint_frame(const PreparedMorph& morph, const TriMesh& input, bool is_target, int refine,
+                       const SdfOptions& sdf = {}, const PolygonizeOptions& options = {});
+
 /// The similarity's inverse interpolated at t (identity at 0): morph space -> output space.
 Vec3 placement(const Similarity& s, double t, const Vec3& y);
 
