@@ -63,7 +63,7 @@ TEST_F(DfiTool, SphereToTorusWritesFramesJsonAndGlb) {
                                               (dir_ / "t2").string());
   ASSERT_EQ(r1.exit, 0) << r1.out;
   ASSERT_EQ(r2.exit, 0) << r2.out;
-  for (const char* f : {"frame_0001.obj", "dfi.json"}) {
+  for (const char* f : {"frame_0001.obj", "dfi.json", "frame_0000.obj"}) {
     std::ifstream x(dir_ / "t1" / f), y(dir_ / "t2" / f);
     EXPECT_EQ(std::string(std::istreambuf_iterator<char>(x), {}), std::string(std::istreambuf_iterator<char>(y), {})) << f;
   }
@@ -137,7 +137,7 @@ TEST_F(DfiTool, PartWarpGivesTheSameBytesOnOneOrTwoThreads) {
   // A capsule-like ellipsoid to a longer one: one matched branch, so the part warp (bones) runs.
   const std::string a = write("pa.obj", qs::shapes::ellipsoid(1.2, 0.4, 0.4, 3));
   const std::string b = write("pb.obj", qs::shapes::ellipsoid(1.6, 0.35, 0.3, 3));
-  std::string bytes[2][2];
+  std::string bytes[2][3];
   for (int t = 1; t <= 2; ++t) {
     const fs::path out = dir_ / ("p" + std::to_string(t));
     const RunResult r = run_tool("qs-dfi", a + " " + b + " --frames 3 --grid 24 --emd-voxels 300 -q --threads " +
@@ -151,11 +151,12 @@ TEST_F(DfiTool, PartWarpGivesTheSameBytesOnOneOrTwoThreads) {
       EXPECT_EQ(f["genus"], 0);
     }
     int k = 0;
-    for (const char* f : {"frame_0001.obj", "dfi.json"}) {
+    for (const char* f : {"frame_0001.obj", "dfi.json", "frame_0000.obj"}) {
       std::ifstream x(out / f);
       bytes[t - 1][k++] = std::string(std::istreambuf_iterator<char>(x), {});
     }
   }
   EXPECT_EQ(bytes[0][0], bytes[1][0]);
   EXPECT_EQ(bytes[0][1], bytes[1][1]);
+  EXPECT_EQ(bytes[0][2], bytes[1][2]);  // the refined endpoint frame
 }
