@@ -159,19 +159,6 @@ struct Sample {
   Vec3 x;
 };
 
-/// sin of the smallest angle of triangle (a, b, c) (as uniform.cpp's): the angle opposite the
-/// shortest edge. 0 for a degenerate triangle.
-double sin_smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = b - a, bc = c - b, ca = a - c;
-  const double lab = ab.squaredNorm(), lbc = bc.squaredNorm(), lca = ca.squaredNorm();
-  const double twice_area = ab.cross(ca).norm();
-  double denom2;
-  if (lab <= lbc && lab <= lca) denom2 = lbc * lca;
-  else if (lbc <= lca) denom2 = lab * lca;
-  else denom2 = lab * lbc;
-  return denom2 > 0 ? twice_area / std::sqrt(denom2) : 0.0;
-}
-
 /// Re-cuts every leaf without a T-vertex along the diagonal whose two triangles have the larger
 /// smallest angle over the set (uniform.h's DiagonalRule::BestAngle, with the same exceptions: a
 /// leaf of level 0, a leaf at a patch corner that is a base vertex of valence 2, and at level 1 a
@@ -199,19 +186,7 @@ void choose_leaf_diagonals(const BaseTopology& t, const QuadForest& forest, cons
     Tri& f0 = c.faces[first];
     Tri& f1 = c.faces[first + 1];
     const bool diag02 = node_diagonal02(t, n);
-    const int v00 = f0[0], v10 = f0[1];
-    const int v11 = diag02 ? f0[2] : f1[1], v01 = diag02 ? f1[2] : f0[2];
-    double keep = 1e300, other = 1e300;
-    for (const auto& x : positions) {
-      const Vec3 &a = x[v00], &b = x[v10], &cc = x[v11], &d = x[v01];
-      const double q02 = std::min(sin_smallest_angle(a, b, cc), sin_smallest_angle(a, cc, d));
-      const double q13 = std::min(sin_smallest_angle(a, b, d), sin_smallest_angle(b, cc, d));
-      keep = std::min(keep, diag02 ? q02 : q13);
-      other = std::min(other, diag02 ? q13 : q02);
-    }
-    if (!(other > keep)) continue;
-    if (diag02) f0 = {v00, v10, v01}, f1 = {v10, v11, v01};
-    else f0 = {v00, v10, v11}, f1 = {v00, v11, v01};
+    recut_cell_best_angle(f0, f1, diag02, positions);
   }
 }
 

@@ -171,20 +171,7 @@ void choose_best_angle_diagonals(const BaseTopology& topology, SemiRegularConnec
         Tri& f0 = c.faces[2 * k];
         Tri& f1 = c.faces[2 * k + 1];
         const bool diag02 = (2 * i < n) == (2 * j < n);
-        // Recover the cell's corners from the pattern's two faces.
-        const int v00 = f0[0], v10 = f0[1];
-        const int v11 = diag02 ? f0[2] : f1[1], v01 = diag02 ? f1[2] : f0[2];
-        double keep = 1e300, other = 1e300;
-        for (const auto& x : positions) {
-          const Vec3 &a = x[v00], &b = x[v10], &cc = x[v11], &d = x[v01];
-          const double q02 = std::min(sin_smallest_angle(a, b, cc), sin_smallest_angle(a, cc, d));
-          const double q13 = std::min(sin_smallest_angle(a, b, d), sin_smallest_angle(b, cc, d));
-          keep = std::min(keep, diag02 ? q02 : q13);
-          other = std::min(other, diag02 ? q13 : q02);
-        }
-        if (!(other > keep)) continue;
-        if (diag02) f0 = {v00, v10, v01}, f1 = {v10, v11, v01};
-        else f0 = {v00, v10, v11}, f1 = {v00, v11, v01};
+        recut_cell_best_angle(f0, f1, diag02, positions);
       }
 }
 
@@ -322,6 +309,23 @@ void check_relax(double relax) {
 }
 
 }  // namespace
+
+void recut_cell_best_angle(Tri& f0, Tri& f1, bool diag02, const std::vector<std::vector<Vec3>>& positions) {
+  // Recover the cell's corners from its two faces.
+  const int v00 = f0[0], v10 = f0[1];
+  const int v11 = diag02 ? f0[2] : f1[1], v01 = diag02 ? f1[2] : f0[2];
+  double keep = 1e300, other = 1e300;
+  for (const auto& x : positions) {
+    const Vec3 &a = x[v00], &b = x[v10], &cc = x[v11], &d = x[v01];
+    const double q02 = std::min(sin_smallest_angle(a, b, cc), sin_smallest_angle(a, cc, d));
+    const double q13 = std::min(sin_smallest_angle(a, b, d), sin_smallest_angle(b, cc, d));
+    keep = std::min(keep, diag02 ? q02 : q13);
+    other = std::min(other, diag02 ? q13 : q02);
+  }
+  if (!(other > keep)) return;
+  if (diag02) f0 = {v00, v10, v01}, f1 = {v10, v11, v01};
+  else f0 = {v00, v10, v11}, f1 = {v00, v11, v01};
+}
 
 SemiRegular remesh_uniform(const dissect::Chart& chart, int level, const UniformOptions& options,
                            const Context& context) {

@@ -115,6 +115,11 @@ SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, 
 SemiRegularSet remesh_uniform(const std::vector<dissect::Chart>& charts, int level,
                               const UniformOptions& options = {}, const Context& context = {});
 
+/// Re-cuts one quad cell, given as its two triangles in the remeshes' pattern (f0 starts with the
+/// cell's corners v00, v10; diag02: the cut runs v00-v11), along the other diagonal when that
+/// raises the smallest angle, taken over every mesh of the set (`positions`: one array per mesh).
+void recut_cell_best_angle(Tri& f0, Tri& f1, bool diag02, const std::vector<std::vector<Vec3>>& positions);
+
 /// One sampler per chart of a set, checked to share sampler 0's structure (patch count, names,
 /// base-domain quads). Used by the set remeshers.
 /// \throws InvalidInput for no charts or charts of different dissections (naming what differs).
