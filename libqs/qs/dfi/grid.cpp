@@ -8,15 +8,19 @@
 
 namespace qs::dfi {
 
-double Grid::sample(const Vec3& p) const {
+void Grid::locate(const Vec3& p, int c[3], double f[3]) const {
   const Vec3 q = (p - origin) / spacing;
-  int c[3];
-  double f[3];
   for (int a = 0; a < 3; ++a) {
     const double x = std::clamp(q[a], 0.0, static_cast<double>(dims[a] - 1));
     c[a] = std::min(static_cast<int>(std::floor(x)), dims[a] - 2);
     f[a] = x - c[a];
   }
+}
+
+double Grid::sample(const Vec3& p) const {
+  int c[3];
+  double f[3];
+  locate(p, c, f);
   double v = 0;
   for (int corner = 0; corner < 8; ++corner) {
     const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;

@@ -21,6 +21,9 @@ struct Grid {
     return (static_cast<size_t>(k) * dims[1] + j) * dims[0] + i;
   }
   Vec3 point(int i, int j, int k) const { return origin + spacing * Vec3(i, j, k); }
+  /// The cell that holds p (clamped to the grid: its lowest corner c) and p's fractions f in it,
+  /// the cell the trilinear rules below interpolate in.
+  void locate(const Vec3& p, int c[3], double f[3]) const;
   /// Trilinear interpolation; points outside the grid are clamped to its boundary.
   double sample(const Vec3& p) const;
 };

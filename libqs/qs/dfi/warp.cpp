@@ -126,14 +126,9 @@ namespace {
 // The three components at p with one set of trilinear weights (Grid::sample's rule: clamped).
 Vec3 displacement_at(const Displacement& d, const Vec3& p) {
   const Grid& g = d.u[0];
-  const Vec3 q = (p - g.origin) / g.spacing;
   int c[3];
   double f[3];
-  for (int a = 0; a < 3; ++a) {
-    const double x = std::clamp(q[a], 0.0, static_cast<double>(g.dims[a] - 1));
-    c[a] = std::min(static_cast<int>(std::floor(x)), g.dims[a] - 2);
-    f[a] = x - c[a];
-  }
+  g.locate(p, c, f);
   Vec3 v = Vec3::Zero();
   for (int corner = 0; corner < 8; ++corner) {
     const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;
@@ -148,14 +143,9 @@ Vec3 displacement_at(const Displacement& d, const Vec3& p) {
 // The displacement at p and its gradient (rows: components) within p's cell.
 Vec3 displacement_and_gradient(const Displacement& d, const Vec3& p, Eigen::Matrix3d& grad) {
   const Grid& g = d.u[0];
-  const Vec3 q = (p - g.origin) / g.spacing;
   int c[3];
   double f[3];
-  for (int a = 0; a < 3; ++a) {
-    const double x = std::clamp(q[a], 0.0, static_cast<double>(g.dims[a] - 1));
-    c[a] = std::min(static_cast<int>(std::floor(x)), g.dims[a] - 2);
-    f[a] = x - c[a];
-  }
+  g.locate(p, c, f);
   Vec3 v = Vec3::Zero();
   grad.setZero();
   for (int corner = 0; corner < 8; ++corner) {
