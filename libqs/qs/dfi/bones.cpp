@@ -135,15 +135,7 @@ double min_jacobian(const Displacement& d) {
   for (int k = 0; k + 1 < g.dims[2]; ++k)
     for (int j = 0; j + 1 < g.dims[1]; ++j)
       for (int i = 0; i + 1 < g.dims[0]; ++i) {
-        Eigen::Matrix3d J;
-        for (int c = 0; c < 3; ++c) {
-          const auto& u = d.u[c].values;
-          auto at = [&](int a, int b, int e) { return static_cast<double>(u[g.index(i + a, j + b, k + e)]); };
-          J(c, 0) = (at(1, 0, 0) - at(0, 0, 0) + at(1, 1, 0) - at(0, 1, 0) + at(1, 0, 1) - at(0, 0, 1) + at(1, 1, 1) - at(0, 1, 1)) / 4;
-          J(c, 1) = (at(0, 1, 0) - at(0, 0, 0) + at(1, 1, 0) - at(1, 0, 0) + at(0, 1, 1) - at(0, 0, 1) + at(1, 1, 1) - at(1, 0, 1)) / 4;
-          J(c, 2) = (at(0, 0, 1) - at(0, 0, 0) + at(1, 0, 1) - at(1, 0, 0) + at(0, 1, 1) - at(0, 1, 0) + at(1, 1, 1) - at(1, 1, 0)) / 4;
-        }
-        J /= g.spacing;
+        const Eigen::Matrix3d J = cell_gradient(d, i, j, k);
         best = std::min(best, (Eigen::Matrix3d::Identity() + J).determinant());
       }
   return best;

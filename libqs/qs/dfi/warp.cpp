@@ -61,6 +61,20 @@ Displacement extend_displacement(const VoxelSet& v, const std::vector<Vec3>& des
   return d;
 }
 
+Eigen::Matrix3d cell_gradient(const Displacement& d, int i, int j, int k) {
+  const Grid& g = d.u[0];
+  Eigen::Matrix3d J;
+  for (int c = 0; c < 3; ++c) {
+    const auto& u = d.u[c].values;
+    auto at = [&](int a, int b, int e) { return static_cast<double>(u[g.index(i + a, j + b, k + e)]); };
+    J(c, 0) = (at(1, 0, 0) - at(0, 0, 0) + at(1, 1, 0) - at(0, 1, 0) + at(1, 0, 1) - at(0, 0, 1) + at(1, 1, 1) - at(0, 1, 1)) / 4;
+    J(c, 1) = (at(0, 1, 0) - at(0, 0, 0) + at(1, 1, 0) - at(1, 0, 0) + at(0, 1, 1) - at(0, 0, 1) + at(1, 1, 1) - at(1, 0, 1)) / 4;
+    J(c, 2) = (at(0, 0, 1) - at(0, 0, 0) + at(1, 0, 1) - at(1, 0, 0) + at(0, 1, 1) - at(0, 1, 0) + at(1, 1, 1) - at(1, 1, 0)) / 4;
+  }
+  J /= g.spacing;
+  return J;
+}
+
 FoldCheck check_folds(const Displacement& d) {
   const Grid& g = d.u[0];
   FoldCheck f;
@@ -68,17 +82,7 @@ FoldCheck check_folds(const Displacement& d) {
   for (int k = 0; k + 1 < g.dims[2]; ++k)
     for (int j = 0; j + 1 < g.dims[1]; ++j)
       for (int i = 0; i + 1 < g.dims[0]; ++i) {
-        // Gradient of u at the cell centre: averaged forward differences over the cell's 4 edges
-        // along each axis.
-        Eigen::Matrix3d J;
-        for (int c = 0; c < 3; ++c) {
-          const auto& u = d.u[c].values;
-          auto at = [&](int a, int b, int e) { return static_cast<double>(u[g.index(i + a, j + b, k + e)]); };
-          J(c, 0) = (at(1, 0, 0) - at(0, 0, 0) + at(1, 1, 0) - at(0, 1, 0) + at(1, 0, 1) - at(0, 0, 1) + at(1, 1, 1) - at(0, 1, 1)) / 4;
-          J(c, 1) = (at(0, 1, 0) - at(0, 0, 0) + at(1, 1, 0) - at(1, 0, 0) + at(0, 1, 1) - at(0, 0, 1) + at(1, 1, 1) - at(1, 0, 1)) / 4;
-          J(c, 2) = (at(0, 0, 1) - at(0, 0, 0) + at(1, 0, 1) - at(1, 0, 0) + at(0, 1, 1) - at(0, 1, 0) + at(1, 1, 1) - at(1, 1, 0)) / 4;
-        }
-        J /= g.spacing;
+        const Eigen::Matrix3d J = cell_gradient(d, i, j, k);
         for (int q = 1; q <= 10; ++q) {
           const double s = q / 10.0;
           const double det = (Eigen::Matrix3d::Identity() + s * J).determinant();

@@ -32,6 +32,10 @@ struct FoldCheck {
   int smoothing_steps = 0; ///< Jacobi steps applied to remove folds
 };
 
+/// The gradient of u at the centre of cell (i, j, k) (its lowest sample): averaged forward
+/// differences over the cell's 4 edges along each axis; rows are the components.
+Eigen::Matrix3d cell_gradient(const Displacement& d, int i, int j, int k);
+
 /// Smallest Jacobian determinant of x -> x + s u(x) over the cells, for s = 0.1, 0.2, ..., 1.
 FoldCheck check_folds(const Displacement& d);
 
