@@ -451,9 +451,10 @@ async function pollRun() {
   $('log').scrollTop = 1e9;
   $('run-error').textContent = s.error;
   $('run-btn').disabled = s.status === 'running';
-  document.body.dataset.run = s.status;
-  if (s.status === 'running') { polling = setTimeout(pollRun, 400); return; }
+  if (s.status === 'running') { document.body.dataset.run = s.status; polling = setTimeout(pollRun, 400); return; }
   if (s.status === 'done') { await loadRuns(s.name); showTab('results'); }
+  // published last, so that whoever waits for "done" finds the results tab already shown
+  document.body.dataset.run = s.status;
 }
 
 let runList = [];
