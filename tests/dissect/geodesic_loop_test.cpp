@@ -143,8 +143,11 @@ TEST(GeodesicLoop, AvoidedVerticesKeepTheirSideAndAreNeverOnTheLoop) {
   const GeodesicLoop g = qs::dissect::straighten_seed_loop(m, edge_loop, o);
   expect_valid_loop(g.mesh, g.loop);
   EXPECT_EQ(qs::dissect::sides_of_vertices(g.mesh, g.loop, o.avoid), before);
-  for (int i = 0; i < 4; ++i)
-    if (!g.straightened[i]) EXPECT_FALSE(g.why[i].empty());
+  for (int i = 0; i < 4; ++i) {
+    if (!g.straightened[i]) {
+      EXPECT_FALSE(g.why[i].empty());
+    }
+  }
 }
 
 TEST(GeodesicLoop, BadOptionsAreRejected) {
