@@ -118,6 +118,10 @@ int main(int argc, char** argv) {
                  "Passes over the shared patch sides of --refine-across-borders")
       ->capture_default_str()
       ->check(CLI::Range(0, 20));
+  app.add_option("--refine-border-iterations", refine_opt.border_iterations,
+                 "Newton steps per glued pair of patches of --refine-across-borders")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   app.add_option("--min-split-area", opt.min_split_area,
                  "Do not split a patch over tau (bijective) that holds less than this fraction of its mesh's area; "
                  "the leaf repair takes it (0: off; fewer slivers along limbs)")

@@ -443,10 +443,12 @@ void check_set(const std::vector<dissect::Dissection>& meshes, const RefineOptio
     throw InvalidInput("refine_maps: reference mesh " + std::to_string(options.reference) + " is not in the set of " +
                        std::to_string(meshes.size()) + " meshes (expected 0.." + std::to_string(meshes.size() - 1) +
                        ")");
-  if (options.iterations < 0 || !(options.tolerance >= 0) || options.border_sweeps < 0)
+  if (options.iterations < 0 || !(options.tolerance >= 0) || options.border_sweeps < 0 ||
+      options.border_iterations < 0)
     throw InvalidInput("refine_maps: iterations (" + std::to_string(options.iterations) + "), tolerance (" +
-                       std::to_string(options.tolerance) + ") and border sweeps (" +
-                       std::to_string(options.border_sweeps) + ") must be >= 0");
+                       std::to_string(options.tolerance) + "), border sweeps (" +
+                       std::to_string(options.border_sweeps) + ") and border iterations (" +
+                       std::to_string(options.border_iterations) + ") must be >= 0");
   const size_t np = meshes[0].chart.patches.size();
   for (size_t i = 0; i < meshes.size(); ++i) {
     const auto& c = meshes[i].chart;
@@ -991,7 +993,9 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
     return Eigen::Matrix2d(scale * lin[w] * refs[glue[w].patch].metric(s, (*hints)[t][w]) * lin[w].transpose());
   };
   const std::vector<Vec2> start = pr.uv;
-  const PatchResult res = solve_problem(pr, metric, options, true, Vec2(2, 1));
+  RefineOptions side_options = options;
+  side_options.iterations = std::min(options.iterations, options.border_iterations);
+  const PatchResult res = solve_problem(pr, metric, side_options, true, Vec2(2, 1));
   steps += res.steps;
   if (res.skipped) return SideOutcome::Skipped;
   if (!res.changed) return SideOutcome::Unchanged;

@@ -71,7 +71,10 @@ struct RefineOptions {
   bool across_borders = false;
   /// With across_borders: passes over the shared sides (a pass that changes no side ends them).
   /// \pre >= 0
-  int border_sweeps = 2;
+  int border_sweeps = 1;
+  /// With across_borders: Newton steps per glued pair of patches at most (and at most
+  /// `iterations`); the final interior pass polishes. \pre >= 0
+  int border_iterations = 3;
 };
 
 /// What refinement did to one mesh of the set.
