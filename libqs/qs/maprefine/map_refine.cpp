@@ -903,6 +903,10 @@ std::vector<SharedSide> shared_sides(const dissect::Chart& chart) {
 
 enum class SideOutcome { Refined, Unchanged, Skipped };
 
+// A free vertex this close to the cut line (as a fraction of a crossing edge's extent across it)
+// is moved onto the line instead of cutting the edge next to it.
+constexpr double kCutSnap = 0.15;
+
 // Refines B's map on the union of the two patches of `side` and re-cuts it along the glued line
 // u = 1. `pinned`: corners, seeds and features of B (never moved). Appends new vertices to B's
 // chart; faces of the union are replaced by their pieces (the first piece keeps the face id).
@@ -1003,8 +1007,8 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
   for (int l = 0; l < nl; ++l)
     if (held[l]) uv[l] = start[l];  // exactly as they were
 
-  // Snap free vertices within 2% of a crossing edge's u-extent onto the cut line (when their
-  // faces stay positive), so that the cut makes no slivers.
+  // Snap free vertices within kCutSnap of a crossing edge's u-extent onto the cut line (when
+  // their faces stay positive), so that the cut makes fewer slivers.
   std::vector<std::vector<int>> vertex_faces(nl);
   for (size_t t = 0; t < pr.tri.size(); ++t)
     for (int l : pr.tri[t]) vertex_faces[l].push_back(static_cast<int>(t));
@@ -1022,8 +1026,8 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
       const double ua = uv[a].x() - 1, ub = uv[bb].x() - 1;
       if (!(ua * ub < 0)) continue;
       const double t = ua / (ua - ub);
-      if (t < 0.02 && !held[a]) snap.push_back(a);
-      if (t > 0.98 && !held[bb]) snap.push_back(bb);
+      if (t < kCutSnap && !held[a]) snap.push_back(a);
+      if (t > 1 - kCutSnap && !held[bb]) snap.push_back(bb);
     }
   std::sort(snap.begin(), snap.end());
   snap.erase(std::unique(snap.begin(), snap.end()), snap.end());
