@@ -907,15 +907,33 @@ enum class SideOutcome { Refined, Unchanged, Skipped };
 // is moved onto the line instead of cutting the edge next to it.
 constexpr double kCutSnap = 0.15;
 
-// Refines B's map on the union of the two patches of `side` and re-cuts it along the glued line
-// u = 1. `pinned`: corners, seeds and features of B (never moved). Appends new vertices to B's
-// chart; faces of the union are replaced by their pieces (the first piece keeps the face id).
-// Nothing changes unless the refined union is bijective, lower in energy and both new patches
-// have only positive uv faces inside their squares.
-SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch>& refs, const SharedSide& side,
-                        const std::vector<char>& pinned, const RefineOptions& options, int& added_vertices,
-                        int& steps) {
-  auto& chart = b.chart;
+// A side's planned refinement: computed from the chart without changing it (sides of different
+// patches can be planned at once), then committed.
+struct SideCut {
+  struct Piece {
+    int face;                // original chart face
+    std::array<int, 3> c;    // local vertex ids; ids >= vertices.size() are new_pos entries
+  };
+  SideOutcome outcome = SideOutcome::Unchanged;
+  int steps = 0;
+  std::vector<int> vertices;  // local -> chart vertex
+  std::vector<Vec3> new_pos;
+  std::vector<Piece> pieces;
+  std::vector<int> piece_patch;
+  std::vector<std::array<Vec2, 3>> piece_uv;
+  SideCut& with(SideOutcome o) {
+    outcome = o;
+    return *this;
+  }
+};
+
+// Refines B's map on the union of the two patches of `side` and plans the cut along the glued line
+// u = 1. `pinned`: corners, seeds and features of B (never moved). Only an outcome Refined has a
+// cut to commit: the refined union was bijective, lower in energy, and every piece is a positive
+// uv triangle inside its square.
+SideCut plan_side(const dissect::Chart& chart, const std::vector<ReferencePatch>& refs, const SharedSide& side,
+                  const std::vector<char>& pinned, const RefineOptions& options) {
+  SideCut out;
   const int nv = chart.mesh.num_vertices();
   const int nf = chart.mesh.num_faces();
   const std::array<Glue, 2> glue = {Glue{side.p, (1 - side.side_p + 4) % 4, 0.0},
@@ -956,7 +974,7 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
         if (in_patch[l][1 - w]) {
           // On both patches: must be on the shared side, at the same glued point.
           if (std::abs(g.x() - 1) > 1e-9 || std::abs(pr.uv[l].x() - 1) > 1e-9 || std::abs(g.y() - pr.uv[l].y()) > 1e-9)
-            return SideOutcome::Skipped;  // the patches meet elsewhere too, or disagree along the side
+            return out.with(SideOutcome::Skipped);  // the patches meet elsewhere too, or disagree along the side
           pr.uv[l] = Vec2(1, glue[0].to_glued(wedge[l][0]).y());
         }
       } else if (wedge[l][w] != s) {
@@ -985,7 +1003,7 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
     pr.basis.push_back(Vec2::Zero());
     if (free) pr.unknowns += 2;
   }
-  if (pr.unknowns == 0) return SideOutcome::Unchanged;
+  if (pr.unknowns == 0) return out.with(SideOutcome::Unchanged);
   // The reference's metric on the same union, scaled by area_B(union) / area_A(union).
   const double area_a = refs[side.p].area() + refs[side.q].area();
   const double scale = area_a > 0 ? pr.total_area / area_a : 1.0;
@@ -1000,9 +1018,9 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
   RefineOptions side_options = options;
   side_options.iterations = std::min(options.iterations, options.border_iterations);
   const PatchResult res = solve_problem(pr, metric, side_options, true, Vec2(2, 1));
-  steps += res.steps;
-  if (res.skipped) return SideOutcome::Skipped;
-  if (!res.changed) return SideOutcome::Unchanged;
+  out.steps = res.steps;
+  if (res.skipped) return out.with(SideOutcome::Skipped);
+  if (!res.changed) return out.with(SideOutcome::Unchanged);
   std::vector<Vec2> uv = pr.uv;
   for (int l = 0; l < nl; ++l)
     if (held[l]) uv[l] = start[l];  // exactly as they were
@@ -1055,11 +1073,7 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
     return id;
   };
   auto sign = [&](int l) { return all_uv[l].x() < 1 ? -1 : all_uv[l].x() > 1 ? 1 : 0; };
-  struct Piece {
-    int face;  // original chart face
-    std::array<int, 3> c;
-  };
-  std::vector<Piece> pieces;
+  std::vector<SideCut::Piece> pieces;
   for (size_t t = 0; t < pr.tri.size(); ++t) {
     const auto& c = pr.tri[t];
     const int f = pr.faces[t];
@@ -1103,46 +1117,74 @@ SideOutcome refine_side(dissect::Dissection& b, const std::vector<ReferencePatch
     int w = -1;
     for (int l : pieces[i].c)
       if (sign(l) != 0) w = sign(l) < 0 ? 0 : 1;
-    if (w < 0) return SideOutcome::Skipped;  // a piece on the line itself: degenerate
+    if (w < 0) return out.with(SideOutcome::Skipped);  // a piece on the line itself: degenerate
     piece_patch[i] = glue[w].patch;
     for (int k = 0; k < 3; ++k) {
       const int l = pieces[i].c[k];
       piece_uv[i][k] = l < nl && held[l] && in_patch[l][w] ? wedge[l][w] : glue[w].to_patch(all_uv[l]);
     }
     const auto& q = piece_uv[i];
-    if (!(0.5 * tri_det(q[0], q[1], q[2]) > param::kZeroUvArea)) return SideOutcome::Skipped;
+    if (!(0.5 * tri_det(q[0], q[1], q[2]) > param::kZeroUvArea)) return out.with(SideOutcome::Skipped);
   }
-  // Commit.
-  const int first_new = nv;
-  auto chart_vertex = [&](int l) { return l < nl ? pr.vertices[l] : first_new + (l - nl); };
-  for (const auto& p : new_pos) chart.mesh.positions.push_back(p);
+  out.vertices = std::move(pr.vertices);
+  out.new_pos = std::move(new_pos);
+  out.pieces = std::move(pieces);
+  out.piece_patch = std::move(piece_patch);
+  out.piece_uv = std::move(piece_uv);
+  return out.with(SideOutcome::Refined);
+}
+
+// Writes a planned cut into the chart: new vertices appended, each face of the union replaced by
+// its pieces (the first keeps the face id, the others appended).
+void commit_side(dissect::Chart& chart, const SideCut& cut) {
+  const int nl = static_cast<int>(cut.vertices.size());
+  const int first_new = chart.mesh.num_vertices();
+  auto chart_vertex = [&](int l) { return l < nl ? cut.vertices[l] : first_new + (l - nl); };
+  for (const auto& p : cut.new_pos) chart.mesh.positions.push_back(p);
   int last_face = -1;
-  for (size_t i = 0; i < pieces.size(); ++i) {
-    const Tri t{chart_vertex(pieces[i].c[0]), chart_vertex(pieces[i].c[1]), chart_vertex(pieces[i].c[2])};
-    if (pieces[i].face != last_face) {
-      last_face = pieces[i].face;
+  for (size_t i = 0; i < cut.pieces.size(); ++i) {
+    const auto& pc = cut.pieces[i];
+    const Tri t{chart_vertex(pc.c[0]), chart_vertex(pc.c[1]), chart_vertex(pc.c[2])};
+    if (pc.face != last_face) {
+      last_face = pc.face;
       chart.mesh.faces[last_face] = t;
-      chart.face_patch[last_face] = piece_patch[i];
-      chart.face_uv[last_face] = piece_uv[i];
+      chart.face_patch[last_face] = cut.piece_patch[i];
+      chart.face_uv[last_face] = cut.piece_uv[i];
     } else {
       chart.mesh.faces.push_back(t);
-      chart.face_patch.push_back(piece_patch[i]);
-      chart.face_uv.push_back(piece_uv[i]);
+      chart.face_patch.push_back(cut.piece_patch[i]);
+      chart.face_uv.push_back(cut.piece_uv[i]);
     }
   }
-  added_vertices += static_cast<int>(new_pos.size());
-  return SideOutcome::Refined;
 }
 
 struct AcrossResult {
   int sides_refined = 0, sides_skipped = 0, added_vertices = 0, steps = 0;
 };
 
-// `sweeps` passes over the shared sides of B, in patch order.
+// `border_sweeps` passes over the shared sides of B. The sides are grouped (in patch order, each
+// into the first group that has neither of its patches), the sides of a group are planned in
+// parallel (their unions share no face) and committed in order: the result does not depend on
+// the thread count.
 AcrossResult refine_across(dissect::Dissection& b, const std::vector<ReferencePatch>& refs,
                            const RefineOptions& options, const Context& context) {
   AcrossResult out;
   const auto sides = shared_sides(b.chart);
+  std::vector<std::vector<int>> groups;
+  {
+    std::vector<std::vector<char>> used;
+    const size_t np = b.chart.patches.size();
+    for (size_t i = 0; i < sides.size(); ++i) {
+      size_t g = 0;
+      while (g < groups.size() && (used[g][sides[i].p] || used[g][sides[i].q])) ++g;
+      if (g == groups.size()) {
+        groups.emplace_back();
+        used.emplace_back(np, 0);
+      }
+      groups[g].push_back(static_cast<int>(i));
+      used[g][sides[i].p] = used[g][sides[i].q] = 1;
+    }
+  }
   for (int sweep = 0; sweep < options.border_sweeps; ++sweep) {
     std::vector<char> pinned(b.chart.mesh.num_vertices(), 0);
     for (const auto& p : b.chart.patches)
@@ -1153,12 +1195,21 @@ AcrossResult refine_across(dissect::Dissection& b, const std::vector<ReferencePa
     for (const auto& f : b.features)
       if (f.vertex >= 0 && f.vertex < static_cast<int>(pinned.size())) pinned[f.vertex] = 1;
     int refined = 0;
-    for (const auto& side : sides) {
-      context.check_cancel();
+    for (const auto& group : groups) {
       pinned.resize(b.chart.mesh.num_vertices(), 0);
-      const SideOutcome o = refine_side(b, refs, side, pinned, options, out.added_vertices, out.steps);
-      if (o == SideOutcome::Refined) ++refined;
-      if (sweep == 0 && o == SideOutcome::Skipped) ++out.sides_skipped;
+      std::vector<SideCut> cuts(group.size());
+      parallel_for(static_cast<int>(group.size()), options.threads, context, [&](int i) {
+        cuts[i] = plan_side(b.chart, refs, sides[group[i]], pinned, options);
+      });
+      for (const auto& cut : cuts) {
+        out.steps += cut.steps;
+        if (cut.outcome == SideOutcome::Refined) {
+          commit_side(b.chart, cut);
+          out.added_vertices += static_cast<int>(cut.new_pos.size());
+          ++refined;
+        }
+        if (sweep == 0 && cut.outcome == SideOutcome::Skipped) ++out.sides_skipped;
+      }
     }
     out.sides_refined += refined;
     if (refined == 0) break;
