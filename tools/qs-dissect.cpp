@@ -111,6 +111,17 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000));
   app.add_flag("--refine-slide-borders", refine_opt.slide_borders,
                "With --refine-maps: let patch-side vertices slide along their sides too (slower; see README)");
+  app.add_flag("--refine-across-borders", refine_opt.across_borders,
+               "Refine maps across patch borders too: move the patch curves of every mesh but the first (implies "
+               "--refine-maps; adds chart vertices where the new curves cross edges; see README)");
+  app.add_option("--refine-border-sweeps", refine_opt.border_sweeps,
+                 "Passes over the shared patch sides of --refine-across-borders")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 20));
+  app.add_option("--refine-border-iterations", refine_opt.border_iterations,
+                 "Newton steps per glued pair of patches of --refine-across-borders")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   app.add_option("--min-split-area", opt.min_split_area,
                  "Do not split a patch over tau (bijective) that holds less than this fraction of its mesh's area; "
                  "the leaf repair takes it (0: off; fewer slivers along limbs)")
@@ -201,6 +212,7 @@ int main(int argc, char** argv) {
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
+    if (refine_opt.across_borders) refine_maps = true;
     if (refine_maps && result.meshes.size() > 1) {
       refine_report = qs::maprefine::refine_maps(result.meshes, refine_opt, ctx);
       refine_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
@@ -249,6 +261,9 @@ int main(int argc, char** argv) {
                << " patches refined, " << r.patches_skipped << " left as they were, " << r.free_vertices
                << " vertices moved freely, " << r.newton_steps << " Newton steps, "
                << r.flipped_faces + r.zero_area_faces << " flipped or zero-area uv faces\n";
+        if (!r.reference && refine_opt.across_borders)
+          text << "  refine across borders: " << r.sides_refined << " side refinements kept, " << r.sides_skipped
+               << " sides left as they were, " << r.cut_vertices << " chart vertices added by the cuts\n";
       }
       for (const auto& n : d.tree)
         if (i < n.refined_faces.size() && n.refined_faces[i] > 0)

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "qs/core/error.h"
 #include "qs/correspondence/correspondence.h"
@@ -394,4 +395,128 @@ TEST(RefineMaps, AFamilyOfThreeRefinesEveryMeshButTheReference) {
           if (set[i].chart.mesh.faces[f][j] == v) EXPECT_EQ(set[i].chart.face_uv[f][j], set[i].features[k].uv);
     }
   }
+}
+
+namespace {
+
+double surface_area(const qs::dissect::Chart& c) {
+  double a = 0;
+  for (int f = 0; f < c.mesh.num_faces(); ++f) a += qs::face_area(c.mesh, f);
+  return a;
+}
+
+// The uv wedge of chart vertex v in patch p (the first one met), or nullopt.
+std::optional<Vec2> wedge_of(const qs::dissect::Chart& c, int v, int p) {
+  for (int f = 0; f < c.mesh.num_faces(); ++f)
+    if (c.face_patch[f] == p)
+      for (int k = 0; k < 3; ++k)
+        if (c.mesh.faces[f][k] == v) return c.face_uv[f][k];
+  return std::nullopt;
+}
+
+}  // namespace
+
+TEST(RefineAcrossBorders, MovesThePatchCurvesBijectivelyAndLowersTheErrorOfARetessellation) {
+  const auto fam = same_shape_pair();  // one surface, two tessellations: the true map is the identity
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  const auto dissected = dissect_pair(fam);
+  auto inside = dissected;
+  mr::refine_maps(inside);  // patch interiors only
+  auto across = dissected;
+  mr::RefineOptions o;
+  o.across_borders = true;
+  const auto report = mr::refine_maps(across, o);
+  const auto& r = report.meshes[1];
+  EXPECT_GT(r.sides_refined, 0);
+  EXPECT_GT(r.cut_vertices, 0);
+  // Bijective, counted independently of the report.
+  EXPECT_EQ(r.flipped_faces + r.zero_area_faces, 0);
+  EXPECT_EQ(folded_faces(across[1].chart), 0);
+  EXPECT_LE(r.energy_after, r.energy_before);
+
+  // The reference is untouched; the refined mesh keeps its surface (new vertices lie on edges),
+  // its patches, corners, seeds and features exactly.
+  EXPECT_EQ(across[0].chart.face_uv, dissected[0].chart.face_uv);
+  EXPECT_EQ(across[0].chart.mesh.faces, dissected[0].chart.mesh.faces);
+  const auto& c = across[1].chart;
+  const auto& was = dissected[1].chart;
+  EXPECT_EQ(c.mesh.num_vertices(), was.mesh.num_vertices() + r.cut_vertices);
+  EXPECT_GT(c.mesh.num_faces(), was.mesh.num_faces());
+  for (int v = 0; v < was.mesh.num_vertices(); ++v) ASSERT_EQ(c.mesh.positions[v], was.mesh.positions[v]);
+  EXPECT_NEAR(surface_area(c), surface_area(was), 1e-9 * surface_area(was));
+  ASSERT_EQ(c.patches.size(), was.patches.size());
+  for (size_t p = 0; p < c.patches.size(); ++p) {
+    EXPECT_EQ(c.patches[p].corners, was.patches[p].corners);
+    EXPECT_EQ(c.patches[p].flipped_faces + c.patches[p].zero_area_faces, 0) << c.patches[p].name;
+    EXPECT_NEAR(c.patches[p].uv_area_sum, 1.0, 1e-9) << c.patches[p].name;
+    int faces = 0;
+    for (int f = 0; f < c.mesh.num_faces(); ++f) faces += c.face_patch[f] == static_cast<int>(p);
+    EXPECT_EQ(c.patches[p].faces, faces);
+    for (int k = 0; k < 4; ++k) {
+      const auto now = wedge_of(c, c.patches[p].corners[k], static_cast<int>(p));
+      ASSERT_TRUE(now.has_value());
+      EXPECT_EQ(*now, *wedge_of(was, was.patches[p].corners[k], static_cast<int>(p)));
+    }
+  }
+  EXPECT_EQ(across[1].seeds, dissected[1].seeds);
+  ASSERT_EQ(across[1].features.size(), dissected[1].features.size());
+  for (size_t k = 0; k < across[1].features.size(); ++k) {
+    const auto& f = across[1].features[k];
+    EXPECT_EQ(f.patch, dissected[1].features[k].patch);
+    EXPECT_EQ(f.uv, dissected[1].features[k].uv);
+    for (int t = 0; t < c.mesh.num_faces(); ++t)
+      for (int j = 0; j < 3; ++j)
+        if (c.mesh.faces[t][j] == f.vertex) {
+          EXPECT_EQ(c.face_patch[t], f.patch) << f.name;
+          EXPECT_EQ(c.face_uv[t][j], f.uv) << f.name;
+        }
+  }
+  // The later stages read it: closed manifold, every patch a disk with its sides on the square
+  // (the sampler checks all of it), and both patches of a side agree on its vertices.
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(c));
+
+  // Against the truth: lower than refining the interiors alone.
+  const auto e_inside = measure(truth, inside);
+  const auto e_across = measure(truth, across);
+  EXPECT_LT(e_across.mean, e_inside.mean);
+}
+
+TEST(RefineAcrossBorders, IsDeterministicWhateverTheThreadCount) {
+  qs::family::FamilyOptions fo;
+  fo.shapes = 2;
+  fo.seed = 2;
+  fo.faces = 1600;
+  fo.limbs = 4;
+  const auto fam = qs::family::generate_family(fo);
+  auto set1 = dissect_pair(fam);
+  auto set4 = set1;
+  mr::RefineOptions o;
+  o.across_borders = true;
+  o.threads = 1;
+  const auto r1 = mr::refine_maps(set1, o);
+  o.threads = 4;
+  const auto r4 = mr::refine_maps(set4, o);
+  EXPECT_GT(r1.meshes[1].sides_refined, 0);
+  EXPECT_EQ(set1[1].chart.mesh.faces, set4[1].chart.mesh.faces);
+  EXPECT_EQ(set1[1].chart.mesh.positions, set4[1].chart.mesh.positions);
+  EXPECT_EQ(set1[1].chart.face_uv, set4[1].chart.face_uv);
+  EXPECT_EQ(set1[1].chart.face_patch, set4[1].chart.face_patch);
+  EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
+  EXPECT_EQ(folded_faces(set1[1].chart), 0);
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set1[1].chart));
+}
+
+TEST(RefineAcrossBorders, ZeroSweepsIsTheInteriorRefinement) {
+  const auto fam = same_shape_pair();
+  auto a = dissect_pair(fam);
+  auto b = a;
+  mr::RefineOptions o;
+  mr::refine_maps(a, o);
+  o.across_borders = true;
+  o.border_sweeps = 0;
+  mr::refine_maps(b, o);
+  EXPECT_EQ(a[1].chart.face_uv, b[1].chart.face_uv);
+  EXPECT_EQ(a[1].chart.mesh.faces, b[1].chart.mesh.faces);
+  o.border_sweeps = -1;
+  EXPECT_THROW(mr::refine_maps(b, o), qs::InvalidInput);
 }

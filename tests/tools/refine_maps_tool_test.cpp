@@ -69,3 +69,29 @@ TEST_F(RefineMapsTool, OneMeshIsLeftAsDissectedAndBadOptionsAreUsageErrors) {
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
+
+TEST_F(RefineMapsTool, AcrossBordersMovesTheCurvesAndTheLaterStagesReadIt) {
+  RunResult r = run_tool("qs-dissect", pair() + " --refine-across-borders -o " + d() + "/across");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));  // implies --refine-maps
+  EXPECT_THAT(r.out, HasSubstr("  refine across borders: "));
+  EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "across/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
+  // The cuts add vertices and faces to the refined mesh's chart.
+  EXPECT_GT(bytes(dir_ / "across/shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-across-borders --quiet -o " + d() + "/across2").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "across/shape01.chart.ply"), bytes(dir_ / "across2/shape01.chart.ply"));
+  EXPECT_EQ(bytes(dir_ / "across/dissection.json"), bytes(dir_ / "across2/dissection.json"));
+  r = run_tool("qs-remesh", d() + "/across --level 3 -q -o " + d() + "/remesh");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-morph", d() + "/remesh -o " + d() + "/morph");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-merge", d() + "/across -o " + d() + "/merge");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-metro", "--correspondence " + d() + "/across --samples 5000");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-dissect", pair() + " --refine-across-borders --refine-border-sweeps 21 -o " + d() + "/bad");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}

@@ -9,7 +9,10 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
+#include <functional>
+#include <memory>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -267,14 +270,25 @@ Eigen::Matrix4d project_hessian(const Eigen::Matrix2d& J, const Eigen::Matrix4d&
 
 namespace {
 
+// The reference's metric seen by one face of a problem: (local face, uv point) -> 2x2 metric.
+using MetricFn = std::function<Eigen::Matrix2d(size_t, const Vec2&)>;
+
+// The metric of a problem whose faces lie in their own patches' unit squares: per patch, the
+// reference patch and area_B(patch) / area_A(patch); one location hint per face.
+MetricFn patch_metric(const PatchProblem& prob, const std::vector<ReferencePatch>& refs,
+                      const std::vector<double>& scale) {
+  auto hints = std::make_shared<std::vector<int>>(prob.faces.size(), -1);
+  return [&prob, &refs, &scale, hints](size_t t, const Vec2& q) {
+    const int p = prob.face_patch[t];
+    return Eigen::Matrix2d(scale[p] * refs[p].metric(q.cwiseMax(0.0).cwiseMin(1.0), (*hints)[t]));
+  };
+}
+
 class PatchSolver {
  public:
-  // `refs` and `scale`: per patch, the reference patch and area_B(patch) / area_A(patch).
-  PatchSolver(PatchProblem& prob, const std::vector<ReferencePatch>& refs, const std::vector<double>& scale)
-      : prob_(prob), refs_(refs), scale_(scale) {
-    const size_t nf = prob.faces.size();
-    a_.resize(nf);
-    hint_.assign(nf, -1);
+  // `metric`: the reference's (scaled) metric for local face t at uv point q of the problem.
+  PatchSolver(PatchProblem& prob, const MetricFn& metric) : prob_(prob), metric_(metric) {
+    a_.resize(prob.faces.size());
   }
 
   // Re-evaluates the reference metric at the faces' uv centroids and the per-face Jacobian maps.
@@ -282,8 +296,7 @@ class PatchSolver {
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       const Vec2 centroid = (prob_.uv[c[0]] + prob_.uv[c[1]] + prob_.uv[c[2]]) / 3.0;
-      const int p = prob_.face_patch[t];
-      const Eigen::Matrix2d m = scale_[p] * refs_[p].metric(centroid.cwiseMax(0.0).cwiseMin(1.0), hint_[t]);
+      const Eigen::Matrix2d m = metric_(t, centroid);
       Eigen::LLT<Eigen::Matrix2d> llt(m);
       Eigen::Matrix2d l = llt.info() == Eigen::Success ? Eigen::Matrix2d(llt.matrixL())
                                                        : Eigen::Matrix2d(std::sqrt(std::max(m.trace() / 2, 1e-300)) *
@@ -410,10 +423,8 @@ class PatchSolver {
 
  private:
   PatchProblem& prob_;
-  const std::vector<ReferencePatch>& refs_;
-  const std::vector<double>& scale_;
+  const MetricFn& metric_;
   std::vector<Mat46> a_;
-  std::vector<int> hint_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analyzed_ = false;
 };
@@ -432,9 +443,12 @@ void check_set(const std::vector<dissect::Dissection>& meshes, const RefineOptio
     throw InvalidInput("refine_maps: reference mesh " + std::to_string(options.reference) + " is not in the set of " +
                        std::to_string(meshes.size()) + " meshes (expected 0.." + std::to_string(meshes.size() - 1) +
                        ")");
-  if (options.iterations < 0 || !(options.tolerance >= 0))
-    throw InvalidInput("refine_maps: iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
-                       std::to_string(options.tolerance) + ") must be >= 0");
+  if (options.iterations < 0 || !(options.tolerance >= 0) || options.border_sweeps < 0 ||
+      options.border_iterations < 0)
+    throw InvalidInput("refine_maps: iterations (" + std::to_string(options.iterations) + "), tolerance (" +
+                       std::to_string(options.tolerance) + "), border sweeps (" +
+                       std::to_string(options.border_sweeps) + ") and border iterations (" +
+                       std::to_string(options.border_iterations) + ") must be >= 0");
   const size_t np = meshes[0].chart.patches.size();
   for (size_t i = 0; i < meshes.size(); ++i) {
     const auto& c = meshes[i].chart;
@@ -615,13 +629,14 @@ PatchProblem build_side_problem(const dissect::Dissection& d) {
   return pr;
 }
 
-PatchResult solve_problem(PatchProblem& pr, const std::vector<ReferencePatch>& refs, const std::vector<double>& scale,
-                          const RefineOptions& options, bool optimize) {
+// Refines a problem's free (u, v) (all inside [0, hi.x] x [0, hi.y]) under `metric`.
+PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const RefineOptions& options, bool optimize,
+                          const Vec2& hi = Vec2(1, 1)) {
   PatchResult res;
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
   if (pr.faces.empty()) return res;
-  PatchSolver solver(pr, refs, scale);
+  PatchSolver solver(pr, metric);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
@@ -645,7 +660,7 @@ PatchResult solve_problem(PatchProblem& pr, const std::vector<ReferencePatch>& r
   for (const auto& c : pr.tri)
     if (!(0.5 * tri_det(pr.uv[c[0]], pr.uv[c[1]], pr.uv[c[2]]) > param::kZeroUvArea)) ok = false;
   for (const auto& q : pr.uv)
-    if (!(q.x() >= 0 && q.x() <= 1 && q.y() >= 0 && q.y() <= 1)) ok = false;
+    if (!(q.x() >= 0 && q.x() <= hi.x() && q.y() >= 0 && q.y() <= hi.y())) ok = false;
   if (!ok) {
     pr.uv = start;
     res.skipped = true;
@@ -708,16 +723,57 @@ std::vector<PatchResult> interior_pass(dissect::Dissection& b, const std::vector
                    [&](int x, int y) { return probs[x].faces.size() > probs[y].faces.size(); });
   parallel_for(static_cast<int>(order.size()), options.threads, context, [&](int i) {
     const int p = order[i];
-    results[p] = solve_problem(probs[p], refs, scale, options, optimize);
+    results[p] = solve_problem(probs[p], patch_metric(probs[p], refs, scale), options, optimize);
   });
   for (size_t p = 0; p < probs.size(); ++p)
     if (results[p].changed) write_back(probs[p], b.chart);
   return results;
 }
 
-MeshResult run_mesh(dissect::Dissection& b, const dissect::Chart& ref, const RefineOptions& options, bool optimize,
-                    const Context& context) {
-  const int np = static_cast<int>(b.chart.patches.size());
+// Recomputes the figures of the patches marked in `which` (faces, stretch, flipped and zero-area
+// uv faces, uv area sum) from the chart, as the dissection computes them, and the mesh's maximum.
+void update_figures(dissect::Dissection& b, const std::vector<char>& which) {
+  auto& chart = b.chart;
+  const int np = static_cast<int>(chart.patches.size());
+  std::vector<std::vector<int>> faces_of(np);
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) faces_of[chart.face_patch[f]].push_back(f);
+  for (int p = 0; p < np; ++p) {
+    if (!which[p]) continue;
+    std::unordered_map<int, int> local;
+    std::vector<Vec3> pos;
+    std::vector<Vec2> uv;
+    std::vector<Tri> tris;
+    for (int f : faces_of[p]) {
+      Tri t{};
+      for (int k = 0; k < 3; ++k) {
+        const int v = chart.mesh.faces[f][k];
+        auto [it, added] = local.try_emplace(v, static_cast<int>(pos.size()));
+        if (added) {
+          pos.push_back(chart.mesh.positions[v]);
+          uv.push_back(chart.face_uv[f][k]);
+        }
+        t[k] = it->second;
+      }
+      tris.push_back(t);
+    }
+    param::SquareParam sp;
+    sp.uv = uv;
+    param::count_uv_faces(tris, sp);
+    auto& info = chart.patches[p];
+    info.faces = static_cast<int>(tris.size());
+    info.stretch = param::l2_stretch(pos, tris, uv).patch;
+    info.flipped_faces = sp.flipped_faces;
+    info.zero_area_faces = sp.zero_area_faces;
+    info.uv_area_sum = sp.uv_area_sum;
+  }
+  b.max_stretch = 0;
+  for (const auto& p : chart.patches) b.max_stretch = std::max(b.max_stretch, p.stretch);
+}
+
+// The reference's patches (metric and location grid), built once per reference.
+std::vector<ReferencePatch> build_refs(const dissect::Chart& ref, const RefineOptions& options,
+                                       const Context& context) {
+  const int np = static_cast<int>(ref.patches.size());
   std::vector<std::vector<int>> ref_faces(np);
   for (int f = 0; f < ref.mesh.num_faces(); ++f) ref_faces[ref.face_patch[f]].push_back(f);
   std::vector<std::optional<ReferencePatch>> built(np);
@@ -725,6 +781,12 @@ MeshResult run_mesh(dissect::Dissection& b, const dissect::Chart& ref, const Ref
   std::vector<ReferencePatch> refs;
   refs.reserve(np);
   for (auto& r : built) refs.push_back(std::move(*r));
+  return refs;
+}
+
+MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& refs, const RefineOptions& options,
+                    bool optimize, const Context& context) {
+  const int np = static_cast<int>(b.chart.patches.size());
   std::vector<double> area_b(np, 0.0), scale(np, 1.0);
   for (int f = 0; f < b.chart.mesh.num_faces(); ++f) area_b[b.chart.face_patch[f]] += face_area(b.chart.mesh, f);
   for (int p = 0; p < np; ++p)
@@ -752,7 +814,7 @@ MeshResult run_mesh(dissect::Dissection& b, const dissect::Chart& ref, const Ref
   note(interior_pass(b, refs, scale, options, optimize, context), true);
   if (optimize && options.slide_borders && options.iterations > 0) {
     PatchProblem sides = build_side_problem(b);
-    const PatchResult r = solve_problem(sides, refs, scale, options, true);
+    const PatchResult r = solve_problem(sides, patch_metric(sides, refs, scale), options, true);
     out.steps += r.steps;
     if (r.changed) {
       write_back(sides, b.chart);
@@ -762,41 +824,396 @@ MeshResult run_mesh(dissect::Dissection& b, const dissect::Chart& ref, const Ref
     }
   }
   if (!optimize) return out;
-  // Patch figures from the refined map, as the dissection computes them.
-  std::vector<std::vector<int>> faces_of(np);
-  for (int f = 0; f < b.chart.mesh.num_faces(); ++f) faces_of[b.chart.face_patch[f]].push_back(f);
-  auto& chart = b.chart;
-  for (int p = 0; p < np; ++p) {
-    if (!changed[p]) continue;
-    ++out.refined;
-    std::unordered_map<int, int> local;
-    std::vector<Vec3> pos;
-    std::vector<Vec2> uv;
-    std::vector<Tri> tris;
-    for (int f : faces_of[p]) {
-      Tri t{};
-      for (int k = 0; k < 3; ++k) {
-        const int v = chart.mesh.faces[f][k];
-        auto [it, added] = local.try_emplace(v, static_cast<int>(pos.size()));
-        if (added) {
-          pos.push_back(chart.mesh.positions[v]);
-          uv.push_back(chart.face_uv[f][k]);
-        }
-        t[k] = it->second;
-      }
-      tris.push_back(t);
-    }
-    param::SquareParam sp;
-    sp.uv = uv;
-    param::count_uv_faces(tris, sp);
-    auto& info = chart.patches[p];
-    info.stretch = param::l2_stretch(pos, tris, uv).patch;
-    info.flipped_faces = sp.flipped_faces;
-    info.zero_area_faces = sp.zero_area_faces;
-    info.uv_area_sum = sp.uv_area_sum;
+  for (int p = 0; p < np; ++p) out.refined += changed[p];
+  update_figures(b, changed);
+  return out;
+}
+
+// ---- Refinement across patch borders ----------------------------------------------------------
+//
+// Two patches P and Q that share exactly one side are glued into one chart on [0,2] x [0,1]: P's
+// square turned so that the shared side is its side 1 (u = 1), Q's turned so that the side is its
+// side 3 (u = 0) and shifted by 1 in u. B's (u, v) is refined on the union against the reference's
+// metric glued the same way, with the shared side's vertices free; then B's union is cut along
+// u = 1 into the new P (u <= 1) and Q (u >= 1).
+
+// The unit square turned by m quarter turns counter-clockwise about its centre (side k goes to
+// side k + m), closed forms so that 0 and 1 stay exact.
+Vec2 turn_square(const Vec2& q, int m) {
+  switch (m & 3) {
+    case 1: return Vec2(1 - q.y(), q.x());
+    case 2: return Vec2(1 - q.x(), 1 - q.y());
+    case 3: return Vec2(q.y(), 1 - q.x());
+    default: return q;
   }
-  b.max_stretch = 0;
-  for (const auto& p : chart.patches) b.max_stretch = std::max(b.max_stretch, p.stretch);
+}
+
+// A patch's place in the glued chart: g = turn(s, turns) + (shift, 0).
+struct Glue {
+  int patch = -1;
+  int turns = 0;
+  double shift = 0;
+  Vec2 to_glued(const Vec2& s) const { return turn_square(s, turns) + Vec2(shift, 0); }
+  Vec2 to_patch(const Vec2& g) const {
+    return turn_square(Vec2(g.x() - shift, g.y()), 4 - turns).cwiseMax(0.0).cwiseMin(1.0);
+  }
+  // The linear part A of to_glued: a metric M in patch (u, v) is A M A^T in glued (u, v).
+  Eigen::Matrix2d linear() const {
+    Eigen::Matrix2d a = Eigen::Matrix2d::Identity(), r;
+    r << 0, -1, 1, 0;
+    for (int i = 0; i < (turns & 3); ++i) a = r * a;
+    return a;
+  }
+};
+
+struct SharedSide {
+  int p = -1, side_p = -1, q = -1, side_q = -1;  // side_p of p runs opposite to side_q of q; p < q
+};
+
+// The patch sides shared by two patches that share no other side, in patch order.
+std::vector<SharedSide> shared_sides(const dissect::Chart& chart) {
+  std::map<std::pair<int, int>, std::pair<int, int>> directed;  // (corner a, corner b) -> (patch, side)
+  std::map<std::pair<int, int>, int> twice;
+  const int np = static_cast<int>(chart.patches.size());
+  for (int p = 0; p < np; ++p)
+    for (int k = 0; k < 4; ++k) {
+      const auto& c = chart.patches[p].corners;
+      const auto key = std::make_pair(c[k], c[(k + 1) % 4]);
+      if (!directed.emplace(key, std::make_pair(p, k)).second) ++twice[key];
+    }
+  std::vector<SharedSide> sides;
+  std::map<std::pair<int, int>, int> pair_count;
+  for (int p = 0; p < np; ++p)
+    for (int k = 0; k < 4; ++k) {
+      const auto& c = chart.patches[p].corners;
+      const auto key = std::make_pair(c[(k + 1) % 4], c[k]);
+      const auto it = directed.find(key);
+      if (it == directed.end() || twice.count(key) || twice.count({c[k], c[(k + 1) % 4]})) continue;
+      const int q = it->second.first;
+      if (q == p) continue;
+      if (q < p) continue;
+      ++pair_count[{p, q}];
+      sides.push_back({p, k, q, it->second.second});
+    }
+  std::vector<SharedSide> out;
+  for (const auto& s : sides)
+    if (pair_count[{s.p, s.q}] == 1) out.push_back(s);
+  return out;
+}
+
+enum class SideOutcome { Refined, Unchanged, Skipped };
+
+// A free vertex this close to the cut line (as a fraction of a crossing edge's extent across it)
+// is moved onto the line instead of cutting the edge next to it.
+constexpr double kCutSnap = 0.15;
+
+// A side's planned refinement: computed from the chart without changing it (sides of different
+// patches can be planned at once), then committed.
+struct SideCut {
+  struct Piece {
+    int face;                // original chart face
+    std::array<int, 3> c;    // local vertex ids; ids >= vertices.size() are new_pos entries
+  };
+  SideOutcome outcome = SideOutcome::Unchanged;
+  int steps = 0;
+  std::vector<int> vertices;  // local -> chart vertex
+  std::vector<Vec3> new_pos;
+  std::vector<Piece> pieces;
+  std::vector<int> piece_patch;
+  std::vector<std::array<Vec2, 3>> piece_uv;
+  SideCut& with(SideOutcome o) {
+    outcome = o;
+    return *this;
+  }
+};
+
+// Refines B's map on the union of the two patches of `side` and plans the cut along the glued line
+// u = 1. `pinned`: corners, seeds and features of B (never moved). Only an outcome Refined has a
+// cut to commit: the refined union was bijective, lower in energy, and every piece is a positive
+// uv triangle inside its square.
+SideCut plan_side(const dissect::Chart& chart, const std::vector<ReferencePatch>& refs, const SharedSide& side,
+                  const std::vector<char>& pinned, const RefineOptions& options) {
+  SideCut out;
+  const int nv = chart.mesh.num_vertices();
+  const int nf = chart.mesh.num_faces();
+  const std::array<Glue, 2> glue = {Glue{side.p, (1 - side.side_p + 4) % 4, 0.0},
+                                    Glue{side.q, (3 - side.side_q + 4) % 4, 1.0}};
+  std::vector<int> faces;
+  std::vector<char> outside(nv, 0);
+  for (int f = 0; f < nf; ++f) {
+    const int p = chart.face_patch[f];
+    if (p == side.p || p == side.q) faces.push_back(f);
+    else
+      for (int v : chart.mesh.faces[f]) outside[v] = 1;
+  }
+  // Local vertices (one per chart vertex, glued (u, v)), with their original wedges per patch.
+  PatchProblem pr;
+  std::unordered_map<int, int> local;
+  std::vector<std::array<char, 2>> in_patch;
+  std::vector<std::array<Vec2, 2>> wedge;
+  std::vector<char> held;
+  for (int f : faces) {
+    const int w = chart.face_patch[f] == side.p ? 0 : 1;
+    std::array<int, 3> c{};
+    for (int k = 0; k < 3; ++k) {
+      const int v = chart.mesh.faces[f][k];
+      const Vec2& s = chart.face_uv[f][k];
+      const Vec2 g = glue[w].to_glued(s);
+      auto [it, added] = local.try_emplace(v, static_cast<int>(pr.vertices.size()));
+      const int l = it->second;
+      if (added) {
+        pr.vertices.push_back(v);
+        pr.uv.push_back(g);
+        in_patch.push_back({0, 0});
+        wedge.emplace_back();
+        held.push_back(outside[v] || pinned[v]);
+      }
+      if (!in_patch[l][w]) {
+        in_patch[l][w] = 1;
+        wedge[l][w] = s;
+        if (in_patch[l][1 - w]) {
+          // On both patches: must be on the shared side, at the same glued point.
+          if (std::abs(g.x() - 1) > 1e-9 || std::abs(pr.uv[l].x() - 1) > 1e-9 || std::abs(g.y() - pr.uv[l].y()) > 1e-9)
+            return out.with(SideOutcome::Skipped);  // the patches meet elsewhere too, or disagree along the side
+          pr.uv[l] = Vec2(1, glue[0].to_glued(wedge[l][0]).y());
+        }
+      } else if (wedge[l][w] != s) {
+        held[l] = 1;  // wedges of one patch disagree: hold it
+      }
+      c[k] = l;
+    }
+    pr.tri.push_back(c);
+    pr.faces.push_back(f);
+    pr.face_patch.push_back(chart.face_patch[f]);
+    double area = 0;
+    const auto& t = chart.mesh.faces[f];
+    const Eigen::Matrix2d dm =
+        local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], area);
+    pr.dm_inv.push_back(dm.inverse());
+    pr.area.push_back(area);
+    pr.total_area += area;
+  }
+  const int nl = static_cast<int>(pr.vertices.size());
+  for (int l = 0; l < nl; ++l) {
+    // A vertex of both patches off the shared side (checked above) cannot occur; the side's own
+    // vertices become interior unknowns unless pinned.
+    const bool free = !held[l];
+    pr.var.push_back(free ? pr.unknowns : -1);
+    pr.dims.push_back(free ? 2 : 0);
+    pr.basis.push_back(Vec2::Zero());
+    if (free) pr.unknowns += 2;
+  }
+  if (pr.unknowns == 0) return out.with(SideOutcome::Unchanged);
+  // The reference's metric on the same union, scaled by area_B(union) / area_A(union).
+  const double area_a = refs[side.p].area() + refs[side.q].area();
+  const double scale = area_a > 0 ? pr.total_area / area_a : 1.0;
+  const std::array<Eigen::Matrix2d, 2> lin = {glue[0].linear(), glue[1].linear()};
+  auto hints = std::make_shared<std::vector<std::array<int, 2>>>(pr.faces.size(), std::array<int, 2>{-1, -1});
+  const MetricFn metric = [&, hints](size_t t, const Vec2& g) {
+    const int w = g.x() <= 1 ? 0 : 1;
+    const Vec2 s = glue[w].to_patch(g);
+    return Eigen::Matrix2d(scale * lin[w] * refs[glue[w].patch].metric(s, (*hints)[t][w]) * lin[w].transpose());
+  };
+  const std::vector<Vec2> start = pr.uv;
+  RefineOptions side_options = options;
+  side_options.iterations = std::min(options.iterations, options.border_iterations);
+  const PatchResult res = solve_problem(pr, metric, side_options, true, Vec2(2, 1));
+  out.steps = res.steps;
+  if (res.skipped) return out.with(SideOutcome::Skipped);
+  if (!res.changed) return out.with(SideOutcome::Unchanged);
+  std::vector<Vec2> uv = pr.uv;
+  for (int l = 0; l < nl; ++l)
+    if (held[l]) uv[l] = start[l];  // exactly as they were
+
+  // Snap free vertices within kCutSnap of a crossing edge's u-extent onto the cut line (when
+  // their faces stay positive), so that the cut makes fewer slivers.
+  std::vector<std::vector<int>> vertex_faces(nl);
+  for (size_t t = 0; t < pr.tri.size(); ++t)
+    for (int l : pr.tri[t]) vertex_faces[l].push_back(static_cast<int>(t));
+  auto faces_positive = [&](int l) {
+    for (int t : vertex_faces[l]) {
+      const auto& c = pr.tri[t];
+      if (!(0.5 * tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) > 4 * param::kZeroUvArea)) return false;
+    }
+    return true;
+  };
+  std::vector<int> snap;
+  for (const auto& c : pr.tri)
+    for (int k = 0; k < 3; ++k) {
+      const int a = c[k], bb = c[(k + 1) % 3];
+      const double ua = uv[a].x() - 1, ub = uv[bb].x() - 1;
+      if (!(ua * ub < 0)) continue;
+      const double t = ua / (ua - ub);
+      if (t < kCutSnap && !held[a]) snap.push_back(a);
+      if (t > 1 - kCutSnap && !held[bb]) snap.push_back(bb);
+    }
+  std::sort(snap.begin(), snap.end());
+  snap.erase(std::unique(snap.begin(), snap.end()), snap.end());
+  for (int l : snap) {
+    const Vec2 was = uv[l];
+    uv[l].x() = 1;
+    if (!faces_positive(l)) uv[l] = was;
+  }
+
+  // Cut points: one per crossing edge, computed from its lower chart vertex.
+  std::map<std::pair<int, int>, int> cut;  // (local a, local b), a < b -> new local id
+  std::vector<Vec3> new_pos;
+  std::vector<Vec2> all_uv = uv;
+  auto cut_point = [&](int a, int bb) {
+    if (pr.vertices[a] > pr.vertices[bb]) std::swap(a, bb);
+    const auto key = std::make_pair(a, bb);
+    const auto it = cut.find(key);
+    if (it != cut.end()) return it->second;
+    const double ua = uv[a].x() - 1, ub = uv[bb].x() - 1;
+    const double t = ua / (ua - ub);
+    const int id = static_cast<int>(all_uv.size());
+    all_uv.emplace_back(1.0, (1 - t) * uv[a].y() + t * uv[bb].y());
+    new_pos.push_back((1 - t) * chart.mesh.positions[pr.vertices[a]] + t * chart.mesh.positions[pr.vertices[bb]]);
+    cut.emplace(key, id);
+    return id;
+  };
+  auto sign = [&](int l) { return all_uv[l].x() < 1 ? -1 : all_uv[l].x() > 1 ? 1 : 0; };
+  std::vector<SideCut::Piece> pieces;
+  for (size_t t = 0; t < pr.tri.size(); ++t) {
+    const auto& c = pr.tri[t];
+    const int f = pr.faces[t];
+    std::array<int, 3> sg{sign(c[0]), sign(c[1]), sign(c[2])};
+    const bool neg = sg[0] < 0 || sg[1] < 0 || sg[2] < 0, pos = sg[0] > 0 || sg[1] > 0 || sg[2] > 0;
+    if (!(neg && pos)) {
+      pieces.push_back({f, c});
+      continue;
+    }
+    int zero = -1;
+    for (int k = 0; k < 3; ++k)
+      if (sg[k] == 0) zero = k;
+    if (zero >= 0) {  // the line passes through corner `zero`: two triangles
+      const int a = c[zero], x = c[(zero + 1) % 3], y = c[(zero + 2) % 3];
+      const int m = cut_point(x, y);
+      pieces.push_back({f, {a, x, m}});
+      pieces.push_back({f, {a, m, y}});
+      continue;
+    }
+    int lone = 0;  // the corner alone on its side
+    for (int k = 0; k < 3; ++k)
+      if (sg[k] != sg[(k + 1) % 3] && sg[k] != sg[(k + 2) % 3]) lone = k;
+    const int a = c[lone], x = c[(lone + 1) % 3], y = c[(lone + 2) % 3];
+    const int m1 = cut_point(a, x), m2 = cut_point(y, a);
+    pieces.push_back({f, {a, m1, m2}});
+    // The quad m1 x y m2 (convex): the diagonal whose smaller triangle is larger.
+    const double d1 = std::min(tri_det(all_uv[m1], all_uv[x], all_uv[y]), tri_det(all_uv[m1], all_uv[y], all_uv[m2]));
+    const double d2 = std::min(tri_det(all_uv[m1], all_uv[x], all_uv[m2]), tri_det(all_uv[m2], all_uv[x], all_uv[y]));
+    if (d1 >= d2) {
+      pieces.push_back({f, {m1, x, y}});
+      pieces.push_back({f, {m1, y, m2}});
+    } else {
+      pieces.push_back({f, {m1, x, m2}});
+      pieces.push_back({f, {m2, x, y}});
+    }
+  }
+  // Each piece's patch and wedge (u, v); held vertices keep their original wedges exactly.
+  std::vector<int> piece_patch(pieces.size());
+  std::vector<std::array<Vec2, 3>> piece_uv(pieces.size());
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    int w = -1;
+    for (int l : pieces[i].c)
+      if (sign(l) != 0) w = sign(l) < 0 ? 0 : 1;
+    if (w < 0) return out.with(SideOutcome::Skipped);  // a piece on the line itself: degenerate
+    piece_patch[i] = glue[w].patch;
+    for (int k = 0; k < 3; ++k) {
+      const int l = pieces[i].c[k];
+      piece_uv[i][k] = l < nl && held[l] && in_patch[l][w] ? wedge[l][w] : glue[w].to_patch(all_uv[l]);
+    }
+    const auto& q = piece_uv[i];
+    if (!(0.5 * tri_det(q[0], q[1], q[2]) > param::kZeroUvArea)) return out.with(SideOutcome::Skipped);
+  }
+  out.vertices = std::move(pr.vertices);
+  out.new_pos = std::move(new_pos);
+  out.pieces = std::move(pieces);
+  out.piece_patch = std::move(piece_patch);
+  out.piece_uv = std::move(piece_uv);
+  return out.with(SideOutcome::Refined);
+}
+
+// Writes a planned cut into the chart: new vertices appended, each face of the union replaced by
+// its pieces (the first keeps the face id, the others appended).
+void commit_side(dissect::Chart& chart, const SideCut& cut) {
+  const int nl = static_cast<int>(cut.vertices.size());
+  const int first_new = chart.mesh.num_vertices();
+  auto chart_vertex = [&](int l) { return l < nl ? cut.vertices[l] : first_new + (l - nl); };
+  for (const auto& p : cut.new_pos) chart.mesh.positions.push_back(p);
+  int last_face = -1;
+  for (size_t i = 0; i < cut.pieces.size(); ++i) {
+    const auto& pc = cut.pieces[i];
+    const Tri t{chart_vertex(pc.c[0]), chart_vertex(pc.c[1]), chart_vertex(pc.c[2])};
+    if (pc.face != last_face) {
+      last_face = pc.face;
+      chart.mesh.faces[last_face] = t;
+      chart.face_patch[last_face] = cut.piece_patch[i];
+      chart.face_uv[last_face] = cut.piece_uv[i];
+    } else {
+      chart.mesh.faces.push_back(t);
+      chart.face_patch.push_back(cut.piece_patch[i]);
+      chart.face_uv.push_back(cut.piece_uv[i]);
+    }
+  }
+}
+
+struct AcrossResult {
+  int sides_refined = 0, sides_skipped = 0, added_vertices = 0, steps = 0;
+};
+
+// `border_sweeps` passes over the shared sides of B. The sides are grouped (in patch order, each
+// into the first group that has neither of its patches), the sides of a group are planned in
+// parallel (their unions share no face) and committed in order: the result does not depend on
+// the thread count.
+AcrossResult refine_across(dissect::Dissection& b, const std::vector<ReferencePatch>& refs,
+                           const RefineOptions& options, const Context& context) {
+  AcrossResult out;
+  const auto sides = shared_sides(b.chart);
+  std::vector<std::vector<int>> groups;
+  {
+    std::vector<std::vector<char>> used;
+    const size_t np = b.chart.patches.size();
+    for (size_t i = 0; i < sides.size(); ++i) {
+      size_t g = 0;
+      while (g < groups.size() && (used[g][sides[i].p] || used[g][sides[i].q])) ++g;
+      if (g == groups.size()) {
+        groups.emplace_back();
+        used.emplace_back(np, 0);
+      }
+      groups[g].push_back(static_cast<int>(i));
+      used[g][sides[i].p] = used[g][sides[i].q] = 1;
+    }
+  }
+  for (int sweep = 0; sweep < options.border_sweeps; ++sweep) {
+    std::vector<char> pinned(b.chart.mesh.num_vertices(), 0);
+    for (const auto& p : b.chart.patches)
+      for (int c : p.corners)
+        if (c >= 0 && c < static_cast<int>(pinned.size())) pinned[c] = 1;
+    for (int s : b.seeds)
+      if (s >= 0 && s < static_cast<int>(pinned.size())) pinned[s] = 1;
+    for (const auto& f : b.features)
+      if (f.vertex >= 0 && f.vertex < static_cast<int>(pinned.size())) pinned[f.vertex] = 1;
+    int refined = 0;
+    for (const auto& group : groups) {
+      pinned.resize(b.chart.mesh.num_vertices(), 0);
+      std::vector<SideCut> cuts(group.size());
+      parallel_for(static_cast<int>(group.size()), options.threads, context, [&](int i) {
+        cuts[i] = plan_side(b.chart, refs, sides[group[i]], pinned, options);
+      });
+      for (const auto& cut : cuts) {
+        out.steps += cut.steps;
+        if (cut.outcome == SideOutcome::Refined) {
+          commit_side(b.chart, cut);
+          out.added_vertices += static_cast<int>(cut.new_pos.size());
+          ++refined;
+        }
+        if (sweep == 0 && cut.outcome == SideOutcome::Skipped) ++out.sides_skipped;
+      }
+    }
+    out.sides_refined += refined;
+    if (refined == 0) break;
+  }
   return out;
 }
 
@@ -837,7 +1254,7 @@ double map_energy(const dissect::Dissection& a, const dissect::Dissection& b) {
   RefineOptions o;
   o.reference = 0;
   check_set(pair, o);
-  const MeshResult r = run_mesh(pair[1], pair[0].chart, o, false, {});
+  const MeshResult r = run_mesh(pair[1], build_refs(pair[0].chart, o, {}), o, false, {});
   return r.area > 0 ? r.energy_before / r.area / 4 : 0;
 }
 
@@ -846,7 +1263,7 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
   check_set(meshes, options);
   RefineReport report;
   report.meshes.resize(meshes.size());
-  const dissect::Chart& ref = meshes[options.reference].chart;
+  const std::vector<ReferencePatch> refs = build_refs(meshes[options.reference].chart, options, context);
   context.report("refine maps", 0);
   for (size_t i = 0; i < meshes.size(); ++i) {
     auto& r = report.meshes[i];
@@ -855,13 +1272,24 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       count_faces(meshes[i].chart, r);
       continue;
     }
-    const MeshResult m = run_mesh(meshes[i], ref, options, true, context);
+    double before = -1;
+    if (options.across_borders && options.iterations > 0 && options.border_sweeps > 0) {
+      const MeshResult b = run_mesh(meshes[i], refs, options, false, context);
+      before = b.area > 0 ? b.energy_before / b.area / 4 : 0;
+      const AcrossResult a = refine_across(meshes[i], refs, options, context);
+      r.sides_refined = a.sides_refined;
+      r.sides_skipped = a.sides_skipped;
+      r.cut_vertices = a.added_vertices;
+      r.newton_steps += a.steps;
+      update_figures(meshes[i], std::vector<char>(meshes[i].chart.patches.size(), 1));
+    }
+    const MeshResult m = run_mesh(meshes[i], refs, options, true, context);
     r.free_vertices = m.free;
     r.held_vertices = m.held;
-    r.newton_steps = m.steps;
+    r.newton_steps += m.steps;
     r.patches_refined = m.refined;
     r.patches_skipped = m.skipped;
-    r.energy_before = m.area > 0 ? m.energy_before / m.area / 4 : 0;
+    r.energy_before = before >= 0 ? before : m.area > 0 ? m.energy_before / m.area / 4 : 0;
     r.energy_after = m.area > 0 ? m.energy_after / m.area / 4 : 0;
     count_faces(meshes[i].chart, r);
     context.report("refine maps", static_cast<double>(i + 1) / meshes.size());

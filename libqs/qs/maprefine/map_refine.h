@@ -23,11 +23,19 @@
 //  - Held: patch corners, seeds, features, any vertex whose wedges in its patch disagree, and
 //    (unless RefineOptions::slide_borders) every patch-side vertex. Patch-interior vertices move
 //    inside their own patch; with slide_borders, side vertices slide along their side (one
-//    unknown shared by the two patches), between two interior passes. Patch curves on the
-//    surface never move.
+//    unknown shared by the two patches), between two interior passes. In these passes patch
+//    curves on the surface never move (across_borders below moves them).
 //  - Safety: a patch keeps its refined (u, v) only if every uv face stays positive (signed area
 //    above param::kZeroUvArea) and the energy went down; otherwise it is left as it was. Patches
 //    with a flipped or zero-area uv face to start with are not touched.
+//
+// Across patch borders (RefineOptions::across_borders): the patch curves of every mesh but the
+// reference move too. Side by side (a few sweeps, sides in patch order), the two patches P and Q
+// of a side are glued into one chart on [0,2] x [0,1] (Q's square turned and shifted so that its
+// side lies on P's), B's union is refined as above with its outer border held and the side's
+// vertices free, and cut again along u = 1: new chart vertices where that line crosses B's edges
+// (3D points on the edges, so the surface is unchanged), faces split there, the old side
+// vertices kept as ordinary vertices. Corners, seeds, features and the reference stay exactly.
 //
 // In the interior passes patches are independent (their borders are held), so they run in
 // parallel; the sliding pass is one problem. The result does not depend on the thread count.
@@ -51,6 +59,22 @@ struct RefineOptions {
   /// Off by default: on the correspondence benchmark it lowers the distortion energy but changes
   /// no mean error by more than 0.02% of the diagonal, at 9-17 times the time on the human pairs.
   bool slide_borders = false;
+  /// Move the patch curves too (`qs-dissect --refine-across-borders`): for every side shared by
+  /// two patches P and Q (and no other side of theirs), in patch order, glue P's and Q's squares
+  /// along it into one chart on [0,2] x [0,1], refine B's (u, v) on the union against the
+  /// reference's metric glued the same way (the union's border, corners, seeds and features held,
+  /// the side's own vertices free), then cut B's union along u = 1 into the new P and Q: new chart
+  /// vertices where the line crosses an edge (exactly on the surface, float64 uv), the old side
+  /// vertices stay as ordinary vertices. A side is left as it was when the union is folded to
+  /// start with, gains nothing, or a piece of the cut would not be a positive uv triangle. Then
+  /// the interior pass as without it. Off by default (see the README for what it measured).
+  bool across_borders = false;
+  /// With across_borders: passes over the shared sides (a pass that changes no side ends them).
+  /// \pre >= 0
+  int border_sweeps = 1;
+  /// With across_borders: Newton steps per glued pair of patches at most (and at most
+  /// `iterations`); the final interior pass polishes. \pre >= 0
+  int border_iterations = 3;
 };
 
 /// What refinement did to one mesh of the set.
@@ -67,20 +91,28 @@ struct MeshRefineReport {
   double energy_after = 0;
   int flipped_faces = 0;        ///< uv faces with signed area < -param::kZeroUvArea after refinement
   int zero_area_faces = 0;      ///< uv faces with |signed area| <= param::kZeroUvArea after refinement
+  /// With RefineOptions::across_borders: side refinements kept (summed over the sweeps), sides
+  /// left as they were in the first sweep, and chart vertices added by the cuts.
+  int sides_refined = 0;
+  int sides_skipped = 0;
+  int cut_vertices = 0;
 };
 
 struct RefineReport {
   std::vector<MeshRefineReport> meshes;  ///< one per mesh of the set, in order
 };
 
-/// Refines the charts of a dissected set in place (see the top of this file). Only
-/// chart.face_uv of non-reference meshes changes, and the PatchInfo figures that depend on it
-/// (stretch, flipped and zero-area counts, uv area sum) and Dissection::max_stretch are
-/// recomputed; meshes, patches, corners, features and seeds are unchanged, so every later stage
-/// reads the refined charts as before.
+/// Refines the charts of a dissected set in place (see the top of this file). Without
+/// across_borders only chart.face_uv of non-reference meshes changes; with it, their chart meshes
+/// gain vertices (appended: existing vertex ids and positions stay) and faces (a split face keeps
+/// its id for its first piece, the others are appended), and faces change patch where the patch
+/// curves moved. The PatchInfo figures that depend on the chart (faces, stretch, flipped and
+/// zero-area counts, uv area sum) and Dissection::max_stretch are recomputed; patch names,
+/// corners, the base domain, features (vertex, patch, uv) and seeds are unchanged, so every later
+/// stage reads the refined charts as before.
 /// \pre the meshes come from one dissect_set (same patches in the same order, base domains
 /// identical). \throws InvalidInput for an empty set, a reference out of range, options out of
-/// range or charts that do not share their patches (naming the mesh and patch count);
+/// range (iterations, tolerance or border_sweeps below 0) or charts that do not share their patches (naming the mesh and patch count);
 /// Error(Internal "cancelled") when context's cancel flag is raised.
 /// Progress stage: "refine maps".
 RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options = {},
