@@ -19,6 +19,7 @@
 #include "qs/io/write_mesh.h"
 #include "qs/metro/metro.h"
 #include "qs/remesh/adaptive.h"
+#include "qs/remesh/anisotropic.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 #include "resource_limits.h"
@@ -78,6 +79,13 @@ int main(int argc, char** argv) {
                                  "area (balanced quadtrees split while a node covers more than 2.3 s / (P 4^n) of the "
                                  "surface, the largest share over the set; s = the patches' largest shares summed)");
   even_flag->needs(lvl);
+  std::string cells = "aniso";
+  auto* cells_opt = app.add_option("--cells", cells,
+                 "With --even: cells split in u or v alone where they are long on the surface, kept within 2:1 "
+                 "(aniso), or square quadtree cells that keep their patch's aspect (square)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"aniso", "square"}));
+  cells_opt->needs(even_flag);
   app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));
   app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
   app.add_flag("--quads", quads, "Uniform: write the grid cells as quads (OBJ only)");
@@ -153,13 +161,34 @@ int main(int argc, char** argv) {
     qs::Context ctx;
     qs::remesh::SemiRegularSet set;
     nlohmann::ordered_json adaptive_stats;
-    if (even) {
+    if (even && cells == "aniso") {
+      double share_sum = 0;
+      for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
+      const qs::remesh::AnisotropicOptions ao =
+          qs::remesh::anisotropic_options(level, patch_count(charts), std::max(share_sum, 1.0));
+      const qs::remesh::AnisotropicRemesh ar = qs::remesh::remesh_anisotropic(charts, ao, ctx);
+      set = ar.remesh;
+      adaptive_stats = {{"level", level},
+                        {"cells", cells},
+                        {"max_area", ao.max_area},
+                        {"max_aspect", ao.max_aspect},
+                        {"max_level", ao.max_level},
+                        {"finest_level", ar.stats.finest_level},
+                        {"leaves", ar.leaves.size()},
+                        {"fan_leaves", ar.stats.fan_leaves},
+                        {"area_splits", ar.stats.area_splits},
+                        {"aspect_splits", ar.stats.aspect_splits},
+                        {"balance_splits", ar.stats.balance_splits},
+                        {"unresolved_leaves", ar.stats.unresolved_leaves},
+                        {"max_leaf_aspect", ar.stats.max_leaf_aspect}};
+    } else if (even) {
       double share_sum = 0;
       for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
       const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, patch_count(charts), std::max(share_sum, 1.0));
       const qs::remesh::AdaptiveRemesh ar = qs::remesh::remesh_adaptive(charts, eo, ctx);
       set = ar.remesh;
       adaptive_stats = {{"level", level},
+                        {"cells", cells},
                         {"max_area", eo.max_area},
                         {"max_level", eo.max_level},
                         {"finest_level", ar.forest.max_level},

@@ -26,6 +26,8 @@ constexpr int kSpan = 1 << kUnits;
 // that a map degenerate at a point (every node near it long) cannot refine it to max_level.
 constexpr double kAspectAreaFloor = 1.0 / 16;
 
+constexpr double kHalfLog2 = 0.34657359027997264;  // log(2) / 2
+
 enum Split : int { kNone = 0, kU = 1, kV = 2, kUV = 3 };
 
 struct TreeNode {
@@ -33,7 +35,8 @@ struct TreeNode {
   int split = kNone;
   int child = -1;  // first child's index in the patch's node list
   double area = -1;  // A_C, or -1 when not measured
-  double log_aspect = std::numeric_limits<double>::quiet_NaN();  // log r(q)
+  double log_aspect = 0;  // log r(q): the midrange of log(Su / Sv) over the meshes
+  double log_spread = 0;  // half the range of log(Su / Sv) over the meshes
   int x0() const { return i << (kUnits - lu); }
   int x1() const { return (i + 1) << (kUnits - lu); }
   int y0() const { return j << (kUnits - lv); }
@@ -79,7 +82,7 @@ class Builder {
         split(q, b, kind);
         ++stats_.balance_splits;
         const int c = nodes_[q][b].child;
-        for (int k = 0; k < (kind == kUV ? 4 : 2); ++k) work.push_back({q, c + k});
+        for (int k = 0; k < (nodes_[q][b].split == kUV ? 4 : 2); ++k) work.push_back({q, c + k});
         work.push_back({p, a});  // its neighbour may still be too coarse
         break;
       }
@@ -94,7 +97,7 @@ class Builder {
       for (const auto& [q, k] : l) {
         const TreeNode& n = measured(q, k);
         out.push_back({q, n.lu, n.lv, n.i, n.j});
-        aspect.push_back(std::exp(n.log_aspect));
+        aspect.push_back(std::exp(std::abs(n.log_aspect) + n.log_spread));
       }
     }
   }
@@ -114,6 +117,8 @@ class Builder {
 
   void split(int p, int k, int kind) {
     const TreeNode n = nodes_[p][k];
+    // Never a leaf side across the whole patch (see the header).
+    if ((kind == kU && n.lv == 0) || (kind == kV && n.lu == 0)) kind = kUV;
     const int first = static_cast<int>(nodes_[p].size());
     if (kind == kU) {
       for (int a = 0; a < 2; ++a) nodes_[p].push_back({n.lu + 1, n.lv, 2 * n.i + a, n.j});
@@ -132,7 +137,7 @@ class Builder {
     if (n.area >= 0) return n;
     const double su = 1.0 / (1 << n.lu), sv = 1.0 / (1 << n.lv);
     const double u0 = n.i * su, v0 = n.j * sv;
-    double area = 0, log_sum = 0;
+    double area = 0, log_lo = 0, log_hi = 0;
     int logs = 0;
     auto tri = [](const Vec3& a, const Vec3& b, const Vec3& c) { return 0.5 * (b - a).cross(c - a).norm(); };
     for (size_t m = 0; m < samplers_.size(); ++m) {
@@ -152,43 +157,46 @@ class Builder {
       auto col = [&](int a) { return (x[3 + a] - x[a]).norm() + (x[6 + a] - x[3 + a]).norm(); };
       const double lu = 0.25 * (row(0) + 2 * row(1) + row(2)), lv = 0.25 * (col(0) + 2 * col(1) + col(2));
       if (lu > 0 && lv > 0 && std::isfinite(lu) && std::isfinite(lv)) {
-        log_sum += std::log(lu / lv);
+        const double l = std::log(lu / lv);
+        log_lo = logs == 0 ? l : std::min(log_lo, l);
+        log_hi = logs == 0 ? l : std::max(log_hi, l);
         ++logs;
       }
     }
     n.area = area;
-    n.log_aspect = logs > 0 ? log_sum / logs : 0.0;  // a degenerate node in every mesh: square
+    n.log_aspect = 0.5 * (log_lo + log_hi);  // a degenerate node in every mesh: square
+    n.log_spread = 0.5 * (log_hi - log_lo);
     return n;
   }
 
   void refine(int p, int k) {
     const TreeNode& n = measured(p, k);
-    const double area = n.area, r = n.log_aspect;
-    if (k == 0 && o_.max_level >= 1) {  // a root: always split in both directions (see the header)
-      split(p, k, kUV);
-      const int first = nodes_[p][k].child;
-      for (int c = 0; c < 4; ++c) refine(p, first + c);
-      return;
-    }
+    const double area = n.area, r = n.log_aspect, worst = std::abs(r) + n.log_spread;
     const bool too_big = area > o_.max_area;
-    const bool too_long = std::abs(r) > log_max_ && area > kAspectAreaFloor * o_.max_area;
+    // Too long in some mesh, and a split along the long direction makes the worst mesh better.
+    const bool too_long = worst > log_max_ && std::abs(r) > kHalfLog2 && area > kAspectAreaFloor * o_.max_area;
     if (!too_big && !too_long) return;
-    if (std::max(n.lu, n.lv) >= o_.max_level) {
+    const double half = 0.5 * log_max_;
+    const bool can_u = n.lu < o_.max_level, can_v = n.lv < o_.max_level;
+    int kind = kNone;
+    if (too_big) {
+      kind = r > half ? kU : r < -half ? kV : kUV;
+      // A direction at max_level: the other one alone (the area bound first).
+      if (kind == kUV && !can_u) kind = kV;
+      if (kind == kUV && !can_v) kind = kU;
+      if (kind == kU && !can_u) kind = kV;
+      if (kind == kV && !can_v) kind = can_u ? kU : kNone;
+    } else {
+      kind = r > 0 ? (can_u ? kU : kNone) : (can_v ? kV : kNone);
+    }
+    if (kind == kNone) {
       ++stats_.unresolved_leaves;
       return;
     }
-    const double half = 0.5 * log_max_;
-    int kind;
-    if (too_big) {
-      kind = r > half ? kU : r < -half ? kV : kUV;
-      ++stats_.area_splits;
-    } else {
-      kind = r > 0 ? kU : kV;
-      ++stats_.aspect_splits;
-    }
+    ++(too_big ? stats_.area_splits : stats_.aspect_splits);
     split(p, k, kind);
     const int first = nodes_[p][k].child;
-    for (int c = 0; c < (kind == kUV ? 4 : 2); ++c) refine(p, first + c);
+    for (int c = 0; c < (nodes_[p][k].split == kUV ? 4 : 2); ++c) refine(p, first + c);
   }
 
   // The leaf across side d of leaf n of patch p (in the twin patch across a patch side): its

@@ -16,10 +16,7 @@
 // A_C(q) = the largest area(q) / area(mesh) (as remesh_even), and the aspect
 // r(q) = exp(mean over the meshes of log(Su / Sv)) (> 1: long along u).
 //
-// Refinement (all meshes together, so the set keeps one connectivity): every root is split UV
-// (when max_level >= 1), so that no leaf side inside a patch joins two points of the patch's
-// border (two patches could then emit the same edge, e.g. the two seed patches, which share all
-// four sides). Then a node of level
+// Refinement (all meshes together, so the set keeps one connectivity): a node of level
 // max(lu, lv) < max_level is split when A_C(q) > max_area or its aspect exceeds max_aspect either
 // way (r > max_aspect or r < 1 / max_aspect) while A_C(q) > max_area / 16 (so that a map that
 // degenerates at a point does not refine it to max_level). The split is U when r > sqrt(max_aspect), V when
@@ -61,7 +58,7 @@ inline constexpr int kMaxAnisotropicLevel = 11;
 
 /// The anisotropic even remesh's bound for a level n is kAnisoAreaFactor * s / (P 4^n) of the
 /// surface (s, P as in even_options): about the uniform level n's face count on the shared meshes.
-inline constexpr double kAnisoAreaFactor = 2.3;
+inline constexpr double kAnisoAreaFactor = 2.5;
 
 /// Default AnisotropicOptions::max_aspect: cells stay within 2:1 on the surface; a split along the
 /// long side when the aspect exceeds sqrt(2) leaves cells within [0.71, 1.41] where the area bound
