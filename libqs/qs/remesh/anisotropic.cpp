@@ -293,19 +293,27 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
     const std::array<std::int64_t, 4> c = {num.vertex(p, x0, y0), num.vertex(p, x1, y0), num.vertex(p, x1, y1),
                                            num.vertex(p, x0, y1)};
     ring.clear();
-    ring.push_back(c[0]);
-    hanging(hanging, p, x0, y0, x1, y0);
-    ring.push_back(c[1]);
-    hanging(hanging, p, x1, y0, x1, y1);
-    ring.push_back(c[2]);
-    hanging(hanging, p, x1, y1, x0, y1);
-    ring.push_back(c[3]);
-    hanging(hanging, p, x0, y1, x0, y0);
-    const int border_sides = (x0 == 0) + (x1 == span) + (y0 == 0) + (y1 == span);
-    if (ring.size() == 4 && border_sides <= 1) {
-      // The quadrant pattern: a leaf that touches at most one patch side lies in one quadrant.
-      const bool d02 = (x0 + x1 < span) == (y0 + y1 < span);
-      cuts.push_back({faces.size(), d02});
+    std::array<size_t, 4> at{};  // ring position of corner d; side d's hanging vertices follow it
+    for (int d = 0; d < 4; ++d) {
+      at[d] = ring.size();
+      ring.push_back(c[d]);
+      const int ax = d == 0 || d == 3 ? x0 : x1, ay = d <= 1 ? y0 : y1;
+      const int bx = d == 0 || d == 1 ? x1 : x0, by = d == 0 || d == 3 ? y0 : y1;
+      hanging(hanging, p, ax, ay, bx, by);
+    }
+    // Sides on the patch's border: 0 bottom, 1 right, 2 top, 3 left.
+    const std::array<bool, 4> on = {y0 == 0, x1 == span, y1 == span, x0 == 0};
+    const int border_sides = on[0] + on[1] + on[2] + on[3];
+    // A corner leaf (two adjacent border sides, at patch corner k): k, else -1.
+    int corner = -1;
+    for (int k = 0; k < 4 && border_sides == 2; ++k)
+      if (on[(k + 3) % 4] && on[k]) corner = k;
+    if (ring.size() == 4 && (border_sides <= 1 || corner >= 0)) {
+      // The quadrant pattern: a leaf that touches at most one patch side lies in one quadrant, and
+      // a corner leaf is cut through the patch corner. The other diagonal of a corner leaf joins two
+      // border points, which another patch may join too only at a base vertex of valence 2.
+      const bool d02 = corner >= 0 ? corner % 2 == 0 : (x0 + x1 < span) == (y0 + y1 < span);
+      if (corner < 0 || t.valence[t.quads[p][corner]] >= 3) cuts.push_back({faces.size(), d02});
       if (d02) {
         faces.push_back({c[0], c[1], c[2]});
         faces.push_back({c[0], c[2], c[3]});
@@ -313,6 +321,17 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
         faces.push_back({c[0], c[1], c[3]});
         faces.push_back({c[1], c[2], c[3]});
       }
+      continue;
+    }
+    if (ring.size() == 5 && border_sides <= 1) {
+      // One hanging vertex M on side d: (C_d, M, C_d+3), (M, C_d+1, C_d+2), (M, C_d+2, C_d+3). Its
+      // two inner edges join M to the opposite side's corners, at most one of them on the border.
+      int d = 0;
+      while ((d < 3 ? at[d + 1] : ring.size()) != at[d] + 2) ++d;
+      const std::int64_t m = ring[at[d] + 1];
+      faces.push_back({c[d], m, c[(d + 3) % 4]});
+      faces.push_back({m, c[(d + 1) % 4], c[(d + 2) % 4]});
+      faces.push_back({m, c[(d + 2) % 4], c[(d + 3) % 4]});
       continue;
     }
     ++fan_leaves;
