@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
   auto* even_flag = app.add_flag("--even", even,
                                  "With --level n (the default since issue 13): about the uniform level n's face count, "
                                  "spread over the surface by area (trees split while a cell covers more than "
-                                 "2.5 s / (P 4^n) of the surface, the largest share over the set; s = the patches' "
+                                 "2.3 s / (P 4^n) of the surface, the largest share over the set; s = the patches' "
                                  "largest shares summed)");
   even_flag->needs(lvl);
   auto* uniform_flag = app.add_flag("--uniform", uniform,
