@@ -73,12 +73,12 @@ class Builder {
         const int res_a = d % 2 == 0 ? na.lu : na.lv;
         const int res_b = side % 2 == 0 ? nb.lu : nb.lv;
         if (res_b >= res_a - 1) continue;
-        const double r = measured(q, b).log_aspect;
-        const double half = 0.5 * log_max_;
-        const TreeNode& nb2 = nodes_[q][b];
+        const TreeNode& mb = measured(q, b);  // no reallocation: nb is still valid
+        const double r = mb.log_aspect, half = 0.5 * log_max_;
+        // Along the needed direction alone when it is the long one (or the other is at max_level).
         int kind;
-        if (side % 2 == 0) kind = r > half || nb2.lv + 1 > o_.max_level ? kU : kUV;
-        else kind = r < -half || nb2.lu + 1 > o_.max_level ? kV : kUV;
+        if (side % 2 == 0) kind = r > half || mb.lv + 1 > o_.max_level ? kU : kUV;
+        else kind = r < -half || mb.lu + 1 > o_.max_level ? kV : kUV;
         split(q, b, kind);
         ++stats_.balance_splits;
         const int c = nodes_[q][b].child;
@@ -101,8 +101,6 @@ class Builder {
       }
     }
   }
-
-  const TreeNode& node(int p, int k) const { return nodes_[p][k]; }
 
  private:
   void collect_leaves(int p, int k, std::vector<std::pair<int, int>>& out) const {
