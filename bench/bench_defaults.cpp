@@ -29,6 +29,7 @@
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
 #include "qs/remesh/adaptive.h"
+#include "qs/remesh/anisotropic.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 
@@ -201,6 +202,29 @@ int main(int argc, char** argv) {
         es.worst_med = std::min(es.worst_med, ea.median);
         if (head)
           es.heads_tsp_lo = std::min(es.heads_tsp_lo, etd.spread), es.heads_tsp_hi = std::max(es.heads_tsp_hi, etd.spread);
+
+        // The same with anisotropic cells (qs-remesh --even: split in u or v alone on long cells).
+        const auto a4 = qs::remesh::remesh_even_anisotropic(charts, 4).remesh;
+        const auto aa = qs::remesh::smallest_angle_stats(a4.mesh(0));
+        const auto a5 = qs::remesh::remesh_even_anisotropic(charts, 5).remesh;
+        const auto ae = qs::metro::metro(d.chart.mesh, a5.mesh(0), mo);
+        const double aerr = 100 * ae.mean / ae.diagonal;
+        const auto avd = qs::remesh::vertex_density(a5.mesh(0));
+        const double aface_ratio =
+            static_cast<double>(a5.connectivity.faces.size()) / static_cast<double>(r5.connectivity.faces.size());
+        std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
+                    (c.name + "/aniso").c_str(), d.chart.patches.size(), aerr, 100 * aa.under_5, 100 * aa.under_10,
+                    100 * aa.under_20, aa.median, avd.spread, etd.spread, aface_ratio);
+        std::fflush(stdout);
+        Sum& as = sums[c.name + "/aniso"];
+        ++as.meshes;
+        as.err += aerr, as.u10 += 100 * aa.under_10, as.med += aa.median, as.time += aface_ratio;
+        as.worst_vsp = std::max(as.worst_vsp, avd.spread);
+        as.worst_tsp = std::max(as.worst_tsp, etd.spread);
+        as.worst_u10 = std::max(as.worst_u10, 100 * aa.under_10);
+        as.worst_med = std::min(as.worst_med, aa.median);
+        if (head)
+          as.heads_tsp_lo = std::min(as.heads_tsp_lo, etd.spread), as.heads_tsp_hi = std::max(as.heads_tsp_hi, etd.spread);
       } catch (const qs::Error& e) {
         std::printf("%-22s %-12s error: %s\n", f.filename().c_str(), c.name.c_str(), e.what());
       }
@@ -211,7 +235,7 @@ int main(int argc, char** argv) {
   std::printf("%-17s %6s %8s %7s %7s %6s %6s %8s %8s %13s %8s\n", "candidate", "meshes", "err5_%", "<10", "<10max", "med",
               "medmin", "vsp_max", "tsp_max", "heads_tsp", "time_s");
   for (const auto& c : cands)
-    for (const std::string name : {c.name, c.name + "/even"}) {
+    for (const std::string& name : {c.name, c.name + "/even", c.name + "/aniso"}) {
       const Sum& s = sums[name];
       if (s.meshes == 0) continue;
       char heads[32] = "-";

@@ -17,6 +17,7 @@
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
 #include "qs/remesh/adaptive.h"
+#include "qs/remesh/anisotropic.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 
@@ -69,10 +70,16 @@ int main(int argc, char** argv) {
       const auto ev = qs::remesh::remesh_even({&d.chart}, 5);
       const double even_s = std::chrono::duration<double>(Clock::now() - t0).count();
       const auto evd = qs::remesh::vertex_density(ev.remesh.mesh(0));
+      t0 = Clock::now();
+      const auto an = qs::remesh::remesh_even_anisotropic({&d.chart}, 5);  // qs-remesh --level 5
+      const double aniso_s = std::chrono::duration<double>(Clock::now() - t0).count();
+      const auto avd = qs::remesh::vertex_density(an.remesh.mesh(0));
       std::printf("%-24s report level 5: remesh %.4f s, error report %.4f s (%.1fx the remesh, mean %.4f%%), quality "
-                  "%.4f s; vertex spread %.2f; even: %zu faces, %.4f s, vertex spread %.2f\n",
+                  "%.4f s; vertex spread %.2f; even (square cells): %zu faces, %.4f s, vertex spread %.2f; even "
+                  "(anisotropic cells, the default): %zu faces, %.4f s, vertex spread %.2f\n",
                   name, remesh_s, metro_s, metro_s / remesh_s, 100 * e.mean / e.diagonal, quality_s, vd.spread,
-                  ev.remesh.connectivity.faces.size(), even_s, evd.spread);
+                  ev.remesh.connectivity.faces.size(), even_s, evd.spread, an.remesh.connectivity.faces.size(), aniso_s,
+                  avd.spread);
     }
     size_t l6_faces = 0;
     for (int level = 3; level <= 6; ++level) {

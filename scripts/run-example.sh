@@ -22,7 +22,7 @@ echo "== qs-inspect: read and validate the examples"
 echo "== qs-dissect: one common dissection (landmarks from examples/<stem>.landmarks.json)"
 "$tools/qs-dissect" "${meshes[@]}" -o "$out/dissection" --report "$out/dissection-report.txt"
 
-echo "== qs-remesh: uniform level 4, one connectivity for the three shapes"
+echo "== qs-remesh: level 4 (even remesh, anisotropic cells), one connectivity for the three shapes"
 "$tools/qs-remesh" "$out/dissection" --level 4 --error -o "$out/remesh-L4"
 
 echo "== qs-bake: 128x128 normal-map tiles per patch, tangent space, OpenGL green"

@@ -1,4 +1,5 @@
-// qs-remesh: uniform or adaptive semi-regular remeshes of a dissected set, all with one face list.
+// qs-remesh: even (the default for --level), uniform or adaptive semi-regular remeshes of a dissected
+// set, all with one face list.
 // Reads a qs-dissect output folder; writes OUTDIR/<stem>.obj|.ply per mesh and OUTDIR/remesh.json.
 //
 // Exit codes: 0 done, 1 usage, 2 invalid input (a folder that is not a consistent dissection),
@@ -19,6 +20,7 @@
 #include "qs/io/write_mesh.h"
 #include "qs/metro/metro.h"
 #include "qs/remesh/adaptive.h"
+#include "qs/remesh/anisotropic.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
 #include "resource_limits.h"
@@ -65,19 +67,35 @@ int main(int argc, char** argv) {
   double max_memory = qs::tools::kDefaultMaxMemoryGiB;
   qs::remesh::AdaptiveOptions aopt;
   app.add_option("dissection", folder, "A qs-dissect output folder (dissection.json + charts)")->required();
-  auto* lvl = app.add_option("--level", level, "Uniform level n: (2^n+1)^2 samples per patch")
+  auto* lvl = app.add_option("--level", level,
+                             "Level n: about 2 P 4^n faces (P patches), spread over the surface by area, cells kept "
+                             "near square on the surface (the even remesh); with --uniform (2^n+1)^2 samples per patch")
                   ->check(CLI::Range(0, qs::remesh::kMaxUniformLevel));
   auto* ad = app.add_option("--adaptive", eps,
                             "Adaptive: refine each patch's quadtree while the error (fraction of the bounding-box "
                             "diagonal, max over the set) exceeds EPS")
                  ->check(CLI::PositiveNumber);
   lvl->excludes(ad);
-  bool even = false;
+  bool even = false, uniform = false;
   auto* even_flag = app.add_flag("--even", even,
-                                 "With --level n: about the uniform level n's face count, spread over the surface by "
-                                 "area (balanced quadtrees split while a node covers more than 2.3 s / (P 4^n) of the "
-                                 "surface, the largest share over the set; s = the patches' largest shares summed)");
+                                 "With --level n (the default since issue 13): about the uniform level n's face count, "
+                                 "spread over the surface by area (trees split while a cell covers more than "
+                                 "2.3 s / (P 4^n) of the surface, the largest share over the set; s = the patches' "
+                                 "largest shares summed)");
   even_flag->needs(lvl);
+  auto* uniform_flag = app.add_flag("--uniform", uniform,
+                                    "With --level n: the square grid, (2^n+1)^2 samples per patch whatever its size "
+                                    "(the default before issue 13; --quads, --diagonals and --grid-relax select it)");
+  uniform_flag->needs(lvl);
+  uniform_flag->excludes(even_flag);
+  std::string cells = "aniso";
+  auto* cells_opt = app.add_option("--cells", cells,
+                 "Even remesh: cells split in u or v alone where they are long on the surface, kept within 2:1 "
+                 "(aniso), or square quadtree cells that keep their patch's aspect (square)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"aniso", "square"}));
+  cells_opt->needs(lvl);
+  cells_opt->excludes(uniform_flag);
   app.add_option("--max-level", aopt.max_level, "Adaptive: finest level")->capture_default_str()->check(CLI::Range(0, 10));
   app.add_option("--format", format, "Output format")->capture_default_str()->check(CLI::IsMember({"obj", "ply"}));
   app.add_flag("--quads", quads, "Uniform: write the grid cells as quads (OBJ only)");
@@ -88,6 +106,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"angle", "pattern"}));
   even_flag->excludes(diag_opt);
+  cells_opt->excludes(diag_opt);
   double grid_relax = qs::remesh::UniformOptions{}.relax;
   auto* relax_opt = app.add_option("--grid-relax", grid_relax,
                  "Uniform: move the grid samples toward equal 3D spacing along every patch side (0 = the regular "
@@ -95,6 +114,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, qs::remesh::kMaxGridRelax));
   even_flag->excludes(relax_opt);
+  cells_opt->excludes(relax_opt);
   ad->excludes(relax_opt);
   // The error report is opt-in: its closest-point tree over the original costs more than the
   // whole remesh at the usual levels (venus_100k level 5: ~0.1 s of CPU for the remesh, ~0.3 s
@@ -111,14 +131,18 @@ int main(int argc, char** argv) {
                           ->capture_default_str()
                           ->check(CLI::Range(0L, 1000000000L));
   samples_opt->excludes(no_metro_flag);
-  app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/remesh-L<n> or remesh-adaptive)");
+  app.add_option("-o,--output", outdir, "Output folder (default: <dissection>/remesh-L<n>, remesh-L<n>-uniform, remesh-L<n>-square or "
+                 "remesh-adaptive)");
   qs::tools::add_max_memory_option(app, max_memory);
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
     if (level < 0 && eps <= 0) throw qs::UsageError("give --level N or --adaptive EPS");
     if (quads && (level < 0 || format != "obj")) throw qs::UsageError("--quads needs --level and --format obj");
-    if (quads && even) throw qs::UsageError("--quads needs the uniform grid; drop --even");
+    if (quads && (even || cells_opt->count() > 0)) throw qs::UsageError("--quads needs the uniform grid; drop --even and --cells");
+    // --level n: the even remesh unless the uniform grid is asked for (--uniform, or one of its
+    // own options).
+    if (level >= 0 && !uniform && !quads && diag_opt->count() == 0 && relax_opt->count() == 0) even = true;
     no_metro = !(with_error || samples_opt->count() > 0);
     const auto t0 = Clock::now();
     const qs::dissect::LoadedDissection in = qs::dissect::read_dissection(folder);
@@ -140,8 +164,12 @@ int main(int argc, char** argv) {
                               "--level " + std::to_string(level) + " (" + std::to_string(static_cast<long long>(vertices)) +
                                   " vertices per mesh, " + std::to_string(charts.size()) + " meshes)");
     }
+    if (even && cells == "aniso" && level > qs::remesh::kMaxAnisotropicLevel)
+      throw qs::UsageError("--level " + std::to_string(level) + ": the even remesh goes to level " +
+                           std::to_string(qs::remesh::kMaxAnisotropicLevel) + "; add --uniform for the square grid");
     if (outdir.empty())
-      outdir = (fs::path(folder) / (level >= 0 ? "remesh-L" + std::to_string(level) + (even ? "-even" : "")
+      outdir = (fs::path(folder) / (level >= 0 ? "remesh-L" + std::to_string(level) +
+                                                     (!even ? "-uniform" : cells == "square" ? "-square" : "")
                                                : std::string("remesh-adaptive"))).string();
     // Never write over the inputs (qs-remesh D -o D is fine: the names differ).
     std::vector<fs::path> input_paths = {fs::path(folder) / "dissection.json"};
@@ -153,13 +181,34 @@ int main(int argc, char** argv) {
     qs::Context ctx;
     qs::remesh::SemiRegularSet set;
     nlohmann::ordered_json adaptive_stats;
-    if (even) {
+    if (even && cells == "aniso") {
+      double share_sum = 0;
+      for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
+      const qs::remesh::AnisotropicOptions ao =
+          qs::remesh::anisotropic_options(level, patch_count(charts), std::max(share_sum, 1.0));
+      const qs::remesh::AnisotropicRemesh ar = qs::remesh::remesh_anisotropic(charts, ao, ctx);
+      set = ar.remesh;
+      adaptive_stats = {{"level", level},
+                        {"cells", cells},
+                        {"max_area", ao.max_area},
+                        {"max_aspect", ao.max_aspect},
+                        {"max_level", ao.max_level},
+                        {"finest_level", ar.stats.finest_level},
+                        {"leaves", ar.leaves.size()},
+                        {"fan_leaves", ar.stats.fan_leaves},
+                        {"area_splits", ar.stats.area_splits},
+                        {"aspect_splits", ar.stats.aspect_splits},
+                        {"balance_splits", ar.stats.balance_splits},
+                        {"unresolved_leaves", ar.stats.unresolved_leaves},
+                        {"max_leaf_aspect", ar.stats.max_leaf_aspect}};
+    } else if (even) {
       double share_sum = 0;
       for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;
       const qs::remesh::AdaptiveOptions eo = qs::remesh::even_options(level, patch_count(charts), std::max(share_sum, 1.0));
       const qs::remesh::AdaptiveRemesh ar = qs::remesh::remesh_adaptive(charts, eo, ctx);
       set = ar.remesh;
       adaptive_stats = {{"level", level},
+                        {"cells", cells},
                         {"max_area", eo.max_area},
                         {"max_level", eo.max_level},
                         {"finest_level", ar.forest.max_level},
@@ -191,7 +240,7 @@ int main(int argc, char** argv) {
     std::ostringstream text;
     text << std::setprecision(4);
     text << "remesh "
-         << (even ? "even level " + std::to_string(level)
+         << (even ? "even level " + std::to_string(level) + (cells == "aniso" ? " (anisotropic cells)" : " (square cells)")
                   : level >= 0 ? "uniform level " + std::to_string(level) : "adaptive eps " + std::to_string(eps))
          << ": " << c.num_vertices() << " vertices, " << c.num_faces() << " faces, " << c.num_patches
          << " patches, the same for all " << in.meshes.size() << " meshes\n";

@@ -64,7 +64,9 @@ TEST_F(QualityReport, RemeshReportsAnglesDensityAndErrorSamples) {
   EXPECT_THAT(r.out, HasSubstr("vertices per unit area, 5th-95th percentile"));
   EXPECT_THAT(r.out, HasSubstr("(5000 samples per direction)"));
   const auto j = read_json(out / "remesh.json");
-  EXPECT_EQ(j["diagonals"], "angle");
+  EXPECT_EQ(j["mode"], "even");  // --level n: the even remesh with anisotropic cells (issue 13)
+  EXPECT_EQ(j["even"]["cells"], "aniso");
+  EXPECT_EQ(j["diagonals"], "templates");
   const auto& m = j["meshes"][0];
   EXPECT_EQ(m["error"]["samples_per_direction"], 5000);
   const auto mesh = qs::io::read_mesh(out / "egg.obj").mesh;
@@ -107,7 +109,7 @@ TEST_F(QualityReport, ErrorReportIsOptIn) {
 TEST_F(QualityReport, AngleDiagonalsAreNoWorseThanThePattern) {
   const fs::path pa = dir_ / "pattern", an = dir_ / "angle";
   ASSERT_EQ(run_tool("qs-remesh", (dir_ / "d").string() + " --level 4 --diagonals pattern --no-metro -q -o " + pa.string()).exit, 0);
-  ASSERT_EQ(run_tool("qs-remesh", (dir_ / "d").string() + " --level 4 --no-metro -q -o " + an.string()).exit, 0);
+  ASSERT_EQ(run_tool("qs-remesh", (dir_ / "d").string() + " --level 4 --diagonals angle --no-metro -q -o " + an.string()).exit, 0);
   const auto mp = qs::io::read_mesh(pa / "egg.obj").mesh, ma = qs::io::read_mesh(an / "egg.obj").mesh;
   ASSERT_EQ(mp.positions, ma.positions);  // the same samples, only the cells are cut differently
   ASSERT_EQ(mp.faces.size(), ma.faces.size());

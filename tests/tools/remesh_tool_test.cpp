@@ -83,6 +83,53 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --diagonals pattern").exit, 1);
 }
 
+// --level n alone is the even remesh with anisotropic cells (issue 13); --uniform (or a uniform-grid
+// option) gives the square grid, --cells square the even remesh's square quadtree cells.
+TEST_F(RemeshTool, LevelDefaultsToTheAnisotropicEvenRemesh) {
+  qs::io::write_mesh(dir_ / "a.obj", qs::shapes::ellipsoid(2.5, 1, 0.6, 4));
+  qs::io::write_mesh(dir_ / "b.obj", qs::shapes::bumpy_sphere(0.05, 3, 4));
+  const fs::path d = dir_ / "ab.dissection";
+  ASSERT_EQ(run_tool("qs-dissect", (dir_ / "a.obj").string() + " " + (dir_ / "b.obj").string() + " -q -o " + d.string()).exit, 0);
+  const RunResult def = run_tool("qs-remesh", d.string() + " --level 3");
+  ASSERT_EQ(def.exit, 0) << def.out;
+  EXPECT_THAT(def.out, HasSubstr("remesh even level 3 (anisotropic cells)"));
+  ASSERT_TRUE(fs::exists(d / "remesh-L3" / "remesh.json"));
+  auto json = [](const fs::path& f) {
+    std::ifstream in(f / "remesh.json");
+    return nlohmann::json::parse(in);
+  };
+  auto text = [](const fs::path& f) {
+    std::ifstream in(f);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const auto jd = json(d / "remesh-L3");
+  EXPECT_EQ(jd["mode"], "even");
+  EXPECT_EQ(jd["even"]["cells"], "aniso");
+  EXPECT_GE(jd["even"]["max_leaf_aspect"].get<double>(), 1.0);
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --even --cells aniso -q -o " + (dir_ / "ex").string()).exit, 0);
+  EXPECT_EQ(text(d / "remesh-L3" / "a.obj"), text(dir_ / "ex" / "a.obj")) << "--even --cells aniso is the default";
+  const auto a = qs::io::read_mesh(d / "remesh-L3" / "a.obj").mesh, b = qs::io::read_mesh(d / "remesh-L3" / "b.obj").mesh;
+  EXPECT_EQ(a.faces, b.faces);
+  for (const auto* m : {&a, &b}) {
+    const auto v = qs::mesh::validate(*m);
+    EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report("default", v.report);
+  }
+  // The uniform grid: 2 P 4^n faces; --quads, --diagonals and --grid-relax select it too.
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --uniform -q").exit, 0);
+  const auto ju = json(d / "remesh-L3-uniform");
+  EXPECT_EQ(ju["mode"], "uniform");
+  EXPECT_EQ(ju["faces"].get<int>(), 2 * ju["patches"].get<int>() * 64);
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --diagonals angle -q -o " + (dir_ / "da").string()).exit, 0);
+  EXPECT_EQ(text(d / "remesh-L3-uniform" / "a.obj"), text(dir_ / "da" / "a.obj"));
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells square -q").exit, 0);
+  EXPECT_EQ(json(d / "remesh-L3-square")["even"]["cells"], "square");
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --uniform --even").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --uniform --cells aniso").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells square --quads").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells round").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --adaptive 0.01 --uniform").exit, 1);
+}
+
 TEST_F(RemeshTool, ExitCodes) {
   EXPECT_EQ(run_tool("qs-remesh", (dir_ / "nothing").string() + " --level 2").exit, 3);
   fs::create_directories(dir_ / "bad");

@@ -1,0 +1,184 @@
+// Anisotropic even remesh (anisotropic.h): cells split in u or v alone where they are long on the
+// surface, conforming (no T-junction), one connectivity for a set, deterministic.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "qs/core/error.h"
+#include "qs/remesh/adaptive.h"
+#include "qs/remesh/anisotropic.h"
+#include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/quality.h"
+#include "qs/remesh/uniform.h"
+#include "qs/shapes/shapes.h"
+#include "remesh_checks.h"
+
+using qs::remesh_test::expect_closed_manifold;
+using qs::remesh_test::expect_valid_sphere;
+using qs::remesh_test::vertex_towards;
+using ::testing::HasSubstr;
+
+namespace {
+
+// Two long ellipsoids (5:1 and 3.5:1) dissected together into their two seed patches, with seeds
+// near the ends of the long axis: each patch is a long strip, mapped onto the unit square.
+const qs::dissect::DissectionSet& strip_set() {
+  static const auto s = [] {
+    static const auto a = qs::shapes::ellipsoid(5, 1, 1, 4);
+    static const auto b = qs::shapes::ellipsoid(3.5, 1.2, 0.9, 4);
+    auto seeds = [](const qs::TriMesh& m, double x, double y) {
+      return std::array<int, 4>{vertex_towards(m, {x, y, 0}), vertex_towards(m, {-x, y, 0}),
+                                vertex_towards(m, {-x, -y, 0}), vertex_towards(m, {x, -y, 0})};
+    };
+    qs::dissect::DissectOptions o;
+    o.max_patch_area = 0;
+    o.tau = 1e9;  // no quinary split: the two strips stay whole
+    return qs::dissect::dissect_set({{&a, seeds(a, 4, 1), {}, "long"}, {&b, seeds(b, 3, 1), {}, "longer"}}, o);
+  }();
+  return s;
+}
+
+std::vector<const qs::dissect::Chart*> charts_of(const qs::dissect::DissectionSet& s) {
+  std::vector<const qs::dissect::Chart*> c;
+  for (const auto& m : s.meshes) c.push_back(&m.chart);
+  return c;
+}
+
+// A leaf's aspect measured here from its corners only (the mean of its two u sides over the mean
+// of its two v sides, on the surface, or its inverse, whichever is >= 1), the largest over the meshes.
+double corner_aspect(const std::vector<qs::remesh::ChartSampler>& samplers, const qs::remesh::AnisoNode& n) {
+  const double su = 1.0 / (1 << n.lu), sv = 1.0 / (1 << n.lv);
+  double worst = 1;
+  for (const auto& s : samplers) {
+    const qs::Vec3 c0 = s.point(n.patch, {n.i * su, n.j * sv}), c1 = s.point(n.patch, {(n.i + 1) * su, n.j * sv});
+    const qs::Vec3 c2 = s.point(n.patch, {(n.i + 1) * su, (n.j + 1) * sv}), c3 = s.point(n.patch, {n.i * su, (n.j + 1) * sv});
+    const double r = ((c1 - c0).norm() + (c2 - c3).norm()) / ((c3 - c0).norm() + (c2 - c1).norm());
+    worst = std::max({worst, r, 1 / r});
+  }
+  return worst;
+}
+
+TEST(Anisotropic, StripCellsStayNearSquareAndTheMeshIsClosed) {
+  const auto& set = strip_set();
+  ASSERT_EQ(set.meshes.front().chart.patches.size(), 2u);
+  const auto charts = charts_of(set);
+  const auto a = qs::remesh::remesh_even_anisotropic(charts, 4);
+  const auto& c = a.remesh.connectivity;
+  ASSERT_EQ(a.remesh.positions.size(), 2u);
+  EXPECT_EQ(expect_closed_manifold(c.faces, c.num_vertices()), 2);
+  for (int m = 0; m < 2; ++m) expect_valid_sphere(a.remesh.mesh(m), "anisotropic remesh of mesh " + std::to_string(m));
+
+  // Some cells were split in one direction only (the strips are long), and every leaf, measured
+  // independently from its 4 corners, is within the aspect bound (a little slack: the library
+  // measures along 3 lines through the cell, this test along its 2 sides).
+  int one_way = 0;
+  std::vector<qs::remesh::ChartSampler> samplers;
+  for (const auto* ch : charts) samplers.emplace_back(*ch);
+  double worst = 1;
+  for (const auto& n : a.leaves) {
+    one_way += n.lu != n.lv;
+    worst = std::max(worst, corner_aspect(samplers, n));
+  }
+  EXPECT_GT(one_way, static_cast<int>(a.leaves.size()) / 2);
+  EXPECT_LE(worst, 1.25 * qs::remesh::kDefaultMaxAspect);
+  EXPECT_LE(a.stats.max_leaf_aspect, qs::remesh::kDefaultMaxAspect);
+  EXPECT_EQ(a.stats.unresolved_leaves, 0);
+
+  // Better shaped than the square-cell even remesh and the uniform grid of the same level.
+  const auto sq = qs::remesh::remesh_even(charts, 4);
+  const auto un = qs::remesh::remesh_uniform(charts, 4);
+  for (int m = 0; m < 2; ++m) {
+    const auto aa = qs::remesh::smallest_angle_stats(a.remesh.mesh(m));
+    const auto sa = qs::remesh::smallest_angle_stats(sq.remesh.mesh(m));
+    const auto ua = qs::remesh::smallest_angle_stats(un.mesh(m));
+    EXPECT_GT(aa.median, sa.median + 5) << "mesh " << m;
+    EXPECT_GT(aa.median, ua.median + 5) << "mesh " << m;
+    EXPECT_LT(aa.under_20, 0.5 * sa.under_20) << "mesh " << m;
+    EXPECT_LT(aa.under_20, 0.5 * ua.under_20) << "mesh " << m;
+    EXPECT_GE(aa.median, 35) << "mesh " << m;
+  }
+}
+
+TEST(Anisotropic, OneConnectivityForTheSetAndDeterministic) {
+  const auto& set = strip_set();
+  const auto charts = charts_of(set);
+  const auto a = qs::remesh::remesh_even_anisotropic(charts, 3);
+  const auto b = qs::remesh::remesh_even_anisotropic(charts, 3);
+  EXPECT_EQ(a.remesh.connectivity.faces, b.remesh.connectivity.faces);
+  EXPECT_EQ(a.remesh.connectivity.vertex_uv, b.remesh.connectivity.vertex_uv);
+  EXPECT_EQ(a.remesh.positions, b.remesh.positions);
+  // Each mesh alone decides other cells; the set's tree serves both meshes with one face list,
+  // and every vertex of each is a point of that mesh's chart at the vertex's (patch, u, v).
+  for (int m = 0; m < 2; ++m) {
+    const qs::remesh::ChartSampler s(*charts[m]);
+    const auto& c = a.remesh.connectivity;
+    for (int v = 0; v < c.num_vertices(); v += 7)
+      EXPECT_LT((s.point(c.vertex_patch[v], c.vertex_uv[v]) - a.remesh.positions[m][v]).norm(), 1e-12);
+  }
+  const auto alone = qs::remesh::remesh_even_anisotropic({charts[0]}, 3);
+  EXPECT_EQ(expect_closed_manifold(alone.remesh.connectivity.faces, alone.remesh.connectivity.num_vertices()), 2);
+}
+
+// Conforming and closed whatever the refinement: the two seed patches (valence-2 corners, every
+// side shared by the same two patches), a quinary-split star, a pair of different shapes, at
+// several area and aspect bounds, with levels from the roots only to deep trees.
+TEST(Anisotropic, ClosedManifoldOnManyTrees) {
+  struct Case {
+    std::string name;
+    std::vector<const qs::dissect::Chart*> charts;
+  };
+  std::vector<Case> cases = {{"sphere", {&qs::remesh_test::sphere_dissection().chart}},
+                             {"star", {&qs::remesh_test::star_dissection().chart}},
+                             {"pair", charts_of(qs::remesh_test::pair_dissection())},
+                             {"strips", charts_of(strip_set())}};
+  for (const auto& k : cases)
+    for (double area : {2.0, 0.3, 0.05, 0.004})
+      for (double aspect : {1.5, 2.0, 4.0})
+        for (int max_level : {0, 1, 3, 6}) {
+          qs::remesh::AnisotropicOptions o;
+          o.max_area = area;
+          o.max_aspect = aspect;
+          o.max_level = max_level;
+          const auto a = qs::remesh::remesh_anisotropic(k.charts, o);
+          const auto& c = a.remesh.connectivity;
+          SCOPED_TRACE(k.name + " area " + std::to_string(area) + " aspect " + std::to_string(aspect) + " max level " +
+                       std::to_string(max_level));
+          EXPECT_EQ(expect_closed_manifold(c.faces, c.num_vertices()), 2);
+          EXPECT_LE(a.stats.finest_level, max_level);
+          // Every leaf of the balanced trees has a neighbour at most one level coarser along each
+          // side, so a leaf gets at most one hanging vertex per side: at most 8 fan triangles.
+          EXPECT_LE(c.num_faces(), 8 * static_cast<int>(a.leaves.size()));
+          for (size_t m = 0; m < k.charts.size(); ++m) expect_valid_sphere(a.remesh.mesh(static_cast<int>(m)), k.name);
+        }
+}
+
+TEST(Anisotropic, BadOptionsAreRejected) {
+  const auto charts = charts_of(strip_set());
+  qs::remesh::AnisotropicOptions o;
+  try {
+    qs::remesh::remesh_anisotropic(charts, o);
+    ADD_FAILURE() << "max_area 0 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("area bound"));
+  }
+  o.max_area = 0.1;
+  o.max_aspect = 1.2;
+  try {
+    qs::remesh::remesh_anisotropic(charts, o);
+    ADD_FAILURE() << "max_aspect 1.2 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr(">= 1.5"));
+  }
+  o.max_aspect = 2;
+  o.max_level = qs::remesh::kMaxAnisotropicLevel + 1;
+  EXPECT_THROW(qs::remesh::remesh_anisotropic(charts, o), qs::InvalidInput);
+  EXPECT_THROW(qs::remesh::remesh_anisotropic({}, qs::remesh::anisotropic_options(2, 2)), qs::InvalidInput);
+  EXPECT_THROW(qs::remesh::anisotropic_options(-1, 2), qs::InvalidInput);
+  EXPECT_THROW(qs::remesh::anisotropic_options(3, 0), qs::InvalidInput);
+}
+
+}  // namespace
