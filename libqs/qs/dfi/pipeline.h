@@ -63,7 +63,7 @@ struct MorphOptions {
   int bone_segments = 8;
   /// Skeleton nodes moved to the centre of their cross-section in the distance fields before the
   /// matching (centre.h); false: where mean curvature flow left them.
-  bool centre_skeletons = false;
+  bool centre_skeletons = true;
   double prune_fraction = 0.08;  ///< skeleton spurs shorter than this times the source's bounding-box
                                  ///< diagonal are pruned (prune_skeleton)
   FrameVolume volume = FrameVolume::Linear;
