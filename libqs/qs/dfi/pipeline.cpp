@@ -14,7 +14,8 @@
 namespace qs::dfi {
 namespace {
 
-constexpr size_t kSpeck = 8;      // inside islands of at most this many samples are dropped
+constexpr size_t kSpeck = 8;      // inside islands of at most this many samples are dropped,
+constexpr double kSpeckShare = 0.002;  // or of at most this share of the frame's inside samples
 // Jacobi steps on each frame's bone displacement on a 75-cell bone grid (a 150-cell morph),
 // scaled with the square of the cells for other grids so that the smoothing radius stays the same
 // in space (measured on horse -> camel at 150: 4 leave handles where the warp folds, 64 thin the
@@ -275,7 +276,7 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
 // edges of the Kuhn tetrahedra (the 14 neighbours of the polygonization's lattice) joins to the
 // grid's boundary: such a region's zero set would be an inner shell, a cavity, which neither input
 // has (both are one closed component); and outside samples for islands of at most kSpeck inside
-// samples (below the grid's resolution). Only between the ends: at the ends a pocket that the
+// samples or kSpeckShare of the inside samples (below the grid's resolution). Only between the ends: at the ends a pocket that the
 // sampling closes (between an elephant's ear and head) and a speck are the inputs' own.
 // Returns the number of samples changed.
 size_t fill_cavities(Grid& g) {
@@ -313,6 +314,13 @@ size_t fill_cavities(Grid& g) {
     }
   // Islands of at most kSpeck inside samples (joined the same way): specks below the grid's
   // resolution that a fold of the warp leaves, not parts of either shape.
+  // A piece is a speck up to kSpeck samples or kSpeckShare of the frame's inside samples: what a
+  // part thinner than the grid leaves behind when the blend thins it (the camel's tail between
+  // t = 0.8 and 0.9: 0.02-0.05% of the frame's volume); a part that comes off (a head, several %)
+  // is kept, and shows.
+  size_t inside_samples = 0;
+  for (float v : g.values) inside_samples += v < 0;
+  const size_t speck = std::max(kSpeck, static_cast<size_t>(kSpeckShare * static_cast<double>(inside_samples)));
   std::vector<char> seen(g.size(), 0);
   std::vector<size_t> island;
   const float outside = static_cast<float>(g.spacing);
@@ -336,7 +344,7 @@ size_t fill_cavities(Grid& g) {
           stack.push_back(t);
         }
     }
-    if (island.size() <= kSpeck)
+    if (island.size() <= speck)
       for (size_t s : island) g.values[s] = outside, ++changed;
   }
   return changed;

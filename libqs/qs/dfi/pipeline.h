@@ -144,8 +144,8 @@ double iso_for_volume(const Grid& field, double volume, double max_shift);
 /// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
 /// smoothed by Jacobi steps (32 on a 150-cell grid), inverted by Newton steps). Boundary samples are kept outside
 /// (>= one spacing). For 0 < t < 1, outside regions that do not reach the boundary (cavities,
-/// which neither input has) are filled, and inside islands of at most 8 samples (specks below the
-/// grid's resolution) dropped, both along the edges of the polygonization's tetrahedra. With
+/// which neither input has) are filled, and inside islands of at most 8 samples or 0.2% of the
+/// frame's inside samples (specks and pieces of parts thinner than the grid) dropped, both along the edges of the polygonization's tetrahedra. With
 /// FrameVolume::Linear (the default) the blend's iso level is shifted first, for 0 < t < 1, so
 /// that the frame's volume follows the linear interpolation of the ends' (iso_for_volume).
 Grid blend_field(const PreparedMorph& morph, double t, int threads = 0, BlendInfo* info = nullptr);
