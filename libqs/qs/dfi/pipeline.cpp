@@ -374,60 +374,13 @@ void smooth_displacement(Displacement& d, int steps) {
     }
 }
 
-// Where the warp folds (or nearly: det(I + grad u) < kRepairDet in a cell), Jacobi steps on the
-// samples of those cells and their neighbours only, until no cell folds or kRepairRounds rounds:
-// a fold where two parts' transforms meet is smoothed where it is, the rest of the warp kept.
-constexpr double kRepairDet = 0.1;
-constexpr int kRepairRounds = 40;
-void repair_folds_locally(Displacement& d) {
-  const Grid& g = d.u[0];
-  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  std::vector<char> mark(g.size());
-  for (int round = 0; round < kRepairRounds; ++round) {
-    std::fill(mark.begin(), mark.end(), 0);
-    bool any = false;
-    for (int k = 0; k + 1 < nz; ++k)
-      for (int j = 0; j + 1 < ny; ++j)
-        for (int i = 0; i + 1 < nx; ++i)
-          if ((Eigen::Matrix3d::Identity() + cell_gradient(d, i, j, k)).determinant() < kRepairDet) {
-            any = true;
-            for (int c = -1; c <= 2; ++c)
-              for (int b = -1; b <= 2; ++b)
-                for (int a = -1; a <= 2; ++a) {
-                  const int x = i + a, y = j + b, z = k + c;
-                  if (x >= 0 && y >= 0 && z >= 0 && x < nx && y < ny && z < nz) mark[g.index(x, y, z)] = 1;
-                }
-          }
-    if (!any) return;
-    for (int step = 0; step < 4; ++step)
-      for (auto& comp : d.u) {
-        std::vector<float> next = comp.values;
-        for (int k = 0; k < nz; ++k)
-          for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) {
-              if (!mark[g.index(i, j, k)]) continue;
-              double sum = comp.values[g.index(i, j, k)];
-              int cnt = 1;
-              if (i > 0) sum += comp.values[g.index(i - 1, j, k)], ++cnt;
-              if (i + 1 < nx) sum += comp.values[g.index(i + 1, j, k)], ++cnt;
-              if (j > 0) sum += comp.values[g.index(i, j - 1, k)], ++cnt;
-              if (j + 1 < ny) sum += comp.values[g.index(i, j + 1, k)], ++cnt;
-              if (k > 0) sum += comp.values[g.index(i, j, k - 1)], ++cnt;
-              if (k + 1 < nz) sum += comp.values[g.index(i, j, k + 1)], ++cnt;
-              next[g.index(i, j, k)] = static_cast<float>(sum / cnt);
-            }
-        comp.values.swap(next);
-      }
-  }
-}
-
 // The bone warp at s, smoothed (blending the bones' transforms leaves creases where the nearest
 // bone changes).
 Displacement frame_bone_warp(const std::vector<Bone>& bones, const Grid& geometry, double s, int threads) {
   Displacement d = bone_displacement(bones, geometry, s, threads);
   const double cells = std::max({geometry.dims[0], geometry.dims[1], geometry.dims[2]}) - 3.0;
   smooth_displacement(d, std::max(1, static_cast<int>(std::lround(kBoneSmoothing * (cells / 75) * (cells / 75)))));
-  repair_folds_locally(d);
+  repair_folds_locally(d);  // bones.h
   return d;
 }
 
