@@ -7,7 +7,7 @@
 // the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
 // and whether 1 and 2 threads give the same bytes.
 //
-// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--retime] [--refine-ends R] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
+// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--retime] [--refine-ends R] [--free-volume] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
 // horse-knot, spot-eight, femur-elephant, horse-camel, cat-koala; default all)
 #include <algorithm>
 #include <chrono>
@@ -53,7 +53,7 @@ TriMesh load(const std::string& name) {
 
 int main(int argc, char** argv) {
   int grid = 150, frames = 11, refine_ends = 1;
-  bool smoothness = false, retime = false;
+  bool smoothness = false, retime = false, free_volume = false;
   std::string methods = "warp,global,blend";
   std::vector<std::string> wanted;
   for (int i = 1; i < argc; ++i) {
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--smoothness")) smoothness = true;
     else if (!std::strcmp(argv[i], "--retime")) retime = true;
+    else if (!std::strcmp(argv[i], "--free-volume")) free_volume = true;
     else if (!std::strcmp(argv[i], "--refine-ends") && i + 1 < argc) refine_ends = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
     else wanted.push_back(argv[i]);
@@ -92,6 +93,8 @@ int main(int argc, char** argv) {
     opt.align = dfi::Align::Similarity;
     opt.warp = method != "blend";
     opt.part_transport = method == "warp";
+    // The plain blend is the paper's baseline: its zero level, whatever volume it encloses.
+    opt.volume = method == "blend" || free_volume ? dfi::FrameVolume::Free : dfi::FrameVolume::Linear;
     auto t0 = Clock::now();
     const dfi::PreparedMorph m = dfi::prepare_morph(a, b, opt);
     const double fields_s = since(t0);

@@ -90,11 +90,11 @@ int main(int argc, char** argv) {
                "Writes OUTDIR/frame_NNNN.<fmt>, OUTDIR/dfi.json and optionally a GLB.\n"
                "Exit codes: 0 done, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal error.",
                "qs-dfi"};
-  std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even";
+  std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even", volume = "linear";
   std::optional<std::string> glb;
   int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 3;
   double fps = 12;
-  bool no_warp = false, exact_endpoints = false, quiet = false, global_transport = false;
+  bool no_warp = false, no_centring = false, exact_endpoints = false, quiet = false, global_transport = false;
   int anchors_per_branch = 3, emd_voxels = 1500, bone_segments = 8;
   app.add_option("SOURCE", source_file, "Source mesh (.obj .off .ply .stl), closed, any genus")->required();
   app.add_option("TARGET", target_file, "Target mesh, closed, any genus")->required();
@@ -107,6 +107,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"none", "similarity"}));
   app.add_flag("--no-warp", no_warp, "The plain distance-field blend (1-t) d0 + t d1 (the ablation); default: "
                                      "the skeleton-guided warp");
+  app.add_option("--volume", volume, "Volume of the frames between the ends: linear (default: each frame's iso level "
+                                     "shifted, by at most 4 cells, so that its volume follows the linear interpolation "
+                                     "of the ends') or free (the blend's zero level)")
+      ->check(CLI::IsMember({"linear", "free"}));
+  app.add_flag("--no-centring", no_centring, "Skeleton nodes where mean curvature flow left them (default: moved to "
+                                             "the centre of their cross-section before the matching)");
   app.add_flag("--global-transport", global_transport, "One transport over all interior voxels instead of one "
                                                        "per matched part (the ablation)");
   std::vector<std::string> landmark_files;
@@ -148,6 +154,8 @@ int main(int argc, char** argv) {
     opt.sdf.band = band;
     opt.sdf.threads = threads;
     opt.warp = !no_warp;
+    opt.centre_skeletons = !no_centring;
+    opt.volume = volume == "free" ? qs::dfi::FrameVolume::Free : qs::dfi::FrameVolume::Linear;
     opt.bone_segments = bone_segments;
     opt.part_transport = !global_transport;
     opt.anchors_per_branch = anchors_per_branch;
@@ -206,6 +214,7 @@ int main(int argc, char** argv) {
       const auto t0 = Clock::now();
       const double t = times[f];
       qs::TriMesh mesh;
+      qs::dfi::BlendInfo blend;
       bool exact = false;
       if (exact_endpoints && (f == 0 || f == frames - 1)) {
         mesh = f == 0 ? source.mesh : target.mesh;
@@ -214,7 +223,7 @@ int main(int argc, char** argv) {
         mesh = qs::dfi::endpoint_frame(morph, f == 0 ? source.mesh : target.mesh, f != 0, endpoint_refine, opt.sdf,
                                        opt.polygonize);
       } else {
-        mesh = qs::dfi::frame_mesh(morph, qs::dfi::blend_field(morph, t, threads), t, opt.polygonize);
+        mesh = qs::dfi::frame_mesh(morph, qs::dfi::blend_field(morph, t, threads, &blend), t, opt.polygonize);
       }
       const qs::dfi::MeshStats st = qs::dfi::mesh_stats(mesh);
       if (!exact && !st.closed_manifold)
@@ -229,7 +238,9 @@ int main(int argc, char** argv) {
                              {"faces", st.faces},
                              {"components", st.components},
                              {"genus", st.genus},
-                             {"volume", st.volume}});
+                             {"volume", st.volume},
+                             {"iso_shift", blend.iso_shift / morph.source_sdf.spacing},
+                             {"iso_shift_clamped", blend.clamped}});
       if (glb) seq.push_back({frame_stem(f, frames), mesh.positions, mesh.faces});
       std::ostringstream m;
       m << "frame " << f + 1 << "/" << frames << " t=" << std::setprecision(3) << t << ": " << st.vertices
@@ -253,7 +264,7 @@ int main(int argc, char** argv) {
         {"target", shape_json(target, morph.target_volume)},
         {"options", {{"frames", frames}, {"grid", grid}, {"align", align}, {"band", band},
                      {"exact_endpoints", exact_endpoints}, {"frame_format", format}, {"timing", timing},
-                     {"endpoint_refine", endpoint_refine}}},
+                     {"endpoint_refine", endpoint_refine}, {"volume", volume}}},
         {"timing", timing_json},
         {"grid", {{"dims", {g.dims[0], g.dims[1], g.dims[2]}}, {"spacing", g.spacing}, {"origin", vec_json(g.origin)}}},
         {"alignment", {{"scale", morph.target_to_source.scale},
@@ -290,6 +301,10 @@ int main(int argc, char** argv) {
                                   {"warp", morph.bones.empty() ? "linear" : "parts"},
                                   {"bones", morph.bones.size()},
                                   {"bones_min_det", morph.bone_min_det},
+                                  {"centring", {{"source_moved", morph.source_centring.moved},
+                                                {"source_outside", {morph.source_centring.outside_before, morph.source_centring.outside_after}},
+                                                {"target_moved", morph.target_centring.moved},
+                                                {"target_outside", {morph.target_centring.outside_before, morph.target_centring.outside_after}}}},
                                   {"folds", {{"source_min_det", morph.source_folds.min_det},
                                              {"target_min_det", morph.target_folds.min_det},
                                              {"source_smoothing_steps", morph.source_folds.smoothing_steps},

@@ -114,3 +114,49 @@ TEST(Matching, TerminalBranchesMatchWhenTheirJunctionsDiffer) {
     EXPECT_EQ(p.reversed, (tip0 == a.a) != (tip1 == t.a));
   }
 }
+
+// A displacement that folds in one small region (a bump pushing the samples near the centre past
+// each other along x) is repaired there: no cell folds after, and samples away from the fold keep
+// their displacement exactly.
+TEST(Bones, LocalFoldRepairSmoothsOnlyWhereTheWarpFolds) {
+  Box3 box;
+  box.min = Vec3::Constant(-1);
+  box.max = Vec3::Constant(1);
+  const Grid g = grid_over(box, 32, 1);
+  Displacement d;
+  for (auto& c : d.u) {
+    c = g;
+    c.values.assign(g.size(), 0.0f);
+  }
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) {
+        const Vec3 p = g.point(i, j, k);
+        const size_t id = g.index(i, j, k);
+        // u_x = -2 x exp(-|p|^2 / 0.02): d(x + u_x)/dx = 1 - 2 = -1 at the centre.
+        d.u[0].values[id] = static_cast<float>(-2.0 * p.x() * std::exp(-p.squaredNorm() / 0.02));
+        d.u[1].values[id] = static_cast<float>(0.1 * p.y());  // a mild stretch everywhere else
+      }
+  ASSERT_LT(min_jacobian(d), 0.0);
+  const Displacement before = d;
+  const FoldRepair r = repair_folds_locally(d);
+  EXPECT_GT(r.rounds, 0);
+  EXPECT_GE(r.min_det, 0.1);
+  EXPECT_GT(min_jacobian(d), 0.0);
+  int untouched = 0, far = 0;
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i)
+        if (g.point(i, j, k).norm() > 0.7) {
+          ++far;
+          const size_t id = g.index(i, j, k);
+          untouched += d.u[0].values[id] == before.u[0].values[id] && d.u[1].values[id] == before.u[1].values[id];
+        }
+  EXPECT_EQ(untouched, far);
+  // Nothing to repair: nothing changes.
+  Displacement calm = before;
+  for (auto& v : calm.u[0].values) v = 0.0f;
+  const Displacement calm_before = calm;
+  EXPECT_EQ(repair_folds_locally(calm).rounds, 0);
+  EXPECT_EQ(calm.u[1].values, calm_before.u[1].values);
+}

@@ -16,6 +16,7 @@ TEST(Pipeline, SphereToTorusFramesAreClosedAndEndpointsWithinAVoxel) {
   MorphOptions opt;
   opt.grid = 40;
   opt.warp = false;  // the plain blend (the warped morph is tested in stages_test)
+  opt.volume = FrameVolume::Free;  // its zero level as blended (FrameVolume::Linear: volume_test)
   const PreparedMorph m = prepare_morph(sphere, torus, opt);
   const int frames = 7;
   for (int f = 0; f < frames; ++f) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "qs/dfi/sdf.h"
 
@@ -139,6 +140,53 @@ double min_jacobian(const Displacement& d) {
         best = std::min(best, (Eigen::Matrix3d::Identity() + J).determinant());
       }
   return best;
+}
+
+FoldRepair repair_folds_locally(Displacement& d, double min_det, int max_rounds) {
+  FoldRepair r;
+  const Grid& g = d.u[0];
+  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  std::vector<char> mark(g.size());
+  for (;; ++r.rounds) {
+    std::fill(mark.begin(), mark.end(), 0);
+    bool any = false;
+    r.min_det = std::numeric_limits<double>::infinity();
+    for (int k = 0; k + 1 < nz; ++k)
+      for (int j = 0; j + 1 < ny; ++j)
+        for (int i = 0; i + 1 < nx; ++i) {
+          const double det = (Eigen::Matrix3d::Identity() + cell_gradient(d, i, j, k)).determinant();
+          r.min_det = std::min(r.min_det, det);
+          if (det < min_det) {
+            any = true;
+            for (int c = -1; c <= 2; ++c)
+              for (int b = -1; b <= 2; ++b)
+                for (int a = -1; a <= 2; ++a) {
+                  const int x = i + a, y = j + b, z = k + c;
+                  if (x >= 0 && y >= 0 && z >= 0 && x < nx && y < ny && z < nz) mark[g.index(x, y, z)] = 1;
+                }
+          }
+        }
+    if (!any || r.rounds == max_rounds) return r;
+    for (int step = 0; step < 4; ++step)
+      for (auto& comp : d.u) {
+        std::vector<float> next = comp.values;
+        for (int k = 0; k < nz; ++k)
+          for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) {
+              if (!mark[g.index(i, j, k)]) continue;
+              double sum = comp.values[g.index(i, j, k)];
+              int cnt = 1;
+              if (i > 0) sum += comp.values[g.index(i - 1, j, k)], ++cnt;
+              if (i + 1 < nx) sum += comp.values[g.index(i + 1, j, k)], ++cnt;
+              if (j > 0) sum += comp.values[g.index(i, j - 1, k)], ++cnt;
+              if (j + 1 < ny) sum += comp.values[g.index(i, j + 1, k)], ++cnt;
+              if (k > 0) sum += comp.values[g.index(i, j, k - 1)], ++cnt;
+              if (k + 1 < nz) sum += comp.values[g.index(i, j, k + 1)], ++cnt;
+              next[g.index(i, j, k)] = static_cast<float>(sum / cnt);
+            }
+        comp.values.swap(next);
+      }
+  }
 }
 
 }  // namespace qs::dfi

@@ -53,4 +53,16 @@ Displacement bone_displacement(const std::vector<Bone>& bones, const Grid& geome
 /// Smallest Jacobian determinant of x -> x + u(x) over the cells of u's grid.
 double min_jacobian(const Displacement& d);
 
+struct FoldRepair {
+  double min_det = 1;  ///< smallest det(I + grad u) over the cells at the last check
+  int rounds = 0;      ///< rounds of local smoothing applied
+};
+
+/// Repairs folds where they are: while a cell has det(I + grad u) < min_det and fewer than
+/// max_rounds rounds were applied, the samples of such cells and their neighbours (a 4^3 block per
+/// cell) get 4 Jacobi steps (each the mean of itself and its 6 neighbours); samples away from
+/// every fold are left exactly as they were. Used on every frame of the part warp (0.1, 40), so a
+/// fold where two parts' transforms meet does not send the whole morph to the linear warp.
+FoldRepair repair_folds_locally(Displacement& d, double min_det = 0.1, int max_rounds = 40);
+
 }  // namespace qs::dfi

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "qs/core/error.h"
 #include "qs/dfi/transport.h"
@@ -13,7 +14,8 @@
 namespace qs::dfi {
 namespace {
 
-constexpr size_t kSpeck = 8;      // inside islands of at most this many samples are dropped
+constexpr size_t kSpeck = 8;      // inside islands of at most this many samples are dropped,
+constexpr double kSpeckShare = 0.002;  // or of at most this share of the frame's inside samples
 // Jacobi steps on each frame's bone displacement on a 75-cell bone grid (a 150-cell morph),
 // scaled with the square of the cells for other grids so that the smoothing radius stays the same
 // in space (measured on horse -> camel at 150: 4 leave handles where the warp folds, 64 thin the
@@ -141,6 +143,12 @@ void check_correspondence_options(const MorphOptions& o) {
 void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOptions& o, const Context& ctx) {
   m.warp = true;
   const double diagonal = bounding_box(source.positions).diagonal();
+  if (o.centre_skeletons) {
+    m.source_centring = centre_skeleton(m.source_skeleton, m.source_sdf);
+    m.target_centring = centre_skeleton(m.target_skeleton, m.target_sdf);
+    m.source_branches = skeleton_branches(m.source_skeleton);
+    m.target_branches = skeleton_branches(m.target_skeleton);
+  }
   std::vector<NodePair> forced;
   for (const auto& lm : o.landmarks)
     forced.push_back({nearest_node(m.source_skeleton, lm.source),
@@ -268,7 +276,7 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
 // edges of the Kuhn tetrahedra (the 14 neighbours of the polygonization's lattice) joins to the
 // grid's boundary: such a region's zero set would be an inner shell, a cavity, which neither input
 // has (both are one closed component); and outside samples for islands of at most kSpeck inside
-// samples (below the grid's resolution). Only between the ends: at the ends a pocket that the
+// samples or kSpeckShare of the inside samples (below the grid's resolution). Only between the ends: at the ends a pocket that the
 // sampling closes (between an elephant's ear and head) and a speck are the inputs' own.
 // Returns the number of samples changed.
 size_t fill_cavities(Grid& g) {
@@ -306,6 +314,13 @@ size_t fill_cavities(Grid& g) {
     }
   // Islands of at most kSpeck inside samples (joined the same way): specks below the grid's
   // resolution that a fold of the warp leaves, not parts of either shape.
+  // A piece is a speck up to kSpeck samples or kSpeckShare of the frame's inside samples: what a
+  // part thinner than the grid leaves behind when the blend thins it (the camel's tail between
+  // t = 0.8 and 0.9: 0.02-0.05% of the frame's volume); a part that comes off (a head, several %)
+  // is kept, and shows.
+  size_t inside_samples = 0;
+  for (float v : g.values) inside_samples += v < 0;
+  const size_t speck = std::max(kSpeck, static_cast<size_t>(kSpeckShare * static_cast<double>(inside_samples)));
   std::vector<char> seen(g.size(), 0);
   std::vector<size_t> island;
   const float outside = static_cast<float>(g.spacing);
@@ -329,7 +344,7 @@ size_t fill_cavities(Grid& g) {
           stack.push_back(t);
         }
     }
-    if (island.size() <= kSpeck)
+    if (island.size() <= speck)
       for (size_t s : island) g.values[s] = outside, ++changed;
   }
   return changed;
@@ -365,6 +380,7 @@ Displacement frame_bone_warp(const std::vector<Bone>& bones, const Grid& geometr
   Displacement d = bone_displacement(bones, geometry, s, threads);
   const double cells = std::max({geometry.dims[0], geometry.dims[1], geometry.dims[2]}) - 3.0;
   smooth_displacement(d, std::max(1, static_cast<int>(std::lround(kBoneSmoothing * (cells / 75) * (cells / 75)))));
+  repair_folds_locally(d);  // bones.h
   return d;
 }
 
@@ -382,7 +398,11 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
   if (options.grid < 8 || options.grid > 1024)
     throw InvalidInput("grid is " + std::to_string(options.grid) + " cells; expected 8 to 1024");
   if (options.pad < 2) throw InvalidInput("pad is " + std::to_string(options.pad) + " cells; expected at least 2");
+  if (!(options.max_iso_shift >= 0 && options.max_iso_shift <= 64))
+    throw InvalidInput("max_iso_shift is " + std::to_string(options.max_iso_shift) + " cells; expected 0 to 64");
   PreparedMorph m;
+  m.volume = options.volume;
+  m.max_iso_shift = options.max_iso_shift;
   const Vec3 c0 = volume_centroid(source, m.source_volume);
   const Vec3 c1 = volume_centroid(target, m.target_volume);
   if (!(m.source_volume > 0) || !(m.target_volume > 0))
@@ -414,7 +434,41 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
   return m;
 }
 
-Grid blend_field(const PreparedMorph& m, double t, int threads) {
+double volume_below(const Grid& field, double c) {
+  const double h = field.spacing, cell = h * h * h;
+  double sum = 0;
+  for (float v : field.values) sum += std::clamp(0.5 + (c - v) / h, 0.0, 1.0);
+  return cell * sum;
+}
+
+double iso_for_volume(const Grid& field, double volume, double max_shift) {
+  const double h = field.spacing, cell = h * h * h;
+  max_shift = std::max(0.0, max_shift);
+  // Samples that are inside (or outside) for every c in [-max_shift, max_shift] once; the band
+  // between them is what the bisection sums, in the grid's order (deterministic).
+  double inside = 0;
+  std::vector<double> band;
+  for (float v : field.values) {
+    if (v <= -max_shift - 0.5 * h) inside += 1;
+    else if (v < max_shift + 0.5 * h) band.push_back(v);
+  }
+  const auto below = [&](double c) {
+    double sum = inside;
+    for (double v : band) sum += std::clamp(0.5 + (c - v) / h, 0.0, 1.0);
+    return cell * sum;
+  };
+  double lo = -max_shift, hi = max_shift;
+  if (below(hi) <= volume) return hi;
+  if (below(lo) >= volume) return lo;
+  while (hi - lo > 1e-6 * h) {
+    const double mid = 0.5 * (lo + hi);
+    (below(mid) < volume ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+Grid blend_field(const PreparedMorph& m, double t, int threads, BlendInfo* info) {
+  if (info) *info = BlendInfo{};
   Grid g = m.source_sdf;
   if (!m.bones.empty()) {
     // The ends are the inputs' fields exactly (no resampling at a zero warp).
@@ -433,6 +487,22 @@ Grid blend_field(const PreparedMorph& m, double t, int threads) {
   } else {
     for (size_t i = 0; i < g.values.size(); ++i)
       g.values[i] = static_cast<float>((1 - t) * m.source_sdf.values[i] + t * m.target_sdf.values[i]);
+  }
+  // The frame's volume: where neither warped shape covers the other (parts that do not overlap
+  // half-way), the blend of two distance fields is positive and the frame thins or loses them;
+  // shifting its iso level by one constant brings the enclosed volume back to the linear
+  // interpolation of the ends' (measured with the same estimator on both, so its bias cancels).
+  if (m.volume == FrameVolume::Linear && t > 0 && t < 1) {
+    const double wanted = (1 - t) * volume_below(m.source_sdf) + t * volume_below(m.target_sdf);
+    const double shift = iso_for_volume(g, wanted, m.max_iso_shift * g.spacing);
+    if (info) {
+      info->volume_wanted = wanted;
+      info->volume_blended = volume_below(g);
+      info->iso_shift = shift;
+      info->clamped = std::abs(shift) >= m.max_iso_shift * g.spacing;
+    }
+    const float s = static_cast<float>(shift);
+    for (float& v : g.values) v -= s;
   }
   const float floor = static_cast<float>(g.spacing);
   for (int k = 0; k < g.dims[2]; ++k)

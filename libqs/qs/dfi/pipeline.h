@@ -19,6 +19,7 @@
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/dfi/bones.h"
+#include "qs/dfi/centre.h"
 #include "qs/dfi/grid.h"
 #include "qs/dfi/harmonic.h"
 #include "qs/dfi/matching.h"
@@ -38,6 +39,14 @@ enum class Align {
               ///< placement to the target's (scale, rotation and centre interpolated)
 };
 
+/// How the volume of the frames between the ends is set.
+enum class FrameVolume {
+  Free,   ///< the zero level of the blended field, whatever volume it encloses
+  Linear  ///< the iso level of each frame's blended field shifted (by at most max_iso_shift cells) so
+          ///< that the volume it encloses follows (1 - t) V_0 + t V_1, both sides measured on the
+          ///< fields with the same estimator (volume_below); the ends are never shifted
+};
+
 struct MorphOptions {
   int grid = 150;          ///< cells along the longest side of the common bounding box
   int pad = 3;             ///< empty cells around it
@@ -52,8 +61,13 @@ struct MorphOptions {
   /// displacement (warp.h), which is also what runs when no branch is matched or the part warp
   /// folds (a Jacobian determinant <= 0 at s = 0.5 or 1, after its smoothing).
   int bone_segments = 8;
+  /// Skeleton nodes moved to the centre of their cross-section in the distance fields before the
+  /// matching (centre.h); false: where mean curvature flow left them.
+  bool centre_skeletons = true;
   double prune_fraction = 0.08;  ///< skeleton spurs shorter than this times the source's bounding-box
                                  ///< diagonal are pruned (prune_skeleton)
+  FrameVolume volume = FrameVolume::Linear;
+  double max_iso_shift = 4;      ///< cells: the largest iso-level shift of FrameVolume::Linear (0 to 64)
   int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
   double position_weight = 0.1;  ///< weight of the voxel distance (per bounding-box diagonal) added to
                                  ///< the harmonic-vector distance in the transport cost (breaks ties)
@@ -78,10 +92,13 @@ struct PreparedMorph {
   Similarity target_to_source;  ///< identity when Align::None
   Grid source_sdf, target_sdf;  ///< on the same samples, in morph (source) space
   double source_volume = 0, target_volume = 0;  ///< of the input meshes, in their own units
+  FrameVolume volume = FrameVolume::Free;       ///< from MorphOptions (prepare_morph); Free when built by hand
+  double max_iso_shift = 4;                     ///< from MorphOptions (cells)
   // The correspondence (only with options.warp), everything in morph space.
   bool warp = false;
   Skeleton source_skeleton, target_skeleton;
   std::vector<Branch> source_branches, target_branches;
+  CentreReport source_centring, target_centring;  ///< what centre_skeleton did (centre_skeletons)
   SkeletonMatching matching;
   std::vector<AnchorPair> anchors;     ///< the ones kept (distinct voxels on both sides)
   int emd_cells = 0;                   ///< coarse grid cells along the longest side
@@ -105,13 +122,33 @@ struct PreparedMorph {
 PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options = {},
                             const Context& ctx = {});
 
+/// What blend_field did to one frame's field.
+struct BlendInfo {
+  double iso_shift = 0;       ///< world units subtracted from the blend (> 0 grows the shape); 0 at the ends
+  double volume_wanted = 0;   ///< (1 - t) V_0 + t V_1 by volume_below (FrameVolume::Linear between the ends)
+  double volume_blended = 0;  ///< volume_below of the blend before the shift
+  bool clamped = false;       ///< the wanted volume needed more than max_iso_shift cells
+};
+
+/// The volume enclosed by the level c of a sampled field (negative inside): each sample counts
+/// its cell volume times clamp(1/2 + (c - value) / spacing, 0, 1), a smoothed step one cell wide
+/// (exact for a plane, within O(spacing^2) of the polygonization's volume for a distance field).
+/// Non-decreasing in c.
+double volume_below(const Grid& field, double c = 0);
+
+/// The iso value c whose volume_below equals `volume` (bisection to 1e-6 cells), clamped to
+/// [-max_shift, max_shift] (world units). \pre field has values.
+double iso_for_volume(const Grid& field, double volume, double max_shift);
+
 /// The field of frame t in [0, 1]: (1 - t) d_0 + t d_1, each warped toward the other when the
 /// morph has a warp (the part warp of bones.h when it has bones: each frame's displacement
 /// smoothed by Jacobi steps (32 on a 150-cell grid), inverted by Newton steps). Boundary samples are kept outside
 /// (>= one spacing). For 0 < t < 1, outside regions that do not reach the boundary (cavities,
-/// which neither input has) are filled, and inside islands of at most 8 samples (specks below the
-/// grid's resolution) dropped, both along the edges of the polygonization's tetrahedra.
-Grid blend_field(const PreparedMorph& morph, double t, int threads = 0);
+/// which neither input has) are filled, and inside islands of at most 8 samples or 0.2% of the
+/// frame's inside samples (specks and pieces of parts thinner than the grid) dropped, both along the edges of the polygonization's tetrahedra. With
+/// FrameVolume::Linear (the default) the blend's iso level is shifted first, for 0 < t < 1, so
+/// that the frame's volume follows the linear interpolation of the ends' (iso_for_volume).
+Grid blend_field(const PreparedMorph& morph, double t, int threads = 0, BlendInfo* info = nullptr);
 
 /// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the
 /// source's at 0, the target's at 1, interpolated in between).

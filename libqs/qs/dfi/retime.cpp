@@ -97,6 +97,8 @@ Retiming even_frame_times(const PreparedMorph& morph, int frames, const RetimeOp
     coarse.source_warp = morph.source_warp;
     coarse.target_warp = morph.target_warp;
     coarse.bones = morph.bones;
+    coarse.volume = morph.volume;  // the same iso-level rule (max_iso_shift in cells)
+    coarse.max_iso_shift = morph.max_iso_shift;
     if (!morph.bones.empty()) coarse.bone_grid = coarser(morph.bone_grid, o.coarsen);
     m = &coarse;
   }
