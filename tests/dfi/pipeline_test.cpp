@@ -13,24 +13,29 @@ TEST(Pipeline, SphereToTorusFramesAreClosedAndEndpointsWithinAVoxel) {
   TriMesh sphere = shapes::icosphere(3);
   for (Vec3& p : sphere.positions) p *= 1.2;
   const TriMesh torus = shapes::torus(64, 24);
-  MorphOptions opt;
-  opt.grid = 40;
-  opt.warp = false;  // the plain blend (the warped morph is tested in stages_test)
-  opt.volume = FrameVolume::Free;  // its zero level as blended (FrameVolume::Linear: volume_test)
-  const PreparedMorph m = prepare_morph(sphere, torus, opt);
-  const int frames = 7;
-  for (int f = 0; f < frames; ++f) {
-    const double t = f / (frames - 1.0);
-    const TriMesh mesh = frame_mesh(m, blend_field(m, t), t);
-    const MeshStats s = mesh_stats(mesh);
-    EXPECT_TRUE(s.closed_manifold) << f;
-    EXPECT_GT(s.volume, 0) << f;
-    EXPECT_EQ(test_support::self_intersections(mesh), 0) << f;
-    if (f == 0 || f == frames - 1) {
-      EXPECT_EQ(s.genus, f == 0 ? 0 : 1);
-      EXPECT_EQ(s.components, 1);
-      const metro::MetroResult r = metro::metro(mesh, f == 0 ? sphere : torus);
-      EXPECT_LT(r.max, m.source_sdf.spacing) << "frame " << f << " Hausdorff " << r.max;
+  // The plain blend (the warped morph is tested in stages_test), with its zero level as blended
+  // and with the iso level shifted for a linear volume (the default).
+  for (const FrameVolume volume : {FrameVolume::Free, FrameVolume::Linear}) {
+    SCOPED_TRACE(volume == FrameVolume::Free ? "free volume" : "linear volume");
+    MorphOptions opt;
+    opt.grid = 40;
+    opt.warp = false;
+    opt.volume = volume;
+    const PreparedMorph m = prepare_morph(sphere, torus, opt);
+    const int frames = 7;
+    for (int f = 0; f < frames; ++f) {
+      const double t = f / (frames - 1.0);
+      const TriMesh mesh = frame_mesh(m, blend_field(m, t), t);
+      const MeshStats s = mesh_stats(mesh);
+      EXPECT_TRUE(s.closed_manifold) << f;
+      EXPECT_GT(s.volume, 0) << f;
+      EXPECT_EQ(test_support::self_intersections(mesh), 0) << f;
+      if (f == 0 || f == frames - 1) {
+        EXPECT_EQ(s.genus, f == 0 ? 0 : 1);
+        EXPECT_EQ(s.components, 1);
+        const metro::MetroResult r = metro::metro(mesh, f == 0 ? sphere : torus);
+        EXPECT_LT(r.max, m.source_sdf.spacing) << "frame " << f << " Hausdorff " << r.max;
+      }
     }
   }
 }

@@ -85,3 +85,22 @@ TEST(MeshStats, CountsGenusComponentsAndVolume) {
   open.faces.pop_back();
   EXPECT_FALSE(mesh_stats(open).closed_manifold);
 }
+
+// The independent check itself: it must see a crossing, in 3D and within one plane, and must not
+// see one between coplanar faces that only lie side by side (a field's planar patch).
+TEST(SelfIntersectionCheck, CountsCrossingsAndNotNeighboursInOnePlane) {
+  TriMesh crossing;
+  crossing.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(3, 3, 0)};
+  crossing.faces = {{0, 1, 2}, {3, 4, 5}};
+  EXPECT_EQ(test_support::self_intersections(crossing), 1);
+  TriMesh overlapping;  // two triangles in z = 0, the second's corner inside the first
+  overlapping.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0.5, 0.5, 0), Vec3(3, 1, 0), Vec3(3, 3, 0)};
+  overlapping.faces = {{0, 1, 2}, {3, 4, 5}};
+  EXPECT_EQ(test_support::self_intersections(overlapping), 1);
+  TriMesh side_by_side;  // in one tilted plane, apart (the frame that the 3D signs alone flagged)
+  const Vec3 s(0.043, 0.0154, 0), z(0, 0, 1);
+  side_by_side.positions = {Vec3::Zero(), s + 0.008 * z, -0.035 * z, s - 0.035 * z, 1.6 * s + 0.018 * z, 1.6 * s - 0.035 * z};
+  for (Vec3& p : side_by_side.positions) p += Vec3(-0.49, 1.2876132009968655, 0.0001);
+  side_by_side.faces = {{0, 1, 2}, {3, 4, 5}};
+  EXPECT_EQ(test_support::self_intersections(side_by_side), 0);
+}

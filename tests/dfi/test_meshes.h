@@ -29,10 +29,38 @@ inline double torus_sd(const Vec3& p, double R, double r) {
   return std::hypot(std::hypot(p.x(), p.y()) - R, p.z()) - r;
 }
 
-/// Does segment pq cross triangle abc (proper crossing, exact-ish in doubles)?
+/// 2D: does segment pq cross triangle abc (an edge crossed properly, or p or q strictly inside)?
+/// Coordinates are the two axes other than `drop`.
+inline bool segment_hits_triangle_2d(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
+                                     int drop) {
+  const int x = (drop + 1) % 3, y = (drop + 2) % 3;
+  auto o = [&](const Vec3& u, const Vec3& v, const Vec3& w) {
+    return (v[x] - u[x]) * (w[y] - u[y]) - (v[y] - u[y]) * (w[x] - u[x]);
+  };
+  auto inside = [&](const Vec3& r) {
+    const double s1 = o(a, b, r), s2 = o(b, c, r), s3 = o(c, a, r);
+    return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
+  };
+  auto crosses = [&](const Vec3& u, const Vec3& v) {
+    const double d1 = o(p, q, u), d2 = o(p, q, v), d3 = o(u, v, p), d4 = o(u, v, q);
+    return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
+  };
+  return inside(p) || inside(q) || crosses(a, b) || crosses(b, c) || crosses(c, a);
+}
+
+/// Does segment pq cross triangle abc? A proper crossing in 3D; where pq lies in abc's plane (to
+/// rounding: both orientations below 1e-9 of the scale's cube, as on the planar patches of a field
+/// sampled on grid planes), the 2D test in that plane instead of the noise of the 3D signs.
 inline bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
   auto orient = [](const Vec3& w, const Vec3& x, const Vec3& y, const Vec3& z) { return (x - w).dot((y - w).cross(z - w)); };
   const double sp = orient(a, b, c, p), sq = orient(a, b, c, q);
+  const double scale = std::max({(b - a).norm(), (c - a).norm(), (q - p).norm()});
+  const double eps = 1e-9 * scale * scale * scale;
+  if (std::abs(sp) <= eps && std::abs(sq) <= eps) {
+    const Vec3 n = (b - a).cross(c - a).cwiseAbs();
+    const int drop = n.x() >= n.y() && n.x() >= n.z() ? 0 : (n.y() >= n.z() ? 1 : 2);
+    return segment_hits_triangle_2d(p, q, a, b, c, drop);
+  }
   if ((sp > 0 && sq > 0) || (sp < 0 && sq < 0) || sp == 0 || sq == 0) return false;
   const double s1 = orient(p, q, a, b), s2 = orient(p, q, b, c), s3 = orient(p, q, c, a);
   return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
