@@ -80,11 +80,19 @@ int main(int argc, char** argv) {
   app.add_option("--relax", opt.relax_rounds, "Rounds of seed-curve relaxation (paper 3.3; off by default, see README)")
       ->capture_default_str()
       ->check(CLI::Range(0, 16));
-  bool cotan = false;
-  app.add_flag("--geodesic-seed-curves", opt.geodesic_seed_curves,
-               "Straighten the seed curves into geodesics cut into the mesh (less dependent on the tessellation; see README)");
-  app.add_flag("--cotan", cotan,
-               "Cotangent weights on each patch's intrinsic Delaunay triangulation instead of mean-value weights (experimental, see README)");
+  // Issue 13/17: geodesic seed curves and intrinsic cotangent weights are the defaults; the old
+  // maps stay one flag away. The former opt-in flags are still accepted (they ask for the default).
+  bool edge_paths = false, mean_value = false, geodesic_flag = false, cotan_flag = false;
+  app.add_flag("--edge-seed-paths", edge_paths,
+               "Keep the seed curves as the shortest edge paths instead of straightening them into geodesics "
+               "(the default before issue 17; depends on the tessellation)");
+  app.add_flag("--mean-value", mean_value,
+               "Floater mean-value weights for every patch map instead of cotangent weights on the patch's "
+               "intrinsic Delaunay triangulation (the default before issue 17; depends on the tessellation)");
+  app.add_flag("--geodesic-seed-curves", geodesic_flag, "Geodesic seed curves (the default; kept for old scripts)");
+  app.add_flag("--cotan", cotan_flag, "Intrinsic cotangent weights (the default; kept for old scripts)");
+  app.get_option("--edge-seed-paths")->excludes("--geodesic-seed-curves");
+  app.get_option("--mean-value")->excludes("--cotan");
   app.add_flag("--predict-split", opt.predict_split,
                "Choose each split by the children's stretch predicted from the parent's map (experimental, see README)");
   app.add_option("--optimize-stretch", opt.stretch_iterations,
@@ -134,7 +142,8 @@ int main(int argc, char** argv) {
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");
-    opt.intrinsic_cotan = cotan;
+    opt.geodesic_seed_curves = !edge_paths;
+    opt.intrinsic_cotan = !mean_value;
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());

@@ -41,15 +41,15 @@ struct DissectOptions {
   int relax_rounds = 0;
   /// Straighten the four seed curves into geodesics cut into the mesh (straighten_seed_loop)
   /// before anything else, so that the seed loop is the same curve on the surface for any
-  /// tessellation (issue 17); false: the shortest edge paths as traced. Off by default: it lowers
-  /// the error of one surface tessellated twice (gen-v0: mean 0.94% -> 0.39%) but not on every
-  /// pair of the benchmark, and three dissect_set tests end with folded leaves (see the README).
-  bool geodesic_seed_curves = false;
+  /// tessellation (issue 17); false: the shortest edge paths as traced. On by default (issue 13/17):
+  /// with intrinsic_cotan it lowers the error of one surface tessellated twice (gen-v0: mean
+  /// 0.94% -> 0.19%) and of the re-tessellated human pair (see the README).
+  bool geodesic_seed_curves = true;
   /// Interior weights of every patch map: cotangent weights on the patch's intrinsic Delaunay
   /// triangulation (param::InteriorWeights::IntrinsicCotan, tessellation-independent in the
   /// limit) instead of Floater's mean-value weights; a patch whose own triangles fold under it
-  /// keeps mean-value weights. Experimental (see the README).
-  bool intrinsic_cotan = false;
+  /// keeps mean-value weights. On by default (issue 13/17); false: mean-value weights everywhere.
+  bool intrinsic_cotan = true;
   /// Choose the split among candidate centres and w by the children's stretch predicted from the
   /// parent's map (see the README); false: the peak and w rule alone.
   bool predict_split = false;

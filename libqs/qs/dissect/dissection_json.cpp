@@ -27,6 +27,8 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"feature_cut_margin", options.feature_cut_margin},
                     {"feature_group_distance", options.feature_group_distance},
                     {"relax_rounds", options.relax_rounds},
+                    {"geodesic_seed_curves", options.geodesic_seed_curves},
+                    {"intrinsic_cotan", options.intrinsic_cotan},
                     {"predict_split", options.predict_split},
                     {"stretch_iterations", options.stretch_iterations},
                     {"max_patch_area", options.max_patch_area},

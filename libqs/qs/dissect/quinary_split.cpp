@@ -95,9 +95,9 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
       if (!std::isfinite(t)) throw SplitFailure("a cut met a degenerate parameter triangle");
       const double s = cross2(ux - p, e) / cross2(d, e);
       if (s >= 1.0) throw SplitFailure("a cut missed its end vertex");
-      if (t < 0.05 && flag_[x] == kFree) {
+      if (t < snap_ && flag_[x] == kFree) {
         next = x;
-      } else if (t > 0.95 && flag_[y] == kFree) {
+      } else if (t > 1 - snap_ && flag_[y] == kFree) {
         next = y;
       } else {
         const int hxy = CutMesh::next(best_h);
@@ -188,5 +188,38 @@ std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const
   return kids;  // the parent's face list stays until the whole set has split (restore needs it)
 }
 
+void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<std::array<int, 2>>& segments) {
+  const Extracted& ex = p.ex;
+  for (size_t i = 0; i < ex.verts.size(); ++i) {
+    uv_of_[ex.verts[i]] = p.sp.uv[i];
+    flag_[ex.verts[i]] = kFree;
+  }
+  for (int v : ex.pm.boundary) flag_[ex.verts[v]] = kBoundary;
+  for (const auto& f : p.features) flag_[ex.verts[f.second]] = kFeature;
+  std::vector<std::array<int, 2>> global;
+  for (const auto& s : segments) global.push_back({ex.verts[s[0]], ex.verts[s[1]]});
+  cut_edges_.clear();
+  // Exact segments: a crossing passes through a free vertex only within rounding of it.
+  snap_ = 1e-9;
+  std::string failure;
+  try {
+    for (const auto& s : global) trace(node.label, s[0], s[1]);
+  } catch (const SplitFailure& e) {
+    failure = e.what();
+  }
+  snap_ = 0.05;
+  cut_edges_.clear();
+  // The same map on the refined patch: new vertices got their uv on the split edges.
+  Param q;
+  q.weights = p.weights;
+  q.ex = extract(node);
+  q.sp.uv.resize(q.ex.verts.size());
+  for (size_t i = 0; i < q.ex.verts.size(); ++i) q.sp.uv[i] = uv_of_[q.ex.verts[i]];
+  param::count_uv_faces(q.ex.pm.faces, q.sp);
+  q.st = param::l2_stretch(q.ex.pm.positions, q.ex.pm.faces, q.sp.uv);
+  collect_features(q);
+  p = std::move(q);
+  if (!failure.empty()) throw SplitFailure(failure);
+}
 
 }  // namespace qs::dissect::detail
