@@ -109,11 +109,15 @@ int main(int argc, char** argv) {
                  "Stretch-minimization rounds for a patch over tau before it is split (fewer splits on limbs)")
       ->capture_default_str()
       ->check(CLI::Range(0, 50));
-  bool refine_maps = false;
+  // Issue 13/17: on by default for a set (it does nothing for one mesh).
+  bool refine_flag = false, no_refine = false;
   qs::maprefine::RefineOptions refine_opt;
-  app.add_flag("--refine-maps", refine_maps,
-               "After the dissection, move each mesh's chart (u,v) inside its patches so that its map to the first "
-               "mesh has low isometric distortion (issue 17; patch borders, seeds and features stay; see README)");
+  app.add_flag("--no-refine-maps", no_refine,
+               "Keep the dissection's own maps: by default, for two or more meshes, each mesh's chart (u,v) is "
+               "moved inside its patches so that its map to the first mesh has low isometric distortion "
+               "(issue 17; patch borders, seeds and features stay; see README)");
+  app.add_flag("--refine-maps", refine_flag, "Refine the maps between the meshes (the default; kept for old scripts)");
+  app.get_option("--no-refine-maps")->excludes("--refine-maps");
   app.add_option("--refine-iterations", refine_opt.iterations, "Newton steps per patch of --refine-maps")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
@@ -142,6 +146,7 @@ int main(int argc, char** argv) {
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");
+    const bool refine_maps = !no_refine;
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     if (outdir.empty()) outdir = default_outdir(meshes);
@@ -279,7 +284,7 @@ int main(int argc, char** argv) {
              << f.uv.x() << ", " << f.uv.y() << ")\n";
       flipped += mesh_flipped;
     }
-    if (refine_maps && inputs.size() == 1)
+    if (refine_flag && inputs.size() == 1)
       text << "refine maps: one mesh, no map between meshes to refine (the chart is as dissected)\n";
     if (inputs.size() > 1)
       text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
