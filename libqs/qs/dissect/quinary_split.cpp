@@ -188,6 +188,9 @@ std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const
   return kids;  // the parent's face list stays until the whole set has split (restore needs it)
 }
 
+// cut_segments: crossings this near a free vertex (in edge parameter) pass through it.
+constexpr double kSegmentSnap = 0.02;
+
 void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<std::array<int, 2>>& segments) {
   const Extracted& ex = p.ex;
   for (size_t i = 0; i < ex.verts.size(); ++i) {
@@ -199,8 +202,10 @@ void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<s
   std::vector<std::array<int, 2>> global;
   for (const auto& s : segments) global.push_back({ex.verts[s[0]], ex.verts[s[1]]});
   cut_edges_.clear();
-  // Exact segments: a crossing passes through a free vertex only within rounding of it.
-  snap_ = 1e-9;
+  // A crossing within 2% of an edge's length of a free vertex passes through it: the segment moves
+  // by that little, and no sliver is cut into the surface (a split 1e-6 from a vertex makes 3D
+  // slivers that fold later mean-value maps, and midpoint refinement keeps their shape).
+  snap_ = kSegmentSnap;
   std::string failure;
   try {
     for (const auto& s : global) trace(node.label, s[0], s[1]);
