@@ -93,6 +93,10 @@ int main(int argc, char** argv) {
   app.add_flag("--cotan", cotan_flag, "Intrinsic cotangent weights (the default; kept for old scripts)");
   app.get_option("--edge-seed-paths")->excludes("--geodesic-seed-curves");
   app.get_option("--mean-value")->excludes("--cotan");
+  bool no_fallback = false;
+  app.add_flag("--no-fallback-maps", no_fallback,
+               "Keep the result of the default maps even when it ends with folded leaves (by default the set is "
+               "then dissected again with --edge-seed-paths --mean-value, and that result kept if it folds less)");
   app.add_flag("--predict-split", opt.predict_split,
                "Choose each split by the children's stretch predicted from the parent's map (experimental, see README)");
   app.add_option("--optimize-stretch", opt.stretch_iterations,
@@ -149,6 +153,7 @@ int main(int argc, char** argv) {
     const bool refine_maps = !no_refine;
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
+    opt.fallback_maps = !no_fallback;
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());
@@ -212,6 +217,12 @@ int main(int argc, char** argv) {
     const auto t1 = std::chrono::steady_clock::now();
     qs::dissect::DissectionSet result = qs::dissect::dissect_set(set, opt, ctx);
     const auto t2 = std::chrono::steady_clock::now();
+    // Which maps were used, and why (the safety net of the new maps: DissectOptions::fallback_maps).
+    std::string maps = qs::dissect::maps_name(result.geodesic_seed_curves, result.intrinsic_cotan);
+    if (!result.maps_fallback.empty()) maps += " (fallback: " + result.maps_fallback + ")";
+    qs::dissect::DissectOptions used = opt;  // dissection.json records the options of the result
+    used.geodesic_seed_curves = result.geodesic_seed_curves;
+    used.intrinsic_cotan = result.intrinsic_cotan;
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
@@ -313,6 +324,7 @@ int main(int argc, char** argv) {
     }
     if (refine_flag && inputs.size() == 1)
       text << "refine maps: one mesh, no map between meshes to refine (the chart is as dissected)\n";
+    text << "maps: " << maps << "\n";
     if (inputs.size() > 1)
       text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
            << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events
@@ -323,7 +335,7 @@ int main(int argc, char** argv) {
       qs::dissect::write_chart_ply(folder.staging() / dm.chart_file, dm.dissection.chart);
     }
     qs::check_not_an_input(fs::path(outdir) / "dissection.json", input_paths, "-o");
-    qs::write_file_atomically(folder.staging() / "dissection.json", qs::dissect::dissection_to_json(out, opt, false));
+    qs::write_file_atomically(folder.staging() / "dissection.json", qs::dissect::dissection_to_json(out, used, false, maps));
     const auto t3 = std::chrono::steady_clock::now();
     text << "  wrote " << (fs::path(outdir) / "dissection.json").string() << " and " << out.size() << " chart file"
          << (out.size() > 1 ? "s" : "") << "\n";

@@ -86,6 +86,8 @@ TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
     const auto j = nlohmann::json::parse(js);
     EXPECT_EQ(j["options"]["geodesic_seed_curves"], opts.find("--edge-seed-paths") == std::string::npos);
     EXPECT_EQ(j["options"]["intrinsic_cotan"], opts.find("--mean-value") == std::string::npos);
+    EXPECT_EQ(j["maps"], std::string(opts.find("--edge-seed-paths") == std::string::npos ? "geodesic" : "edge") + "+" +
+                             (opts.find("--mean-value") == std::string::npos ? "cotan" : "mean-value"));
     for (const auto& p : j["meshes"][0]["patches"]) {
       EXPECT_EQ(p["flipped_faces"], 0);
       EXPECT_EQ(p["zero_area_faces"], 0);
