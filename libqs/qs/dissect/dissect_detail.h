@@ -190,6 +190,7 @@ class MeshDissector {
   }
   int insert_point(int label, const Vec2& q, bool snap);
   std::vector<int> trace(int label, int a, int b);
+  void project_onto_segment(int label, int v, const Vec2& q);
 
   const TriMesh& mesh_;  // the input, before any cut
   std::string name_;
@@ -205,6 +206,7 @@ class MeshDissector {
   std::vector<std::array<Vec2, 3>> face_uv_;   // leaves' wedge uv, by global face
   std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
   double snap_ = 0.05;  // trace: a crossing this near a free vertex (in edge parameter) passes through it
+  bool project_ = false;  // trace: ... and that vertex's uv moves onto the segment (cut_segments)
   std::vector<Node> leaves_;
   std::vector<PatchInfo> infos_;
   struct Repair {

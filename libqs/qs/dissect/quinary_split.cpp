@@ -53,6 +53,24 @@ int MeshDissector::insert_point(int label, const Vec2& q, bool snap) {
   return m;
 }
 
+// Moves vertex v's uv to q (onto a segment being cut) unless that folds a face around it.
+void MeshDissector::project_onto_segment(int label, int v, const Vec2& q) {
+  const Vec2 old = uv_of_[v];
+  uv_of_[v] = q;
+  const int h0 = cm_.out_halfedge(v);
+  int h = h0;
+  do {
+    if (cm_.patch(CutMesh::face_of(h)) == label) {
+      const Vec2 &a = uv_of_[v], &b = uv_of_[cm_.head(h)], &c = uv_of_[cm_.head(CutMesh::next(h))];
+      if (!(signed_area(a, b, c) > param::kZeroUvArea)) {
+        uv_of_[v] = old;
+        return;
+      }
+    }
+    h = cm_.rotate_ccw(h);
+  } while (h != h0);
+}
+
 // Cuts the straight parameter-domain segment from vertex a to vertex b into the mesh: walks from
 // vertex to vertex, splitting each crossed edge (or passing through a free vertex when the
 // crossing is within 5% of it). Returns the path's vertices, a and b included.
@@ -97,8 +115,10 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
       if (s >= 1.0) throw SplitFailure("a cut missed its end vertex");
       if (t < snap_ && flag_[x] == kFree) {
         next = x;
+        if (project_) project_onto_segment(label, x, ux + t * e);
       } else if (t > 1 - snap_ && flag_[y] == kFree) {
         next = y;
+        if (project_) project_onto_segment(label, y, ux + t * e);
       } else {
         const int hxy = CutMesh::next(best_h);
         if (!interior_edge(hxy, label)) throw SplitFailure("a cut crossed its patch's boundary");
@@ -206,6 +226,7 @@ void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<s
   // by that little, and no sliver is cut into the surface (a split 1e-6 from a vertex makes 3D
   // slivers that fold later mean-value maps, and midpoint refinement keeps their shape).
   snap_ = kSegmentSnap;
+  project_ = true;
   std::string failure;
   try {
     for (const auto& s : global) trace(node.label, s[0], s[1]);
@@ -213,6 +234,7 @@ void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<s
     failure = e.what();
   }
   snap_ = 0.05;
+  project_ = false;
   cut_edges_.clear();
   // The same map on the refined patch: new vertices got their uv on the split edges.
   Param q;
