@@ -4,7 +4,8 @@
 #
 #   usage: bench/correspondence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-correspondence)
 #   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000),
-#          DISSECT_ARGS (extra qs-dissect options, e.g. "--refine-maps" or "--geodesic-seed-curves --cotan"; the table then shows the
+#          DISSECT_ARGS (extra qs-dissect options, e.g. "--no-refine-maps" or "--edge-seed-paths --mean-value" for the
+#          maps that were the defaults before issues 13/17; the table then shows the
 #          dissection's and the refinement's own times from qs-dissect's report)
 #
 # Pairs (data made here, nothing committed but the SMPL landmark file):

@@ -80,11 +80,23 @@ int main(int argc, char** argv) {
   app.add_option("--relax", opt.relax_rounds, "Rounds of seed-curve relaxation (paper 3.3; off by default, see README)")
       ->capture_default_str()
       ->check(CLI::Range(0, 16));
-  bool cotan = false;
-  app.add_flag("--geodesic-seed-curves", opt.geodesic_seed_curves,
-               "Straighten the seed curves into geodesics cut into the mesh (less dependent on the tessellation; see README)");
-  app.add_flag("--cotan", cotan,
-               "Cotangent weights on each patch's intrinsic Delaunay triangulation instead of mean-value weights (experimental, see README)");
+  // Issue 13/17: geodesic seed curves and intrinsic cotangent weights are the defaults; the old
+  // maps stay one flag away. The former opt-in flags are still accepted (they ask for the default).
+  bool edge_paths = false, mean_value = false, geodesic_flag = false, cotan_flag = false;
+  app.add_flag("--edge-seed-paths", edge_paths,
+               "Keep the seed curves as the shortest edge paths instead of straightening them into geodesics "
+               "(the default before issue 17; depends on the tessellation)");
+  app.add_flag("--mean-value", mean_value,
+               "Floater mean-value weights for every patch map instead of cotangent weights on the patch's "
+               "intrinsic Delaunay triangulation (the default before issue 17; depends on the tessellation)");
+  app.add_flag("--geodesic-seed-curves", geodesic_flag, "Geodesic seed curves (the default; kept for old scripts)");
+  app.add_flag("--cotan", cotan_flag, "Intrinsic cotangent weights (the default; kept for old scripts)");
+  app.get_option("--edge-seed-paths")->excludes("--geodesic-seed-curves");
+  app.get_option("--mean-value")->excludes("--cotan");
+  bool no_fallback = false;
+  app.add_flag("--no-fallback-maps", no_fallback,
+               "Keep the result of the default maps even when it ends with folded leaves (by default the set is "
+               "then dissected again with --edge-seed-paths --mean-value, and that result kept if it folds less)");
   app.add_flag("--predict-split", opt.predict_split,
                "Choose each split by the children's stretch predicted from the parent's map (experimental, see README)");
   app.add_option("--optimize-stretch", opt.stretch_iterations,
@@ -101,11 +113,15 @@ int main(int argc, char** argv) {
                  "Stretch-minimization rounds for a patch over tau before it is split (fewer splits on limbs)")
       ->capture_default_str()
       ->check(CLI::Range(0, 50));
-  bool refine_maps = false;
+  // Issue 13/17: on by default for a set (it does nothing for one mesh).
+  bool refine_flag = false, no_refine = false;
   qs::maprefine::RefineOptions refine_opt;
-  app.add_flag("--refine-maps", refine_maps,
-               "After the dissection, move each mesh's chart (u,v) inside its patches so that its map to the first "
-               "mesh has low isometric distortion (issue 17; patch borders, seeds and features stay; see README)");
+  app.add_flag("--no-refine-maps", no_refine,
+               "Keep the dissection's own maps: by default, for two or more meshes, each mesh's chart (u,v) is "
+               "moved inside its patches so that its map to the first mesh has low isometric distortion "
+               "(issue 17; patch borders, seeds and features stay; see README)");
+  app.add_flag("--refine-maps", refine_flag, "Refine the maps between the meshes (the default; kept for old scripts)");
+  app.get_option("--no-refine-maps")->excludes("--refine-maps");
   app.add_option("--refine-iterations", refine_opt.iterations, "Newton steps per patch of --refine-maps")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
@@ -145,7 +161,10 @@ int main(int argc, char** argv) {
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");
-    opt.intrinsic_cotan = cotan;
+    const bool refine_maps = !no_refine;
+    opt.geodesic_seed_curves = !edge_paths;
+    opt.intrinsic_cotan = !mean_value;
+    opt.fallback_maps = !no_fallback;
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());
@@ -209,12 +228,42 @@ int main(int argc, char** argv) {
     const auto t1 = std::chrono::steady_clock::now();
     qs::dissect::DissectionSet result = qs::dissect::dissect_set(set, opt, ctx);
     const auto t2 = std::chrono::steady_clock::now();
+    // Which maps were used, and why (the safety net of the new maps: DissectOptions::fallback_maps).
+    std::string maps = qs::dissect::maps_name(result.geodesic_seed_curves, result.intrinsic_cotan);
+    if (!result.maps_fallback.empty()) maps += " (fallback: " + result.maps_fallback + ")";
+    qs::dissect::DissectOptions used = opt;  // dissection.json records the options of the result
+    used.geodesic_seed_curves = result.geodesic_seed_curves;
+    used.intrinsic_cotan = result.intrinsic_cotan;
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
     if (refine_opt.across_borders) refine_maps = true;
+    std::vector<char> same_chart(result.meshes.size(), 0);  // as the reference's: left as dissected
     if (refine_maps && result.meshes.size() > 1) {
-      refine_report = qs::maprefine::refine_maps(result.meshes, refine_opt, ctx);
+      // A mesh whose chart is the reference's (the same mesh, seeds and features given twice) maps
+      // to it by the identity, which the refinement could only disturb: it is left as dissected.
+      const auto& ref = result.meshes[static_cast<size_t>(refine_opt.reference)].chart;
+      std::vector<size_t> moved;
+      for (size_t i = 0; i < result.meshes.size(); ++i) {
+        const auto& c = result.meshes[i].chart;
+        same_chart[i] = static_cast<int>(i) != refine_opt.reference && c.mesh.positions == ref.mesh.positions &&
+                        c.mesh.faces == ref.mesh.faces && c.face_patch == ref.face_patch && c.face_uv == ref.face_uv;
+        if (!same_chart[i]) moved.push_back(i);
+      }
+      if (moved.size() > 1) {
+        std::vector<qs::dissect::Dissection> sub;
+        qs::maprefine::RefineOptions ro = refine_opt;
+        for (size_t k = 0; k < moved.size(); ++k) {
+          if (static_cast<int>(moved[k]) == refine_opt.reference) ro.reference = static_cast<int>(k);
+          sub.push_back(std::move(result.meshes[moved[k]]));
+        }
+        const qs::maprefine::RefineReport r = qs::maprefine::refine_maps(sub, ro, ctx);
+        refine_report.meshes.resize(result.meshes.size());
+        for (size_t k = 0; k < moved.size(); ++k) {
+          result.meshes[moved[k]] = std::move(sub[k]);
+          refine_report.meshes[moved[k]] = r.meshes[k];
+        }
+      }
       refine_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
       result.max_stretch = 0;
       for (const auto& m : result.meshes) result.max_stretch = std::max(result.max_stretch, m.max_stretch);
@@ -251,7 +300,10 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
-      if (i < refine_report.meshes.size()) {
+      if (same_chart[i]) {
+        text << "  refine maps: the same chart as mesh " << refine_opt.reference
+             << " (the identity map), left as dissected\n";
+      } else if (i < refine_report.meshes.size()) {
         const auto& r = refine_report.meshes[i];
         if (r.reference)
           text << "  refine maps: reference (not moved)\n";
@@ -285,8 +337,9 @@ int main(int argc, char** argv) {
              << f.uv.x() << ", " << f.uv.y() << ")\n";
       flipped += mesh_flipped;
     }
-    if (refine_maps && inputs.size() == 1)
+    if (refine_flag && inputs.size() == 1)
       text << "refine maps: one mesh, no map between meshes to refine (the chart is as dissected)\n";
+    text << "maps: " << maps << "\n";
     if (inputs.size() > 1)
       text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
            << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events
@@ -297,7 +350,7 @@ int main(int argc, char** argv) {
       qs::dissect::write_chart_ply(folder.staging() / dm.chart_file, dm.dissection.chart);
     }
     qs::check_not_an_input(fs::path(outdir) / "dissection.json", input_paths, "-o");
-    qs::write_file_atomically(folder.staging() / "dissection.json", qs::dissect::dissection_to_json(out, opt, false));
+    qs::write_file_atomically(folder.staging() / "dissection.json", qs::dissect::dissection_to_json(out, used, false, maps));
     const auto t3 = std::chrono::steady_clock::now();
     text << "  wrote " << (fs::path(outdir) / "dissection.json").string() << " and " << out.size() << " chart file"
          << (out.size() > 1 ? "s" : "") << "\n";

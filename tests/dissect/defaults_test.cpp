@@ -30,14 +30,19 @@ TEST(DissectDefaults, AreTheDocumentedOnes) {
   EXPECT_EQ(o.min_faces_to_split, 150);
   EXPECT_EQ(o.min_split_area, 0.01);    // README, qs-dissect, "Bodies and long limbs"
   EXPECT_EQ(o.force_split_area, 0.03);
+  EXPECT_TRUE(o.geodesic_seed_curves);  // issue 13/17: the tessellation-independent maps
+  EXPECT_TRUE(o.intrinsic_cotan);
 }
 
 TEST(DissectDefaults, SmoothShapeGetsAreaCappedPatches) {
   // The stretch rule alone leaves an ellipsoid in its 2 seed patches (each half the surface); the
-  // default area cap splits both once: 10 patches, none over 15% of the area.
+  // default area cap splits both, and, under the default cotangent maps, their centre children
+  // (0.4, 1.4) once more: 18 patches, none over 15% of the area (the old edge paths and mean-value
+  // maps: 10 patches; the largest stretch is 1.19 or 1.20 either way).
   const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
   const auto d = qs::dissect::dissect(m, std::nullopt);
-  EXPECT_EQ(d.chart.patches.size(), 10u);
+  EXPECT_EQ(d.chart.patches.size(), 18u);
+  EXPECT_LE(d.max_stretch, 1.25);
   std::vector<double> area(d.chart.patches.size(), 0.0);
   double total = 0;
   for (int f = 0; f < d.chart.mesh.num_faces(); ++f) {
@@ -52,11 +57,12 @@ TEST(DissectDefaults, SmoothShapeGetsAreaCappedPatches) {
 }
 
 TEST(DissectDefaults, ExampleMeshesGetTheDocumentedPatchCounts) {
-  // README, "Default options": spot_2k 22 patches, fish_blub_2k 46 (automatic seeds, alone).
+  // README, "Default options": spot_2k 22 patches, fish_blub_2k 54 (automatic seeds, alone; 46 with
+  // the old edge paths and mean-value maps, largest stretch 2.06 there, 1.74 now).
   const auto spot = qs::dissect::dissect(example("spot_2k.obj"), std::nullopt);
   EXPECT_EQ(spot.chart.patches.size(), 22u);
   EXPECT_LE(spot.max_stretch, 3.0);
   const auto fish = qs::dissect::dissect(example("fish_blub_2k.obj"), std::nullopt);
-  EXPECT_EQ(fish.chart.patches.size(), 46u);
+  EXPECT_EQ(fish.chart.patches.size(), 54u);
   EXPECT_LE(fish.max_stretch, 3.0);
 }

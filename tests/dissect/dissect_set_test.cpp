@@ -154,9 +154,65 @@ TEST(DissectSet, AlignmentThroughFlipEventsStaysBijective) {
   for (int i = 0; i < 6; ++i) dirs_b.push_back(qs::Vec3(std::cos(i * 1.1 + 2.0), std::sin(i * 1.1 + 2.0), 0.6));
   MeshToDissect ma{&a, equator_seeds(a), features_at(a, dirs), "a"};
   MeshToDissect mb{&a, ma.seeds, features_at(a, dirs_b), "a-rotated-features"};
-  const DissectionSet s = qs::dissect::dissect_set({ma, mb});
-  EXPECT_GT(s.warp_events, 0) << "the test should exercise flip events";
+  // Both the default maps (geodesic seed curves, cotangent weights) and the old ones (edge paths,
+  // mean-value weights). Warps without flip events fold mesh faces that straddle warp edges here
+  // (node 0.4 and below: 1-5 folded faces per mesh, more after every local refinement) unless the
+  // warp's edges are cut into the patch first, as the alignment does.
+  qs::dissect::DissectOptions old_maps;
+  old_maps.geodesic_seed_curves = false;
+  old_maps.intrinsic_cotan = false;
+  for (const auto& o : {qs::dissect::DissectOptions{}, old_maps}) {
+    SCOPED_TRACE(o.intrinsic_cotan ? "default maps" : "old maps");
+    const DissectionSet s = qs::dissect::dissect_set({ma, mb}, o);
+    EXPECT_GT(s.warp_events, 0) << "the test should exercise flip events";
+    expect_common_structure(s, {a.num_faces(), a.num_faces()});
+  }
+}
+
+TEST(DissectSet, FoldedNewMapsFallBackToTheOldOnes) {
+  // The flip-event set with max_depth 1: the default maps (geodesic curves, cotangent weights) end
+  // with folded leaves (a warp with flip events at depth 1, no split left), the old ones (edge
+  // paths, mean-value weights) do not; the safety net keeps the old maps' result and says why.
+  const auto a = qs::shapes::ellipsoid(1.4, 1, 0.8, 4);
+  std::vector<qs::Vec3> dirs, dirs_b;
+  for (int i = 0; i < 6; ++i) dirs.push_back(qs::Vec3(std::cos(i * 1.1), std::sin(i * 1.1), 1.2));
+  for (int i = 0; i < 6; ++i) dirs_b.push_back(qs::Vec3(std::cos(i * 1.1 + 2.0), std::sin(i * 1.1 + 2.0), 0.6));
+  MeshToDissect ma{&a, equator_seeds(a), features_at(a, dirs), "a"};
+  MeshToDissect mb{&a, ma.seeds, features_at(a, dirs_b), "b"};
+  auto folded = [](const DissectionSet& s) {
+    long n = 0;
+    for (const auto& d : s.meshes)
+      for (const auto& p : d.chart.patches) n += p.flipped_faces + p.zero_area_faces;
+    return n;
+  };
+  qs::dissect::DissectOptions o;
+  o.max_depth = 1;
+  o.fallback_maps = false;
+  const DissectionSet raw = qs::dissect::dissect_set({ma, mb}, o);
+  ASSERT_GT(folded(raw), 0) << "the test needs a set that the new maps leave folded";
+  EXPECT_TRUE(raw.geodesic_seed_curves);
+  EXPECT_TRUE(raw.intrinsic_cotan);
+  EXPECT_TRUE(raw.maps_fallback.empty());
+  o.fallback_maps = true;
+  const DissectionSet s = qs::dissect::dissect_set({ma, mb}, o);
+  EXPECT_EQ(folded(s), 0);
+  EXPECT_FALSE(s.geodesic_seed_curves);
+  EXPECT_FALSE(s.intrinsic_cotan);
+  EXPECT_THAT(s.maps_fallback, HasSubstr(std::to_string(folded(raw)) + " folded uv faces with geodesic+cotan (patch "));
   expect_common_structure(s, {a.num_faces(), a.num_faces()});
+  // The same as asking for the old maps.
+  qs::dissect::DissectOptions old = o;
+  old.geodesic_seed_curves = false;
+  old.intrinsic_cotan = false;
+  const DissectionSet direct = qs::dissect::dissect_set({ma, mb}, old);
+  EXPECT_TRUE(direct.maps_fallback.empty());
+  ASSERT_EQ(direct.meshes.size(), s.meshes.size());
+  for (size_t i = 0; i < s.meshes.size(); ++i) {
+    EXPECT_EQ(direct.meshes[i].chart.face_uv, s.meshes[i].chart.face_uv);
+    EXPECT_EQ(direct.meshes[i].base.quads, s.meshes[i].base.quads);
+  }
+  EXPECT_EQ(qs::dissect::maps_name(true, true), "geodesic+cotan");
+  EXPECT_EQ(qs::dissect::maps_name(false, false), "edge+mean-value");
 }
 
 TEST(DissectSet, FeaturesMustMatchAcrossTheSet) {

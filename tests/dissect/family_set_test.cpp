@@ -83,10 +83,17 @@ INSTANTIATE_TEST_SUITE_P(Families, FamilySet,
                          });
 
 TEST(FamilySetRefinement, AFoldedLeafIsRefinedAndEndsBijective) {
-  // Seed 3's first pair: one leaf with a limb-tip feature is folded by the alignment at its
-  // sampling, even after repair; refining the region of its folds makes it bijective.
-  const Generated& g = family_of(3);
-  const qs::dissect::DissectionSet s = qs::dissect::dissect_set({g.set[0], g.set[1]});
+  // With the old maps (edge seed paths, mean-value weights), seed 1's first four shapes have leaves
+  // that stay folded after the alignment and the repair; refining the region of their folds makes
+  // them bijective. (With the default maps none of the pairs shape 0 + shape 1..4 of seeds 1-6, nor
+  // the families of 8 and 16 of seeds 1-3, needs a refinement any more: the warp's edges are cut
+  // into the patch first, see feature_alignment.cpp.)
+  const Generated& g = family_of(1);
+  qs::dissect::DissectOptions old_maps;
+  old_maps.geodesic_seed_curves = false;
+  old_maps.intrinsic_cotan = false;
+  const std::vector<qs::dissect::MeshToDissect> set(g.set.begin(), g.set.begin() + 4);
+  const qs::dissect::DissectionSet s = qs::dissect::dissect_set(set, old_maps);
   int refined = 0;
   for (const auto& n : s.tree)
     for (int f : n.refined_faces) refined += f;
@@ -94,7 +101,7 @@ TEST(FamilySetRefinement, AFoldedLeafIsRefinedAndEndsBijective) {
   expect_exact_common_structure(s);
   // The refinement only resamples the surface: every chart vertex lies on its input mesh's
   // surface, so the total area is unchanged.
-  for (size_t i = 0; i < 2; ++i) {
+  for (size_t i = 0; i < set.size(); ++i) {
     double a_in = 0, a_chart = 0;
     for (int f = 0; f < g.set[i].mesh->num_faces(); ++f) a_in += qs::face_area(*g.set[i].mesh, f);
     for (int f = 0; f < s.meshes[i].chart.mesh.num_faces(); ++f) a_chart += qs::face_area(s.meshes[i].chart.mesh, f);

@@ -193,11 +193,17 @@ double self_error(const qs::dissect::DissectOptions& options) {
 }
 
 TEST(GeodesicLoop, OneSurfaceTessellatedTwiceMapsCloserToTheIdentity) {
-  qs::dissect::DissectOptions geodesic;
-  geodesic.geodesic_seed_curves = true;
-  const double before = self_error({});
-  const double after = self_error(geodesic);
-  EXPECT_LT(after, 0.7 * before) << "edge paths " << before << "%, geodesic curves " << after << "%";
+  // The default maps (geodesic seed curves, intrinsic cotangent weights) against the edge paths
+  // with the same weights, and against the old maps (edge paths, mean-value weights).
+  qs::dissect::DissectOptions edges, old_maps;
+  edges.geodesic_seed_curves = false;
+  old_maps.geodesic_seed_curves = false;
+  old_maps.intrinsic_cotan = false;
+  const double now = self_error({});
+  const double edge_paths = self_error(edges);
+  const double old = self_error(old_maps);
+  EXPECT_LT(now, 0.85 * edge_paths) << "edge paths " << edge_paths << "%, geodesic curves " << now << "%";
+  EXPECT_LT(now, 0.7 * old) << "old maps " << old << "%, default maps " << now << "%";
 }
 
 }  // namespace

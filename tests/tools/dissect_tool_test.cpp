@@ -62,8 +62,9 @@ TEST_F(DissectTool, WritesTheChartAndTheJsonContract) {
   EXPECT_EQ(bytes(out / "blob.chart.ply"), bytes(out2 / "blob.chart.ply"));
 }
 
-// Issue 17's options: geodesic seed curves and intrinsic cotangent weights, alone and together:
-// exit 0, every leaf bijective, the output deterministic.
+// Issue 17's maps (geodesic seed curves and intrinsic cotangent weights, the defaults), each turned
+// off alone and both (the old maps): exit 0, every leaf bijective, the output deterministic; the
+// options record which maps were used.
 TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
   const qs::TriMesh mesh = qs::shapes::bumpy_sphere(0.15, 4, 4);
   const std::string in = write("bumpy.obj", mesh);
@@ -71,7 +72,7 @@ TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
     std::ifstream f(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(f), {});
   };
-  for (const std::string opts : {"--geodesic-seed-curves", "--cotan", "--geodesic-seed-curves --cotan"}) {
+  for (const std::string opts : {"", "--edge-seed-paths", "--mean-value", "--edge-seed-paths --mean-value"}) {
     SCOPED_TRACE(opts);
     const fs::path out = dir_ / "o1", out2 = dir_ / "o2";
     fs::remove_all(out);
@@ -83,6 +84,10 @@ TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
     EXPECT_EQ(bytes(out / "bumpy.chart.ply"), bytes(out2 / "bumpy.chart.ply"));
     std::ifstream js(out / "dissection.json");
     const auto j = nlohmann::json::parse(js);
+    EXPECT_EQ(j["options"]["geodesic_seed_curves"], opts.find("--edge-seed-paths") == std::string::npos);
+    EXPECT_EQ(j["options"]["intrinsic_cotan"], opts.find("--mean-value") == std::string::npos);
+    EXPECT_EQ(j["maps"], std::string(opts.find("--edge-seed-paths") == std::string::npos ? "geodesic" : "edge") + "+" +
+                             (opts.find("--mean-value") == std::string::npos ? "cotan" : "mean-value"));
     for (const auto& p : j["meshes"][0]["patches"]) {
       EXPECT_EQ(p["flipped_faces"], 0);
       EXPECT_EQ(p["zero_area_faces"], 0);

@@ -44,7 +44,7 @@ TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
   EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));
   EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
   EXPECT_THAT(r.out, HasSubstr(", refine maps "));
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --no-refine-maps --quiet -o " + d() + "/plain").exit, 0);
   // The reference's chart is the plain one; the other mesh's differs (same size: same format).
   EXPECT_EQ(bytes(dir_ / "ref/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
   EXPECT_NE(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "plain/shape01.chart.ply"));
@@ -53,6 +53,10 @@ TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
   ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-maps --quiet -o " + d() + "/ref2").exit, 0);
   EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "ref2/shape01.chart.ply"));
   EXPECT_EQ(bytes(dir_ / "ref/dissection.json"), bytes(dir_ / "ref2/dissection.json"));
+  // The refinement is the default for a set (issue 13/17): no flag, the same bytes.
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/default").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "default/shape01.chart.ply"));
+  EXPECT_EQ(bytes(dir_ / "ref/dissection.json"), bytes(dir_ / "default/dissection.json"));
   // The later stages consume it unchanged.
   r = run_tool("qs-remesh", d() + "/ref --level 3 -q -o " + d() + "/remesh");
   EXPECT_EQ(r.exit, 0) << r.out;
@@ -66,6 +70,9 @@ TEST_F(RefineMapsTool, OneMeshIsLeftAsDissectedAndBadOptionsAreUsageErrors) {
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("refine maps: one mesh, no map between meshes to refine"));
   r = run_tool("qs-dissect", pair() + " --refine-maps --refine-iterations -1 -o " + d() + "/bad");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  r = run_tool("qs-dissect", pair() + " --refine-maps --no-refine-maps -o " + d() + "/bad");
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }

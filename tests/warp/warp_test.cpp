@@ -226,6 +226,20 @@ TEST(WarpSquare, SingleFeatureWithoutEventsIsAffinePerTriangle) {
   const WarpResult r = warp_square({f}, {g}, pts);
   EXPECT_EQ(r.events, 0);
   EXPECT_EQ(r.warp_triangles, 4);
+  // The warp mesh comes back: the fan of the feature (vertex 4) over the 4 sides, CCW at the start
+  // and at the end.
+  ASSERT_EQ(r.triangles.size(), 4u);
+  std::vector<std::array<int, 2>> sides;
+  for (const auto& t : r.triangles) {
+    const std::vector<Vec2> start = {c[0], c[1], c[2], c[3], f}, end = {c[0], c[1], c[2], c[3], g};
+    EXPECT_GT(orient(start[t[0]], start[t[1]], start[t[2]]), 0);
+    EXPECT_GT(orient(end[t[0]], end[t[1]], end[t[2]]), 0);
+    const int k = static_cast<int>(std::find(t.begin(), t.end(), 4) - t.begin());
+    ASSERT_LT(k, 3);
+    sides.push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
+  }
+  std::sort(sides.begin(), sides.end());
+  EXPECT_EQ(sides, (std::vector<std::array<int, 2>>{{0, 1}, {1, 2}, {2, 3}, {3, 0}}));
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const Vec2& p = pts[i];
     for (int s = 0; s < 4; ++s) {

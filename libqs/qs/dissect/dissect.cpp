@@ -64,8 +64,43 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   if (meshes.empty()) throw InvalidInput("no mesh to dissect");
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
-  detail::SetDissector d(meshes, options, context);
-  return d.run();
+  auto folded = [&meshes](const DissectionSet& s, std::string* where) {
+    long n = 0;
+    for (size_t i = 0; i < s.meshes.size(); ++i)
+      for (const auto& p : s.meshes[i].chart.patches) {
+        const int f = p.flipped_faces + p.zero_area_faces;
+        if (f > 0 && where && where->empty())
+          *where = "patch " + p.name + " of " + (meshes[i].name.empty() ? "mesh " + std::to_string(i) : meshes[i].name);
+        n += f;
+      }
+    return n;
+  };
+  DissectionSet out = detail::SetDissector(meshes, options, context).run();
+  out.geodesic_seed_curves = options.geodesic_seed_curves;
+  out.intrinsic_cotan = options.intrinsic_cotan;
+  std::string where;
+  const long bad = folded(out, &where);
+  if (bad > 0 && options.fallback_maps && (options.geodesic_seed_curves || options.intrinsic_cotan)) {
+    // The safety net of the new maps: the whole set again with the old ones.
+    DissectOptions old = options;
+    old.geodesic_seed_curves = false;
+    old.intrinsic_cotan = false;
+    context.info("dissection: " + std::to_string(bad) + " folded uv faces with " +
+                 maps_name(options.geodesic_seed_curves, options.intrinsic_cotan) + " (" + where +
+                 "); dissecting again with edge+mean-value");
+    DissectionSet alt = detail::SetDissector(meshes, old, context).run();
+    if (folded(alt, nullptr) < bad) {
+      alt.geodesic_seed_curves = alt.intrinsic_cotan = false;
+      alt.maps_fallback = std::to_string(bad) + " folded uv faces with " +
+                          maps_name(options.geodesic_seed_curves, options.intrinsic_cotan) + " (" + where + ")";
+      return alt;
+    }
+  }
+  return out;
+}
+
+std::string maps_name(bool geodesic_seed_curves, bool intrinsic_cotan) {
+  return std::string(geodesic_seed_curves ? "geodesic" : "edge") + "+" + (intrinsic_cotan ? "cotan" : "mean-value");
 }
 
 Dissection dissect(const TriMesh& mesh, const std::optional<std::array<int, 4>>& seeds,

@@ -121,6 +121,12 @@ class MeshDissector {
   /// is unchanged, only its sampling): every edge, or (with `p`) those of the faces that p's map
   /// folds and two rings around them. Neighbouring patches are untouched. Returns faces added.
   int refine(const Node& node, const Param* p = nullptr);
+  /// Cuts straight segments of p's parameter domain (between local vertices of p: features and
+  /// corners) into the node's patch, as the quinary split cuts its 8 segments but without snapping
+  /// to nearby vertices (new vertices lie exactly on the segments, on the surface; the map is
+  /// unchanged as a function on the surface), then re-extracts p (same map, new vertices).
+  /// Throws SplitFailure when a segment cannot be traced (p is re-extracted all the same).
+  void cut_segments(const Node& node, Param& p, const std::vector<std::array<int, 2>>& segments);
   size_t labels() const { return patch_faces_.size(); }
   size_t node_faces(const Node& node) const { return patch_faces_[node.label].size(); }
   /// Drops the parent's face list once every mesh of the set has split it.
@@ -184,6 +190,7 @@ class MeshDissector {
   }
   int insert_point(int label, const Vec2& q, bool snap);
   std::vector<int> trace(int label, int a, int b);
+  void project_onto_segment(int label, int v, const Vec2& q);
 
   const TriMesh& mesh_;  // the input, before any cut
   std::string name_;
@@ -198,6 +205,8 @@ class MeshDissector {
   std::vector<char> flag_;                     // scratch: Flag of the patch being split
   std::vector<std::array<Vec2, 3>> face_uv_;   // leaves' wedge uv, by global face
   std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
+  double snap_ = 0.05;  // trace: a crossing this near a free vertex (in edge parameter) passes through it
+  bool project_ = false;  // trace: ... and that vertex's uv moves onto the segment (cut_segments)
   std::vector<Node> leaves_;
   std::vector<PatchInfo> infos_;
   struct Repair {
@@ -243,7 +252,7 @@ class SetDissector {
   // Parameterizes a node in every mesh and aligns its features to their mean (u,v).
   // `nodes` holds the node of every mesh (same name and label, each mesh's own corner ids).
   std::vector<Param> evaluate(const std::vector<Node>& nodes, TreeNode& tn);
-  void align(std::vector<Param>& ps, TreeNode& tn);
+  void align(const std::vector<Node>& nodes, std::vector<Param>& ps, TreeNode& tn);
   std::pair<Vec2, double> choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
                                        const std::vector<bool>& over);
 

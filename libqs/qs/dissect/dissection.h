@@ -41,15 +41,20 @@ struct DissectOptions {
   int relax_rounds = 0;
   /// Straighten the four seed curves into geodesics cut into the mesh (straighten_seed_loop)
   /// before anything else, so that the seed loop is the same curve on the surface for any
-  /// tessellation (issue 17); false: the shortest edge paths as traced. Off by default: it lowers
-  /// the error of one surface tessellated twice (gen-v0: mean 0.94% -> 0.39%) but not on every
-  /// pair of the benchmark, and three dissect_set tests end with folded leaves (see the README).
-  bool geodesic_seed_curves = false;
+  /// tessellation (issue 17); false: the shortest edge paths as traced. On by default (issue 13/17):
+  /// with intrinsic_cotan it lowers the error of one surface tessellated twice (gen-v0: mean
+  /// 0.94% -> 0.19%) and of the re-tessellated human pair (see the README).
+  bool geodesic_seed_curves = true;
   /// Interior weights of every patch map: cotangent weights on the patch's intrinsic Delaunay
   /// triangulation (param::InteriorWeights::IntrinsicCotan, tessellation-independent in the
   /// limit) instead of Floater's mean-value weights; a patch whose own triangles fold under it
-  /// keeps mean-value weights. Experimental (see the README).
-  bool intrinsic_cotan = false;
+  /// keeps mean-value weights. On by default (issue 13/17); false: mean-value weights everywhere.
+  bool intrinsic_cotan = true;
+  /// Safety net of the new maps (issues 13/17): when a dissection with geodesic seed curves or
+  /// cotangent weights ends with folded leaves (flipped or zero-area uv faces), the whole set is
+  /// dissected again with edge paths and mean-value weights, and that result is kept if it folds
+  /// less (DissectionSet::maps_fallback says why). false: the result of the options as given.
+  bool fallback_maps = true;
   /// Choose the split among candidate centres and w by the children's stretch predicted from the
   /// parent's map (see the README); false: the peak and w rule alone.
   bool predict_split = false;
@@ -190,7 +195,16 @@ struct DissectionSet {
   std::vector<Dissection> meshes;
   double max_stretch = 0;
   int warp_events = 0;
+  /// The maps the result was made with (the options', or the old ones after a fallback).
+  bool geodesic_seed_curves = false;
+  bool intrinsic_cotan = false;
+  /// Empty, or why the old maps were used (DissectOptions::fallback_maps): e.g. "28 folded uv
+  /// faces with geodesic+cotan (patch 1.4.3.1.3.2.4 of lion.obj)".
+  std::string maps_fallback;
 };
+
+/// "geodesic+cotan", "edge+mean-value", ...: the seed curves and patch weights of a dissection.
+std::string maps_name(bool geodesic_seed_curves, bool intrinsic_cotan);
 
 /// Dissects a validated mesh. `seeds` are vertex ids of `mesh`; nullopt chooses them
 /// automatically (choose_seeds). \throws InvalidInput for unroutable seeds, SolverError when a
@@ -203,7 +217,8 @@ Dissection dissect(const TriMesh& mesh, const std::optional<std::array<int, 4>>&
 /// stretch), after the features inside it were moved to their mean (u,v) over the set by
 /// warp::warp_square. \throws InvalidInput for a feature missing from a mesh, features on
 /// different seed patches or on a cut line, features too close, tau below 1, min_split_area or
-/// force_split_area outside [0, 1]; SolverError as dissect().
+/// force_split_area outside [0, 1]; SolverError as dissect(). With options.fallback_maps, a result
+/// with folded leaves under the new maps is replaced by the old maps' when that folds less.
 DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options = {},
                           const Context& context = {});
 

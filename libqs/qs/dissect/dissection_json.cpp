@@ -13,10 +13,11 @@ namespace qs::dissect {
 using nlohmann::ordered_json;
 
 std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const DissectOptions& options,
-                               bool include_times) {
+                               bool include_times, const std::string& maps) {
   ordered_json doc;
   doc["format"] = "qs-dissection";
   doc["version"] = kDissectionFormatVersion;
+  if (!maps.empty()) doc["maps"] = maps;
   doc["options"] = {{"tau", options.tau},
                     {"max_depth", options.max_depth},
                     {"min_faces_to_split", options.min_faces_to_split},
@@ -27,6 +28,9 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"feature_cut_margin", options.feature_cut_margin},
                     {"feature_group_distance", options.feature_group_distance},
                     {"relax_rounds", options.relax_rounds},
+                    {"geodesic_seed_curves", options.geodesic_seed_curves},
+                    {"intrinsic_cotan", options.intrinsic_cotan},
+                    {"fallback_maps", options.fallback_maps},
                     {"predict_split", options.predict_split},
                     {"stretch_iterations", options.stretch_iterations},
                     {"max_patch_area", options.max_patch_area},

@@ -26,8 +26,10 @@ struct DissectedMesh {
 
 /// The whole document, pretty-printed, deterministic (no times unless include_times). The tree
 /// and base domain are taken from the first mesh (they are common to the set).
+/// `maps`, when not empty, is written as the top-level "maps" field (which seed curves and patch
+/// weights were used, and why, e.g. after the fallback of DissectOptions::fallback_maps).
 std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const DissectOptions& options,
-                               bool include_times);
+                               bool include_times, const std::string& maps = {});
 
 }  // namespace qs::dissect
 

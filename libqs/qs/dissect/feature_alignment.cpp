@@ -18,7 +18,7 @@ namespace qs::dissect::detail {
 // feature_group_distance to each other (in any mesh, or as targets) move as one group, by their
 // centroid, and so do features that near to the border: a warp cannot separate them at this
 // level, and the next split's fresh maps will spread them apart.
-void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
+void SetDissector::align(const std::vector<Node>& nodes, std::vector<Param>& ps, TreeNode& tn) {
   const size_t nf = ps[0].features.size(), nm = ps.size();
   auto uv = [&](size_t i, size_t k) -> const Vec2& { return ps[i].sp.uv[ps[i].features[k].second]; };
   std::vector<Vec2> target(nf, Vec2::Zero());
@@ -80,24 +80,62 @@ void SetDissector::align(std::vector<Param>& ps, TreeNode& tn) {
   std::vector<int> events(nm, 0), pinned_solves(nm, 0);
   size_t faces = 0;
   for (const auto& p : ps) faces += p.ex.faces.size();
+  // Warp vertex 4 + m is group moving[m]; when every moving group is one feature, it is that
+  // feature's vertex, and the warp's edges can be cut into the mesh (below).
+  bool singletons = true;
+  for (size_t g : moving)
+    for (size_t k = 0; k < nf && singletons; ++k)
+      singletons = k == static_cast<size_t>(roots[g]) || find(static_cast<int>(k)) != roots[g];
   parallel_for(nm, [&](size_t i) {
     Param& p = ps[i];
     std::vector<Vec2> from;
     for (size_t g : moving) from.push_back(rep[i][g]);
-    warp::WarpResult wr;
-    try {
-      warp::WarpOptions wo;
-      wo.min_feature_distance = 0.5 * hold;
-      wr = warp::warp_square(from, to, p.sp.uv, wo, ctx_.without_progress());
-    } catch (const Error& e) {
-      const std::string m = "aligning the features of patch " + tn.name + " on " + meshes_[i].name() + ": " + e.what();
-      if (e.code() == ErrorCode::InvalidInput) throw InvalidInput(m);
-      throw SolverError(m);
-    }
+    auto run_warp = [&] {
+      try {
+        warp::WarpOptions wo;
+        wo.min_feature_distance = 0.5 * hold;
+        return warp::warp_square(from, to, p.sp.uv, wo, ctx_.without_progress());
+      } catch (const Error& e) {
+        const std::string m = "aligning the features of patch " + tn.name + " on " + meshes_[i].name() + ": " + e.what();
+        if (e.code() == ErrorCode::InvalidInput) throw InvalidInput(m);
+        throw SolverError(m);
+      }
+    };
+    warp::WarpResult wr = run_warp();
     param::SquareParam warped = p.sp;
     warped.uv = std::move(wr.points);
     events[i] = wr.events;
     param::count_uv_faces(p.ex.pm.faces, warped);
+    if (!warped.bijective() && wr.events == 0 && singletons) {
+      // The warp maps points bijectively, but it is only piecewise linear: a mesh face whose
+      // corners lie in different warp triangles is mapped by its corners alone and folds where the
+      // affine maps of the triangles differ much (a feature moved far). Whether it folds depends on
+      // the face's shape, not its size, so refining the mesh does not help. Without flip events the
+      // warp is one affine map per triangle of its mesh (at the input positions): cut those edges
+      // into the patch (new vertices on the segments, the map unchanged) and every face lies in one
+      // warp triangle, warped by one affine map of positive determinant, so none folds.
+      std::vector<std::array<int, 2>> segments;
+      auto local = [&](int w) {
+        return w < 4 ? p.ex.pm.boundary[p.ex.pm.corner_index[w]] : p.features[roots[moving[w - 4]]].second;
+      };
+      for (const auto& t : wr.triangles)
+        for (int j = 0; j < 3; ++j) {
+          const int a = std::min(t[j], t[(j + 1) % 3]), b = std::max(t[j], t[(j + 1) % 3]);
+          if (b >= 4) segments.push_back({b, a});  // from the feature (inside) to its neighbour
+        }
+      std::sort(segments.begin(), segments.end());
+      segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
+      for (auto& s : segments) s = {local(s[0]), local(s[1])};
+      try {
+        meshes_[i].cut_segments(nodes[i], p, segments);
+      } catch (const SplitFailure&) {
+        // p is the same map on the partly cut patch; the fallbacks below take it
+      }
+      wr = run_warp();
+      warped = p.sp;
+      warped.uv = std::move(wr.points);
+      param::count_uv_faces(p.ex.pm.faces, warped);
+    }
     if (!warped.bijective()) {
       // The warp is a bijection of the square, but a mesh face whose corners lie in different
       // warp triangles is mapped by its corners only and can fold where a feature moved far.

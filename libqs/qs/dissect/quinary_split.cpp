@@ -53,6 +53,24 @@ int MeshDissector::insert_point(int label, const Vec2& q, bool snap) {
   return m;
 }
 
+// Moves vertex v's uv to q (onto a segment being cut) unless that folds a face around it.
+void MeshDissector::project_onto_segment(int label, int v, const Vec2& q) {
+  const Vec2 old = uv_of_[v];
+  uv_of_[v] = q;
+  const int h0 = cm_.out_halfedge(v);
+  int h = h0;
+  do {
+    if (cm_.patch(CutMesh::face_of(h)) == label) {
+      const Vec2 &a = uv_of_[v], &b = uv_of_[cm_.head(h)], &c = uv_of_[cm_.head(CutMesh::next(h))];
+      if (!(signed_area(a, b, c) > param::kZeroUvArea)) {
+        uv_of_[v] = old;
+        return;
+      }
+    }
+    h = cm_.rotate_ccw(h);
+  } while (h != h0);
+}
+
 // Cuts the straight parameter-domain segment from vertex a to vertex b into the mesh: walks from
 // vertex to vertex, splitting each crossed edge (or passing through a free vertex when the
 // crossing is within 5% of it). Returns the path's vertices, a and b included.
@@ -95,10 +113,12 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
       if (!std::isfinite(t)) throw SplitFailure("a cut met a degenerate parameter triangle");
       const double s = cross2(ux - p, e) / cross2(d, e);
       if (s >= 1.0) throw SplitFailure("a cut missed its end vertex");
-      if (t < 0.05 && flag_[x] == kFree) {
+      if (t < snap_ && flag_[x] == kFree) {
         next = x;
-      } else if (t > 0.95 && flag_[y] == kFree) {
+        if (project_) project_onto_segment(label, x, ux + t * e);
+      } else if (t > 1 - snap_ && flag_[y] == kFree) {
         next = y;
+        if (project_) project_onto_segment(label, y, ux + t * e);
       } else {
         const int hxy = CutMesh::next(best_h);
         if (!interior_edge(hxy, label)) throw SplitFailure("a cut crossed its patch's boundary");
@@ -188,5 +208,45 @@ std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const
   return kids;  // the parent's face list stays until the whole set has split (restore needs it)
 }
 
+// cut_segments: crossings this near a free vertex (in edge parameter) pass through it.
+constexpr double kSegmentSnap = 0.02;
+
+void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<std::array<int, 2>>& segments) {
+  const Extracted& ex = p.ex;
+  for (size_t i = 0; i < ex.verts.size(); ++i) {
+    uv_of_[ex.verts[i]] = p.sp.uv[i];
+    flag_[ex.verts[i]] = kFree;
+  }
+  for (int v : ex.pm.boundary) flag_[ex.verts[v]] = kBoundary;
+  for (const auto& f : p.features) flag_[ex.verts[f.second]] = kFeature;
+  std::vector<std::array<int, 2>> global;
+  for (const auto& s : segments) global.push_back({ex.verts[s[0]], ex.verts[s[1]]});
+  cut_edges_.clear();
+  // A crossing within 2% of an edge's length of a free vertex passes through it: the segment moves
+  // by that little, and no sliver is cut into the surface (a split 1e-6 from a vertex makes 3D
+  // slivers that fold later mean-value maps, and midpoint refinement keeps their shape).
+  snap_ = kSegmentSnap;
+  project_ = true;
+  std::string failure;
+  try {
+    for (const auto& s : global) trace(node.label, s[0], s[1]);
+  } catch (const SplitFailure& e) {
+    failure = e.what();
+  }
+  snap_ = 0.05;
+  project_ = false;
+  cut_edges_.clear();
+  // The same map on the refined patch: new vertices got their uv on the split edges.
+  Param q;
+  q.weights = p.weights;
+  q.ex = extract(node);
+  q.sp.uv.resize(q.ex.verts.size());
+  for (size_t i = 0; i < q.ex.verts.size(); ++i) q.sp.uv[i] = uv_of_[q.ex.verts[i]];
+  param::count_uv_faces(q.ex.pm.faces, q.sp);
+  q.st = param::l2_stretch(q.ex.pm.positions, q.ex.pm.faces, q.sp.uv);
+  collect_features(q);
+  p = std::move(q);
+  if (!failure.empty()) throw SplitFailure(failure);
+}
 
 }  // namespace qs::dissect::detail

@@ -115,7 +115,7 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
                        "place the seeds so that each feature is on the same side of the loop in every mesh");
   }
   tn.features = static_cast<int>(ps[0].features.size());
-  if (meshes_.size() > 1 && !ps[0].features.empty()) align(ps, tn);
+  if (meshes_.size() > 1 && !ps[0].features.empty()) align(nodes, ps, tn);
   tn.stretch = 0;
   tn.mesh_stretch.clear();
   for (const auto& p : ps) {

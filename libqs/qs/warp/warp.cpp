@@ -835,6 +835,7 @@ WarpResult Warper::finish() {
   r.events = events_;
   r.detours = detours_;
   r.warp_triangles = static_cast<int>(tri_.size());
+  r.triangles = tri_;
   r.min_warp_area = std::numeric_limits<double>::infinity();
   for (const Triple& t : tri_)
     r.min_warp_area = std::min(r.min_warp_area, 0.5 * orient(pos_[t[0]], pos_[t[1]], pos_[t[2]]));

@@ -2,6 +2,7 @@
 // Foldover-free warp of the unit square by "triangulation over time" (Fujimura & Makarov 1998),
 // used to move feature points to common positions across meshes before dissection (paper 3.4.1).
 
+#include <array>
 #include <vector>
 
 #include "qs/core/context.h"
@@ -29,6 +30,10 @@ struct WarpResult {
   int detours = 0;           ///< intermediate stops made to keep a moving feature clear of others
   int warp_triangles = 0;    ///< triangles of the warp mesh: 2 * (4 + #features) - 6
   double min_warp_area = 0;  ///< smallest signed area of a warp triangle at the end (> 0: bijective)
+  /// The warp mesh at the end, CCW: vertex ids 0..3 the corners (0,0) (1,0) (1,1) (0,1), 4 + k
+  /// feature k. With events == 0 it is also the mesh at the start, and the warp is one affine map
+  /// per triangle: a mesh cut along these edges (at the input positions) is warped without folds.
+  std::vector<std::array<int, 3>> triangles;
 };
 
 /// Moves each feature features[k] to targets[k] inside the unit square and carries `points` along
