@@ -161,7 +161,7 @@ int main(int argc, char** argv) {
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");
-    const bool refine_maps = !no_refine;
+    const bool refine_maps = !no_refine || refine_opt.across_borders;  // --refine-across-borders implies it
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;
@@ -237,33 +237,8 @@ int main(int argc, char** argv) {
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
-    if (refine_opt.across_borders) refine_maps = true;
-    std::vector<char> same_chart(result.meshes.size(), 0);  // as the reference's: left as dissected
     if (refine_maps && result.meshes.size() > 1) {
-      // A mesh whose chart is the reference's (the same mesh, seeds and features given twice) maps
-      // to it by the identity, which the refinement could only disturb: it is left as dissected.
-      const auto& ref = result.meshes[static_cast<size_t>(refine_opt.reference)].chart;
-      std::vector<size_t> moved;
-      for (size_t i = 0; i < result.meshes.size(); ++i) {
-        const auto& c = result.meshes[i].chart;
-        same_chart[i] = static_cast<int>(i) != refine_opt.reference && c.mesh.positions == ref.mesh.positions &&
-                        c.mesh.faces == ref.mesh.faces && c.face_patch == ref.face_patch && c.face_uv == ref.face_uv;
-        if (!same_chart[i]) moved.push_back(i);
-      }
-      if (moved.size() > 1) {
-        std::vector<qs::dissect::Dissection> sub;
-        qs::maprefine::RefineOptions ro = refine_opt;
-        for (size_t k = 0; k < moved.size(); ++k) {
-          if (static_cast<int>(moved[k]) == refine_opt.reference) ro.reference = static_cast<int>(k);
-          sub.push_back(std::move(result.meshes[moved[k]]));
-        }
-        const qs::maprefine::RefineReport r = qs::maprefine::refine_maps(sub, ro, ctx);
-        refine_report.meshes.resize(result.meshes.size());
-        for (size_t k = 0; k < moved.size(); ++k) {
-          result.meshes[moved[k]] = std::move(sub[k]);
-          refine_report.meshes[moved[k]] = r.meshes[k];
-        }
-      }
+      refine_report = qs::maprefine::refine_maps(result.meshes, refine_opt, ctx);
       refine_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
       result.max_stretch = 0;
       for (const auto& m : result.meshes) result.max_stretch = std::max(result.max_stretch, m.max_stretch);
@@ -300,12 +275,12 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
-      if (same_chart[i]) {
-        text << "  refine maps: the same chart as mesh " << refine_opt.reference
-             << " (the identity map), left as dissected\n";
-      } else if (i < refine_report.meshes.size()) {
+      if (i < refine_report.meshes.size()) {
         const auto& r = refine_report.meshes[i];
-        if (r.reference)
+        if (r.identity)
+          text << "  refine maps: the same chart as mesh " << refine_opt.reference
+               << " (the identity map), left as dissected\n";
+        else if (r.reference)
           text << "  refine maps: reference (not moved)\n";
         else
           text << "  refine maps: distortion to mesh " << refine_opt.reference << " " << std::setprecision(4)

@@ -1272,6 +1272,14 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       count_faces(meshes[i].chart, r);
       continue;
     }
+    const dissect::Chart& ref = meshes[static_cast<size_t>(options.reference)].chart;
+    const dissect::Chart& c = meshes[i].chart;
+    if (c.mesh.positions == ref.mesh.positions && c.mesh.faces == ref.mesh.faces && c.face_patch == ref.face_patch &&
+        c.face_uv == ref.face_uv) {
+      r.identity = true;
+      count_faces(meshes[i].chart, r);
+      continue;
+    }
     double before = -1;
     if (options.across_borders && options.iterations > 0 && options.border_sweeps > 0) {
       const MeshResult b = run_mesh(meshes[i], refs, options, false, context);
