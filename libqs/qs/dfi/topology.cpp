@@ -82,7 +82,9 @@ BallReport make_ball(Grid& g, const BallOptions& options, const PolygonizeOption
   // What polygonize counts as inside: below zero after its snap of |v| < tol to +tol.
   const double tol = polygonize.snap_tolerance * g.spacing;
   const auto inside = [&](float v) { return !(std::abs(v) < tol) && v < 0; };
-  enum : char { kOut = 0, kIn = 1, kBall = 2 };
+  // kQueued: inside, not in the ball, waiting in the queue (each sample is queued at most once at
+  // a time: its key, the value, never changes).
+  enum : char { kOut = 0, kIn = 1, kBall = 2, kQueued = 3 };
   std::vector<char> state(g.size(), kOut);
   std::ptrdiff_t step[14];
   for (int n = 0; n < 14; ++n)
@@ -113,19 +115,19 @@ BallReport make_ball(Grid& g, const BallOptions& options, const PolygonizeOption
     state[s] = kBall;
     for (int n = 0; n < 14; ++n) {
       const size_t t = static_cast<size_t>(static_cast<std::ptrdiff_t>(s) + step[n]);
-      if (state[t] == kIn) queue.push({g.values[t], t});
+      if (state[t] == kIn) state[t] = kQueued, queue.push({g.values[t], t});
     }
   };
   add(seed);
   while (!queue.empty()) {
     const size_t s = queue.top().second;
     queue.pop();
-    if (state[s] != kIn) continue;
     unsigned mask = 0;
     for (int n = 0; n < 14; ++n)
       if (state[static_cast<size_t>(static_cast<std::ptrdiff_t>(s) + step[n])] == kBall) mask |= 1u << n;
     // Not simple now: it is queued again when one of its neighbours joins the ball.
     if (simple[mask]) add(s);
+    else state[s] = kIn;
   }
   // Inside components the growth did not reach (14-connected among the inside samples left out).
   std::vector<size_t> stack;
