@@ -255,7 +255,11 @@ int main(int argc, char** argv) {
       std::ostringstream m;
       m << "frame " << f + 1 << "/" << frames << " t=" << std::setprecision(3) << t << ": " << st.vertices
         << " vertices, " << st.components << " component(s), genus " << st.genus << ", ";
-      if (controlled) m << ball.removed << " inside sample(s) left out, ";
+      if (controlled) {
+        m << ball.removed << " inside sample(s) left out";
+        if (ball.components_removed) m << " (" << ball.components_removed << " whole piece(s))";
+        m << ", ";
+      }
       m
         << std::fixed << std::setprecision(2) << std::chrono::duration<double>(Clock::now() - t0).count() << " s";
       say(m.str());

@@ -10,6 +10,7 @@
 #include "qs/dfi/pipeline.h"
 #include "qs/dfi/topology.h"
 #include "qs/mesh/validate.h"
+#include "qs/metro/metro.h"
 #include "qs/shapes/shapes.h"
 #include "test_meshes.h"
 
@@ -154,4 +155,27 @@ TEST(MakeBall, MorphFramesAreControlledOnlyWhereTheInputsAreGenusZero) {
   opt.topology_control = false;
   const PreparedMorph off = prepare_morph(sphere, other, opt);
   EXPECT_FALSE(controls_topology(off, 0.5));
+}
+
+// An end frame from the input's own field on a finer grid: a plate thinner than a voxel touches
+// itself across samples and shows handles the input does not have; with the control (the input is
+// genus 0) the frame is one genus-0 piece again, and still within a voxel of the input.
+TEST(MakeBall, AnEndFrameCarriesItsGenusZeroInputsGenus) {
+  TriMesh plate = shapes::ellipsoid(1.0, 0.8, 0.05, 4);
+  for (Vec3& p : plate.positions) p = Eigen::AngleAxisd(0.5, Vec3(1, 1, 0).normalized()) * p;  // off the grid's planes
+  const TriMesh ball = shapes::icosphere(3);
+  MorphOptions opt;
+  opt.grid = 20;
+  opt.warp = false;
+  opt.topology_control = false;
+  const PreparedMorph off = prepare_morph(plate, ball, opt);
+  const MeshStats raw = mesh_stats(endpoint_frame(off, plate, false, 2));
+  EXPECT_TRUE(raw.genus > 0 || raw.components > 1) << "the test needs a plate the sampling breaks";
+  opt.topology_control = true;
+  const PreparedMorph on = prepare_morph(plate, ball, opt);
+  BallReport report;
+  const TriMesh end = endpoint_frame(on, plate, false, 2, {}, {}, &report);
+  EXPECT_GT(report.removed, 0u);
+  expect_sphere(end, "plate end frame");
+  EXPECT_LT(metro::metro(end, plate).max, on.source_sdf.spacing);
 }
