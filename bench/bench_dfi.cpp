@@ -7,7 +7,7 @@
 // the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
 // and whether 1 and 2 threads give the same bytes.
 //
-// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--retime] [--refine-ends R] [--free-volume] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
+// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--retime] [--refine-ends R] [--free-volume] [--no-topology] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
 // horse-knot, spot-eight, femur-elephant, horse-camel, cat-koala; default all)
 #include <algorithm>
 #include <chrono>
@@ -53,7 +53,7 @@ TriMesh load(const std::string& name) {
 
 int main(int argc, char** argv) {
   int grid = 150, frames = 11, refine_ends = 1;
-  bool smoothness = false, retime = false, free_volume = false;
+  bool smoothness = false, retime = false, free_volume = false, no_topology = false;
   std::string methods = "warp,global,blend";
   std::vector<std::string> wanted;
   for (int i = 1; i < argc; ++i) {
@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--smoothness")) smoothness = true;
     else if (!std::strcmp(argv[i], "--retime")) retime = true;
     else if (!std::strcmp(argv[i], "--free-volume")) free_volume = true;
+    else if (!std::strcmp(argv[i], "--no-topology")) no_topology = true;
     else if (!std::strcmp(argv[i], "--refine-ends") && i + 1 < argc) refine_ends = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
     else wanted.push_back(argv[i]);
@@ -95,6 +96,9 @@ int main(int argc, char** argv) {
     opt.part_transport = method == "warp";
     // The plain blend is the paper's baseline: its zero level, whatever volume it encloses.
     opt.volume = method == "blend" || free_volume ? dfi::FrameVolume::Free : dfi::FrameVolume::Linear;
+    // Topology control (topology.h) for the warps unless --no-topology (it acts only where both
+    // inputs are genus 0, and on an end whose input is); the plain blend stays the paper's baseline.
+    opt.topology_control = !no_topology && method != "blend";
     auto t0 = Clock::now();
     const dfi::PreparedMorph m = dfi::prepare_morph(a, b, opt);
     const double fields_s = since(t0);
@@ -109,19 +113,22 @@ int main(int argc, char** argv) {
     }
     double total = 0, worst = 0, end_vox = 0, mid_volume = 0;
     int one_component = 0;
-    std::string genera;
+    std::string genera, removed;
     std::vector<TriMesh> seq;
     for (int f = 0; f < frames; ++f) {
       const double t = times[f];
       t0 = Clock::now();
       const bool end = f == 0 || f == frames - 1;
       TriMesh morph_space, mesh;  // mesh: what qs-dfi writes, the frame at its placement
+      dfi::BallReport ball;
       if (end && refine_ends > 1) {
-        mesh = dfi::endpoint_frame(m, f == 0 ? a : b, f != 0, refine_ends);
+        mesh = dfi::endpoint_frame(m, f == 0 ? a : b, f != 0, refine_ends, {}, {}, &ball);
         morph_space = mesh;
         if (f != 0) for (Vec3& q : morph_space.positions) q = m.target_to_source.apply(q);
       } else {
-        morph_space = dfi::polygonize(dfi::blend_field(m, t));
+        dfi::BlendInfo info;
+        morph_space = dfi::polygonize(dfi::blend_field(m, t, 0, &info));
+        ball = info.ball;
         mesh = morph_space;
         for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, q);
       }
@@ -132,6 +139,8 @@ int main(int argc, char** argv) {
       one_component += st.components == 1;
       if (f) genera += ',';
       genera += std::to_string(st.genus);
+      if (f) removed += ',';
+      removed += dfi::controls_topology(m, t) ? std::to_string(ball.removed) : "-";
       if (2 * f == frames - 1) mid_volume = dfi::mesh_stats(morph_space).volume;
       if (f == 0 || f == frames - 1) {
         const double d = metro::metro(mesh, f == 0 ? a : b).max;
@@ -170,6 +179,8 @@ int main(int argc, char** argv) {
       for (double t : times) std::printf(" %.3f", t);
       std::printf("\n");
     }
+    std::printf("%-15s %-14s topology control: inside samples left out per frame %s\n", p.name.c_str(), method.c_str(),
+                removed.c_str());
     std::printf("%-15s %-14s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), label.c_str(), fields_s,
                 total / frames, worst, end_vox, one_component, frames, mid, smooth.c_str(), same ? "same" : "DIFFER",
                 genera.c_str());

@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
   std::optional<std::string> glb;
   int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 3;
   double fps = 12;
-  bool no_warp = false, no_centring = false, exact_endpoints = false, quiet = false, global_transport = false;
+  bool no_warp = false, no_centring = false, no_topology = false, exact_endpoints = false, quiet = false, global_transport = false;
   int anchors_per_branch = 3, emd_voxels = 1500, bone_segments = 8;
   app.add_option("SOURCE", source_file, "Source mesh (.obj .off .ply .stl), closed, any genus")->required();
   app.add_option("TARGET", target_file, "Target mesh, closed, any genus")->required();
@@ -113,6 +113,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"linear", "free"}));
   app.add_flag("--no-centring", no_centring, "Skeleton nodes where mean curvature flow left them (default: moved to "
                                              "the centre of their cross-section before the matching)");
+  app.add_flag("--no-topology-control", no_topology, "Frames as blended; default: when both inputs are genus 0, "
+                                                    "every frame's inside grown by simple points only (one genus-0 piece; "
+                                                    "an end frame whose input is genus 0 too)");
   app.add_flag("--global-transport", global_transport, "One transport over all interior voxels instead of one "
                                                        "per matched part (the ablation)");
   std::vector<std::string> landmark_files;
@@ -157,6 +160,7 @@ int main(int argc, char** argv) {
     opt.centre_skeletons = !no_centring;
     opt.volume = volume == "free" ? qs::dfi::FrameVolume::Free : qs::dfi::FrameVolume::Linear;
     opt.bone_segments = bone_segments;
+    opt.topology_control = !no_topology;
     opt.part_transport = !global_transport;
     opt.anchors_per_branch = anchors_per_branch;
     opt.emd_voxels = emd_voxels;
@@ -216,15 +220,18 @@ int main(int argc, char** argv) {
       qs::TriMesh mesh;
       qs::dfi::BlendInfo blend;
       bool exact = false;
+      qs::dfi::BallReport ball;
       if (exact_endpoints && (f == 0 || f == frames - 1)) {
         mesh = f == 0 ? source.mesh : target.mesh;
         exact = true;
       } else if (endpoint_refine > 1 && (f == 0 || f == frames - 1)) {
         mesh = qs::dfi::endpoint_frame(morph, f == 0 ? source.mesh : target.mesh, f != 0, endpoint_refine, opt.sdf,
-                                       opt.polygonize);
+                                       opt.polygonize, &ball);
       } else {
         mesh = qs::dfi::frame_mesh(morph, qs::dfi::blend_field(morph, t, threads, &blend), t, opt.polygonize);
+        ball = blend.ball;
       }
+      const bool controlled = !exact && qs::dfi::controls_topology(morph, t);
       const qs::dfi::MeshStats st = qs::dfi::mesh_stats(mesh);
       if (!exact && !st.closed_manifold)
         throw qs::InternalError("frame " + std::to_string(f) + " is not a closed oriented surface");
@@ -240,11 +247,20 @@ int main(int argc, char** argv) {
                              {"genus", st.genus},
                              {"volume", st.volume},
                              {"iso_shift", blend.iso_shift / morph.source_sdf.spacing},
-                             {"iso_shift_clamped", blend.clamped}});
+                             {"iso_shift_clamped", blend.clamped},
+                             {"topology_control", controlled},
+                             {"topology_removed", ball.removed},
+                             {"topology_pieces_removed", ball.components_removed}});
       if (glb) seq.push_back({frame_stem(f, frames), mesh.positions, mesh.faces});
       std::ostringstream m;
       m << "frame " << f + 1 << "/" << frames << " t=" << std::setprecision(3) << t << ": " << st.vertices
-        << " vertices, " << st.components << " component(s), genus " << st.genus << ", "
+        << " vertices, " << st.components << " component(s), genus " << st.genus << ", ";
+      if (controlled) {
+        m << ball.removed << " inside sample(s) left out";
+        if (ball.components_removed) m << " (" << ball.components_removed << " whole piece(s))";
+        m << ", ";
+      }
+      m
         << std::fixed << std::setprecision(2) << std::chrono::duration<double>(Clock::now() - t0).count() << " s";
       say(m.str());
     }
@@ -264,7 +280,7 @@ int main(int argc, char** argv) {
         {"target", shape_json(target, morph.target_volume)},
         {"options", {{"frames", frames}, {"grid", grid}, {"align", align}, {"band", band},
                      {"exact_endpoints", exact_endpoints}, {"frame_format", format}, {"timing", timing},
-                     {"endpoint_refine", endpoint_refine}, {"volume", volume}}},
+                     {"endpoint_refine", endpoint_refine}, {"volume", volume}, {"topology_control", !no_topology}}},
         {"timing", timing_json},
         {"grid", {{"dims", {g.dims[0], g.dims[1], g.dims[2]}}, {"spacing", g.spacing}, {"origin", vec_json(g.origin)}}},
         {"alignment", {{"scale", morph.target_to_source.scale},

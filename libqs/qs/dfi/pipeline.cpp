@@ -403,6 +403,9 @@ PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const 
   PreparedMorph m;
   m.volume = options.volume;
   m.max_iso_shift = options.max_iso_shift;
+  m.topology_control = options.topology_control;
+  m.source_genus = mesh_stats(source).genus;
+  m.target_genus = mesh_stats(target).genus;
   const Vec3 c0 = volume_centroid(source, m.source_volume);
   const Vec3 c1 = volume_centroid(target, m.target_volume);
   if (!(m.source_volume > 0) || !(m.target_volume > 0))
@@ -511,7 +514,18 @@ Grid blend_field(const PreparedMorph& m, double t, int threads, BlendInfo* info)
         if (i == 0 || j == 0 || k == 0 || i == g.dims[0] - 1 || j == g.dims[1] - 1 || k == g.dims[2] - 1)
           g.values[g.index(i, j, k)] = std::max(g.values[g.index(i, j, k)], floor);
   if (t > 0 && t < 1) fill_cavities(g);  // the ends stay the inputs' fields as sampled
+  if (controls_topology(m, t)) {
+    const BallReport ball = make_ball(g);
+    if (info) info->topology_controlled = true, info->ball = ball;
+  }
   return g;
+}
+
+bool controls_topology(const PreparedMorph& m, double t) {
+  if (!m.topology_control) return false;
+  if (t <= 0) return m.source_genus == 0;
+  if (t >= 1) return m.target_genus == 0;
+  return m.source_genus == 0 && m.target_genus == 0;
 }
 
 TriMesh frame_mesh(const PreparedMorph& m, const Grid& field, double t, const PolygonizeOptions& options) {
@@ -521,7 +535,7 @@ TriMesh frame_mesh(const PreparedMorph& m, const Grid& field, double t, const Po
 }
 
 TriMesh endpoint_frame(const PreparedMorph& m, const TriMesh& input, bool is_target, int refine, const SdfOptions& sdf,
-                       const PolygonizeOptions& options) {
+                       const PolygonizeOptions& options, BallReport* ball) {
   if (refine < 1 || refine > 8) throw InvalidInput("endpoint refinement is " + std::to_string(refine) + "; expected 1 to 8");
   const double voxel = (is_target ? m.source_sdf.spacing / m.target_to_source.scale : m.source_sdf.spacing) / refine;
   const Box3 box = bounding_box(input.positions);
@@ -530,7 +544,13 @@ TriMesh endpoint_frame(const PreparedMorph& m, const TriMesh& input, bool is_tar
   if (!(cells <= 2048))
     throw InvalidInput("endpoint grid of " + std::to_string(cells) + " cells; expected at most 2048 (lower the refinement)");
   const Grid domain = grid_over(box, std::max(8, static_cast<int>(cells)), 3);
-  return polygonize(signed_distance(input, domain, sdf), options);
+  Grid field = signed_distance(input, domain, sdf);
+  if (ball) *ball = BallReport{};
+  if (controls_topology(m, is_target ? 1.0 : 0.0)) {
+    const BallReport r = make_ball(field, {}, options);
+    if (ball) *ball = r;
+  }
+  return polygonize(field, options);
 }
 
 }  // namespace qs::dfi

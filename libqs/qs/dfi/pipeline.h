@@ -26,6 +26,7 @@
 #include "qs/dfi/polygonize.h"
 #include "qs/dfi/sdf.h"
 #include "qs/dfi/skeleton.h"
+#include "qs/dfi/topology.h"
 #include "qs/dfi/warp.h"
 
 namespace qs::dfi {
@@ -68,6 +69,12 @@ struct MorphOptions {
                                  ///< diagonal are pruned (prune_skeleton)
   FrameVolume volume = FrameVolume::Linear;
   double max_iso_shift = 4;      ///< cells: the largest iso-level shift of FrameVolume::Linear (0 to 64)
+  /// Topology control (topology.h, make_ball): when both inputs are genus 0, every frame's inside
+  /// set is grown from its deepest sample by simple points only, so that each frame is one closed
+  /// genus-0 surface (the inside samples that would close a handle or belong to another piece are
+  /// set just outside); an end frame whose own input is genus 0 too. Frames of shapes of other
+  /// genus are left as blended. false: no control.
+  bool topology_control = true;
   int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
   double position_weight = 0.1;  ///< weight of the voxel distance (per bounding-box diagonal) added to
                                  ///< the harmonic-vector distance in the transport cost (breaks ties)
@@ -94,6 +101,8 @@ struct PreparedMorph {
   double source_volume = 0, target_volume = 0;  ///< of the input meshes, in their own units
   FrameVolume volume = FrameVolume::Free;       ///< from MorphOptions (prepare_morph); Free when built by hand
   double max_iso_shift = 4;                     ///< from MorphOptions (cells)
+  bool topology_control = false;                ///< from MorphOptions; false when built by hand
+  int source_genus = 0, target_genus = 0;       ///< of the input meshes (mesh_stats)
   // The correspondence (only with options.warp), everything in morph space.
   bool warp = false;
   Skeleton source_skeleton, target_skeleton;
@@ -128,7 +137,13 @@ struct BlendInfo {
   double volume_wanted = 0;   ///< (1 - t) V_0 + t V_1 by volume_below (FrameVolume::Linear between the ends)
   double volume_blended = 0;  ///< volume_below of the blend before the shift
   bool clamped = false;       ///< the wanted volume needed more than max_iso_shift cells
+  bool topology_controlled = false;  ///< make_ball ran on the frame (controls_topology)
+  BallReport ball;                   ///< what it removed
 };
+
+/// Whether the frame at t gets the topology control: the morph's topology_control on, and the
+/// ends' input (t = 0: the source, t = 1: the target) or, between them, both inputs genus 0.
+bool controls_topology(const PreparedMorph& morph, double t);
 
 /// The volume enclosed by the level c of a sampled field (negative inside): each sample counts
 /// its cell volume times clamp(1/2 + (c - value) / spacing, 0, 1), a smoothed step one cell wide
@@ -148,6 +163,7 @@ double iso_for_volume(const Grid& field, double volume, double max_shift);
 /// frame's inside samples (specks and pieces of parts thinner than the grid) dropped, both along the edges of the polygonization's tetrahedra. With
 /// FrameVolume::Linear (the default) the blend's iso level is shifted first, for 0 < t < 1, so
 /// that the frame's volume follows the linear interpolation of the ends' (iso_for_volume).
+/// Last, where controls_topology(morph, t), the inside set is made a ball (make_ball).
 Grid blend_field(const PreparedMorph& morph, double t, int threads = 0, BlendInfo* info = nullptr);
 
 /// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the
@@ -158,9 +174,11 @@ TriMesh frame_mesh(const PreparedMorph& morph, const Grid& field, double t, cons
 /// field on a grid over the input's bounding box alone, `refine` times finer than the morph's grid
 /// (in the input's own units), in the input's coordinates (what frame_mesh gives at t = 0 or 1):
 /// parts thinner than a morph voxel (ears, tails) that the morph's grid loses. refine 1: the
-/// morph's spacing. \throws InvalidInput when refine is not 1 to 8 or the grid would exceed 2048 cells.
+/// morph's spacing. With the morph's topology control and a genus-0 input, the field's inside set
+/// is made a ball first (make_ball; `ball` says what it removed). \throws InvalidInput when
+/// refine is not 1 to 8 or the grid would exceed 2048 cells.
 TriMesh endpoint_frame(const PreparedMorph& morph, const TriMesh& input, bool is_target, int refine,
-                       const SdfOptions& sdf = {}, const PolygonizeOptions& options = {});
+                       const SdfOptions& sdf = {}, const PolygonizeOptions& options = {}, BallReport* ball = nullptr);
 
 /// The similarity's inverse interpolated at t (identity at 0): morph space -> output space.
 Vec3 placement(const Similarity& s, double t, const Vec3& y);

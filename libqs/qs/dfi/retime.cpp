@@ -99,6 +99,9 @@ Retiming even_frame_times(const PreparedMorph& morph, int frames, const RetimeOp
     coarse.bones = morph.bones;
     coarse.volume = morph.volume;  // the same iso-level rule (max_iso_shift in cells)
     coarse.max_iso_shift = morph.max_iso_shift;
+    coarse.topology_control = morph.topology_control;  // the frames as they will be written
+    coarse.source_genus = morph.source_genus;
+    coarse.target_genus = morph.target_genus;
     if (!morph.bones.empty()) coarse.bone_grid = coarser(morph.bone_grid, o.coarsen);
     m = &coarse;
   }
