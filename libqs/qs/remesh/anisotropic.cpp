@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <limits>
 #include <string>
 #include <unordered_set>
@@ -25,6 +26,10 @@ constexpr int kSpan = 1 << kUnits;
 // A node is split for its aspect alone only while it covers more than this share of max_area, so
 // that a map degenerate at a point (every node near it long) cannot refine it to max_level.
 constexpr double kAspectAreaFloor = 1.0 / 16;
+
+// The interior smoothing keeps a move that raises its ring's summed angle quality while the ring's
+// worst angle keeps at least this share of its sine (see the header).
+constexpr double kSmoothWorstSlack = 0.9;
 
 constexpr double kHalfLog2 = 0.34657359027997264;  // log(2) / 2
 
@@ -468,15 +473,25 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       const int b = offset[v], e = offset[v + 1];
       auto nb_uv = [&](int r, int k) { const int w = ring[r][k]; return interior(w) ? c.vertex_uv[w] : fixed_uv[r][k]; };
       // The ring's worst smallest angle over the set, with v at x[m] in mesh m.
+      // Also the sum over the set of the ring's angles' sines up to the bound.
       auto worst = [&](auto&& at) {
-        double q = 1;
+        double q = 1, sum = 0;
         for (size_t m = 0; m < meshes; ++m)
-          for (int r = b; r < e; ++r)
-            q = std::min(q, sin_min_angle(at(m), positions[m][ring[r][0]], positions[m][ring[r][1]]));
-        return q;
+          for (int r = b; r < e; ++r) {
+            const double x = sin_min_angle(at(m), positions[m][ring[r][0]], positions[m][ring[r][1]]);
+            q = std::min(q, x);
+            sum += std::min(x, threshold);
+          }
+        return std::make_pair(q, sum);
       };
-      const double before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
-      if (before >= threshold) continue;
+      const auto before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
+      if (before.first >= threshold) continue;
+      // A move is kept when the ring's worst angle rises, or when the sum rises and the worst
+      // keeps at least kSmoothWorstSlack of its sine.
+      auto better = [&](const std::pair<double, double>& q) {
+        if (q.first < 0) return false;
+        return q.first > before.first || (q.first >= kSmoothWorstSlack * before.first && q.second > before.second);
+      };
       // Per mesh: the 3D target (area-weighted centroid of the ring's triangles), mapped back to uv
       // through the least-squares affine map of the ring's edges; the set moves by the mean step.
       const Vec2 uv = c.vertex_uv[v];
@@ -514,11 +529,11 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       // under 5% of its uv area; `moved` then holds the 3D points.
       auto trial = [&](const Vec2& d) {
         const Vec2 nuv = uv + d;
-        if (!(nuv.x() > 0 && nuv.x() < 1 && nuv.y() > 0 && nuv.y() < 1)) return -1.0;
+        if (!(nuv.x() > 0 && nuv.x() < 1 && nuv.y() > 0 && nuv.y() < 1)) return std::make_pair(-1.0, 0.0);
         for (int r = b; r < e; ++r) {
           const Vec2 a1 = nb_uv(r, 0), a2 = nb_uv(r, 1);
           const double before_uv = cross2(a1 - uv, a2 - uv), after_uv = cross2(a1 - nuv, a2 - nuv);
-          if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv)) return -1.0;
+          if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv)) return std::make_pair(-1.0, 0.0);
         }
         for (size_t m = 0; m < meshes; ++m) moved[m] = samplers[m].point(c.vertex_patch[v], nuv, hints[m]);
         return worst([&](size_t m) -> const Vec3& { return moved[m]; });
@@ -532,7 +547,7 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       if (used == 0) continue;
       step /= used;
       for (int tries = 0; tries < 3; ++tries, step *= 0.5)
-        if (trial(step) > before) {
+        if (better(trial(step))) {
           take(step);
           break;
         }

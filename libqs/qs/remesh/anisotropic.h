@@ -64,7 +64,10 @@
 // triangle centroids in 3D, mapped back to uv through the least-squares affine map of the ring's
 // edges; the set moves by the mean of the proposals (one uv per vertex, so the connectivity and
 // the correspondence stay common), halved up to twice when a ring face would flip or shrink to
-// under 5% in uv, and kept only when the ring's worst smallest angle over the set rises. A moved
+// under 5% in uv, and kept only when the ring's worst smallest angle over the set rises, or when
+// the sum over the set of its triangles' sin(smallest angle), each capped at sin(smooth_below),
+// rises while the worst keeps at least 0.9 of its sine (so the smallest angle may drop a little
+// where the ring as a whole gains; figures in README). A moved
 // vertex is evaluated through the chart at its new uv, so it stays on the surface; corners, patch
 // sides (features, seeds) and the connectivity do not move. The two-triangle cells are cut again
 // by the better diagonal afterwards. vertex_uv then holds the moved (u, v).
