@@ -257,10 +257,20 @@ TEST(Anisotropic, BadOptionsAreRejected) {
   EXPECT_THROW(qs::remesh::remesh_anisotropic({}, qs::remesh::anisotropic_options(2, 2)), qs::InvalidInput);
   o.max_level = 3;
   o.smooth_iterations = -1;
-  EXPECT_THROW(qs::remesh::remesh_anisotropic(charts, o), qs::InvalidInput);
+  try {
+    qs::remesh::remesh_anisotropic(charts, o);
+    ADD_FAILURE() << "smooth_iterations -1 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("smoothing sweeps -1"));
+  }
   o.smooth_iterations = 2;
   o.smooth_below = 75;
-  EXPECT_THROW(qs::remesh::remesh_anisotropic(charts, o), qs::InvalidInput);
+  try {
+    qs::remesh::remesh_anisotropic(charts, o);
+    ADD_FAILURE() << "smooth_below 75 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("0..60 degrees"));
+  }
   EXPECT_THROW(qs::remesh::anisotropic_options(-1, 2), qs::InvalidInput);
   EXPECT_THROW(qs::remesh::anisotropic_options(3, 0), qs::InvalidInput);
 }
