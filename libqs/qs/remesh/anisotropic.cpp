@@ -254,7 +254,8 @@ struct LeafCut {
 
 // Faces of the leaves (see the header), the cells cut in two listed in `cuts`.
 SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vector<AnisoNode>& leaves,
-                                          std::vector<LeafCut>& cuts, int& fan_leaves) {
+                                          std::vector<LeafCut>& cuts, std::vector<size_t>& templates,
+                                          int& fan_leaves) {
   int finest = 0;
   for (const auto& n : leaves) finest = std::max({finest, n.lu, n.lv});
   const int top = finest + 1;  // leaf centres
@@ -332,6 +333,7 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
       int d = 0;
       while ((d < 3 ? at[d + 1] : ring.size()) != at[d] + 2) ++d;
       const std::int64_t m = ring[at[d] + 1];
+      templates.push_back(faces.size());
       faces.push_back({c[d], m, c[(d + 3) % 4]});
       faces.push_back({m, c[(d + 1) % 4], c[(d + 2) % 4]});
       faces.push_back({m, c[(d + 2) % 4], c[(d + 3) % 4]});
@@ -424,6 +426,27 @@ double sin_min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// A 3-triangle template cell (A, M, B, C, D counter-clockwise, M the hanging vertex between A and
+// B), emitted as (A, M, D), (M, B, C), (M, C, D): re-cut as the fan from C, (C, D, A), (C, A, M),
+// (C, M, B), or from D, (D, A, M), (D, M, B), (D, B, C), when that raises the smallest angle over
+// the set. Every inner edge of the three joins at most one point of the patch border (see the
+// header), so no other patch can emit it.
+void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const std::vector<std::vector<Vec3>>& positions) {
+  const int a = amcbd[0], m = amcbd[1], b = amcbd[2], c = amcbd[3], d = amcbd[4];
+  const std::array<std::array<Tri, 3>, 3> cuts = {{{Tri{a, m, d}, Tri{m, b, c}, Tri{m, c, d}},
+                                                   {Tri{c, d, a}, Tri{c, a, m}, Tri{c, m, b}},
+                                                   {Tri{d, a, m}, Tri{d, m, b}, Tri{d, b, c}}}};
+  int best = 0;
+  double best_q = -1;
+  for (int k = 0; k < 3; ++k) {
+    double q = 1;
+    for (const auto& x : positions)
+      for (const Tri& t : cuts[k]) q = std::min(q, sin_min_angle(x[t[0]], x[t[1]], x[t[2]]));
+    if (q > best_q) best_q = q, best = k;
+  }
+  for (int i = 0; i < 3; ++i) f[i] = cuts[best][i];
+}
 
 // Tangential smoothing of the patch-interior vertices (see the header): Gauss-Seidel in vertex
 // order, one uv per vertex for the whole set. Returns the number of accepted moves.
@@ -595,7 +618,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   for (const auto& n : out.leaves) out.stats.finest_level = std::max({out.stats.finest_level, n.lu, n.lv});
 
   std::vector<LeafCut> cuts;
-  out.remesh.connectivity = leaf_connectivity(topology, out.leaves, cuts, out.stats.fan_leaves);
+  std::vector<size_t> templates;
+  out.remesh.connectivity = leaf_connectivity(topology, out.leaves, cuts, templates, out.stats.fan_leaves);
   for (size_t m = 0; m < samplers.size(); ++m) {
     context.report("remesh", 0.7 + 0.3 * m / samplers.size());
     out.remesh.positions.push_back(sample_positions(samplers[m], out.remesh.connectivity, context));
@@ -603,6 +627,15 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   auto& faces = out.remesh.connectivity.faces;
   for (const auto& cut : cuts)
     recut_cell_best_angle(faces[cut.first_face], faces[cut.first_face + 1], cut.diag02, out.remesh.positions);
+  // The template cells' corners A, M, B, C, D (emitted as (A, M, D), (M, B, C), (M, C, D)).
+  std::vector<std::array<int, 5>> pentagons;
+  pentagons.reserve(templates.size());
+  for (size_t first : templates) {
+    const Tri &f0 = faces[first], &f1 = faces[first + 1];
+    pentagons.push_back({f0[0], f0[1], f1[1], f1[2], f0[2]});
+  }
+  for (size_t k = 0; k < templates.size(); ++k)
+    recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions);
   if (options.smooth_iterations > 0) {
     context.check_cancel();
     out.stats.smoothed_moves = smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
@@ -613,6 +646,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
       recut_cell_best_angle(f0, f1, f1[0] == f0[0], out.remesh.positions);
     }
   }
+  for (size_t k = 0; k < templates.size(); ++k)
+    recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions);
   context.report("remesh", 1.0);
   return out;
 }

@@ -51,7 +51,9 @@
 //    the corner's base vertex has valence >= 3 (at valence 2 the other diagonal's two border
 //    points are the neighbour patch's too);
 //  - one hanging vertex M on side d and at most one border side: (C_d, M, C_d+3),
-//    (M, C_d+1, C_d+2), (M, C_d+2, C_d+3) (adaptive.h's template);
+//    (M, C_d+1, C_d+2), (M, C_d+2, C_d+3) (adaptive.h's template), re-cut as the fan from C_d+2 or
+//    from C_d+3 over the pentagon when that has the larger smallest angle over the set (before and
+//    after the smoothing; each inner edge still joins at most one border point);
 //  - otherwise: a fan around the leaf's centre (an interior point of the patch, used by no other
 //    patch) over the leaf's border with its hanging vertices: 4 + (hanging vertices) triangles.
 // Each leaf side piece is shared by exactly the two leaves beside it (or the two patches of a
