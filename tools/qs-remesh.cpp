@@ -200,7 +200,10 @@ int main(int argc, char** argv) {
                         {"aspect_splits", ar.stats.aspect_splits},
                         {"balance_splits", ar.stats.balance_splits},
                         {"unresolved_leaves", ar.stats.unresolved_leaves},
-                        {"max_leaf_aspect", ar.stats.max_leaf_aspect}};
+                        {"max_leaf_aspect", ar.stats.max_leaf_aspect},
+                        {"smooth_iterations", ao.smooth_iterations},
+                        {"smooth_below", ao.smooth_below},
+                        {"smoothed_moves", ar.stats.smoothed_moves}};
     } else if (even) {
       double share_sum = 0;
       for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;

@@ -156,6 +156,84 @@ TEST(Anisotropic, ClosedManifoldOnManyTrees) {
         }
 }
 
+// A copy of a dissection's chart whose maps are sheared inside every patch: each wedge's u moves by
+// k sin(pi u) sin(2 pi v) / 2 (v kept; monotone in u for k < 2 / pi, the identity on the square's
+// border), so the remesh's cells are parallelograms on the surface, not rectangles. (A few thin
+// chart triangles may still turn over in uv, so points are not compared with an unhinted lookup.)
+qs::dissect::Chart sheared(const qs::dissect::Chart& in, double k) {
+  qs::dissect::Chart c = in;
+  for (auto& w : c.face_uv)
+    for (auto& uv : w) {
+      const double u = uv.x(), v = uv.y();
+      if (u > 0 && u < 1 && v > 0 && v < 1) uv.x() = u + 0.5 * k * std::sin(M_PI * u) * std::sin(2 * M_PI * v);
+    }
+  return c;
+}
+
+// The smoothing moves only patch-interior vertices, within their patch, along the surface; it never
+// lowers the smallest angle much, and on sheared maps it removes most slivers.
+TEST(Anisotropic, SmoothingRemovesSliversOfShearedMaps) {
+  for (const auto* base : {&qs::remesh_test::sphere_dissection().chart, &qs::remesh_test::star_dissection().chart}) {
+    const qs::dissect::Chart chart = sheared(*base, 0.6);
+    const std::vector<const qs::dissect::Chart*> charts = {&chart};
+    qs::remesh::AnisotropicOptions o = qs::remesh::anisotropic_options(4, static_cast<int>(chart.patches.size()));
+    o.smooth_iterations = 0;
+    const auto raw = qs::remesh::remesh_anisotropic(charts, o);
+    o.smooth_iterations = qs::remesh::kDefaultSmoothIterations;
+    const auto smooth = qs::remesh::remesh_anisotropic(charts, o);
+    const auto& c0 = raw.remesh.connectivity;
+    const auto& c1 = smooth.remesh.connectivity;
+    ASSERT_EQ(c0.num_vertices(), c1.num_vertices());
+    ASSERT_EQ(c0.num_faces(), c1.num_faces());
+    EXPECT_EQ(expect_closed_manifold(c1.faces, c1.num_vertices()), 2);
+    expect_valid_sphere(smooth.remesh.mesh(0), "smoothed anisotropic remesh");
+    EXPECT_GT(smooth.stats.smoothed_moves, 0);
+    // Corners and patch sides stay where they were; interior vertices stay inside their patch.
+    int moved = 0;
+    for (int v = 0; v < c1.num_vertices(); ++v) {
+      ASSERT_EQ(c0.vertex_patch[v], c1.vertex_patch[v]);
+      const qs::Vec2 a = c0.vertex_uv[v], b = c1.vertex_uv[v];
+      const bool inside = a.x() > 0 && a.x() < 1 && a.y() > 0 && a.y() < 1;
+      if (!inside) {
+        EXPECT_EQ(a, b) << "vertex " << v;
+        EXPECT_EQ(raw.remesh.positions[0][v], smooth.remesh.positions[0][v]) << "vertex " << v;
+      } else {
+        EXPECT_TRUE(b.x() > 0 && b.x() < 1 && b.y() > 0 && b.y() < 1) << "vertex " << v;
+        moved += a != b;
+      }
+    }
+    EXPECT_GT(moved, 0);
+    const auto before = qs::remesh::smallest_angle_stats(raw.remesh.mesh(0));
+    const auto after = qs::remesh::smallest_angle_stats(smooth.remesh.mesh(0));
+    ASSERT_GT(before.under_20, 0.02) << "the sheared maps should give slivers without smoothing";
+    EXPECT_GE(after.min, 0.5 * before.min);  // the worst may drop a little where its ring gains (see the header)
+    EXPECT_LT(after.under_20, 0.5 * before.under_20);
+    EXPECT_LE(after.under_10, before.under_10);
+    EXPECT_GT(after.median, before.median);
+  }
+}
+
+// A set keeps one connectivity and one (u, v) per vertex with the smoothing, deterministically, and
+// every moved vertex is its chart's point at its (u, v) in every mesh.
+TEST(Anisotropic, SmoothedSetSharesConnectivity) {
+  const auto& pair = qs::remesh_test::pair_dissection();
+  const std::vector<const qs::dissect::Chart*> charts = {&pair.meshes[0].chart, &pair.meshes[1].chart};
+  const auto r1 = qs::remesh::remesh_even_anisotropic(charts, 3);
+  const auto r2 = qs::remesh::remesh_even_anisotropic(charts, 3);
+  EXPECT_GT(r1.stats.smoothed_moves, 0);
+  EXPECT_EQ(r1.remesh.connectivity.faces, r2.remesh.connectivity.faces);
+  EXPECT_EQ(r1.remesh.connectivity.vertex_uv, r2.remesh.connectivity.vertex_uv);
+  EXPECT_EQ(r1.remesh.positions, r2.remesh.positions);
+  EXPECT_EQ(expect_closed_manifold(r1.remesh.connectivity.faces, r1.remesh.connectivity.num_vertices()), 2);
+  for (int m = 0; m < 2; ++m) {
+    const qs::remesh::ChartSampler s(*charts[m]);
+    const auto& c = r1.remesh.connectivity;
+    for (int v = 0; v < c.num_vertices(); ++v)
+      EXPECT_LT((s.point(c.vertex_patch[v], c.vertex_uv[v]) - r1.remesh.positions[m][v]).norm(), 1e-12)
+          << "vertex " << v << " of mesh " << m;
+  }
+}
+
 TEST(Anisotropic, BadOptionsAreRejected) {
   const auto charts = charts_of(strip_set());
   qs::remesh::AnisotropicOptions o;
@@ -177,6 +255,22 @@ TEST(Anisotropic, BadOptionsAreRejected) {
   o.max_level = qs::remesh::kMaxAnisotropicLevel + 1;
   EXPECT_THROW(qs::remesh::remesh_anisotropic(charts, o), qs::InvalidInput);
   EXPECT_THROW(qs::remesh::remesh_anisotropic({}, qs::remesh::anisotropic_options(2, 2)), qs::InvalidInput);
+  o.max_level = 3;
+  o.smooth_iterations = -1;
+  try {
+    qs::remesh::remesh_anisotropic(charts, o);
+    ADD_FAILURE() << "smooth_iterations -1 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("smoothing sweeps -1"));
+  }
+  o.smooth_iterations = 2;
+  o.smooth_below = 75;
+  try {
+    qs::remesh::remesh_anisotropic(charts, o);
+    ADD_FAILURE() << "smooth_below 75 accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("0..60 degrees"));
+  }
   EXPECT_THROW(qs::remesh::anisotropic_options(-1, 2), qs::InvalidInput);
   EXPECT_THROW(qs::remesh::anisotropic_options(3, 0), qs::InvalidInput);
 }

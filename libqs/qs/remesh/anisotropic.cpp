@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <limits>
 #include <string>
 #include <unordered_set>
@@ -25,6 +26,10 @@ constexpr int kSpan = 1 << kUnits;
 // A node is split for its aspect alone only while it covers more than this share of max_area, so
 // that a map degenerate at a point (every node near it long) cannot refine it to max_level.
 constexpr double kAspectAreaFloor = 1.0 / 16;
+
+// The interior smoothing keeps a move that raises its ring's summed angle quality while the ring's
+// worst angle keeps at least this share of its sine (see the header).
+constexpr double kSmoothWorstSlack = 0.9;
 
 constexpr double kHalfLog2 = 0.34657359027997264;  // log(2) / 2
 
@@ -249,7 +254,8 @@ struct LeafCut {
 
 // Faces of the leaves (see the header), the cells cut in two listed in `cuts`.
 SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vector<AnisoNode>& leaves,
-                                          std::vector<LeafCut>& cuts, int& fan_leaves) {
+                                          std::vector<LeafCut>& cuts, std::vector<size_t>& templates,
+                                          int& fan_leaves) {
   int finest = 0;
   for (const auto& n : leaves) finest = std::max({finest, n.lu, n.lv});
   const int top = finest + 1;  // leaf centres
@@ -327,6 +333,7 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
       int d = 0;
       while ((d < 3 ? at[d + 1] : ring.size()) != at[d] + 2) ++d;
       const std::int64_t m = ring[at[d] + 1];
+      templates.push_back(faces.size());
       faces.push_back({c[d], m, c[(d + 3) % 4]});
       faces.push_back({m, c[(d + 1) % 4], c[(d + 2) % 4]});
       faces.push_back({m, c[(d + 2) % 4], c[(d + 3) % 4]});
@@ -373,6 +380,207 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
   return out;
 }
 
+
+// The uv of vertex v in patch p's frame: its own (patch, uv) when that is p, else (a patch corner
+// or a side sample recorded in another patch) the point of p's border that it is, the nearest one
+// to `near` when several are (a patch that meets itself).
+Vec2 uv_in_patch(const BaseTopology& t, const SemiRegularConnectivity& c, int v, int p, const Vec2& near) {
+  if (c.vertex_patch[v] == p) return c.vertex_uv[v];
+  std::vector<Vec2> cand;
+  static const std::array<Vec2, 4> corner_uv = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  if (v < c.num_base_vertices) {
+    for (int k = 0; k < 4; ++k)
+      if (t.quads[p][k] == v) cand.push_back(corner_uv[k]);
+  } else {
+    const int q = c.vertex_patch[v];
+    const Vec2 uv = c.vertex_uv[v];
+    // Sides of q through uv, with the fraction t along side s from corner s.
+    const std::array<bool, 4> on = {uv.y() == 0, uv.x() == 1, uv.y() == 1, uv.x() == 0};
+    const std::array<double, 4> frac = {uv.x(), uv.y(), 1 - uv.x(), 1 - uv.y()};
+    for (int s = 0; s < 4; ++s) {
+      if (!on[s]) continue;
+      const PatchSide tw = t.twin(q, s);
+      if (tw.patch != p) continue;
+      const double r = 1 - frac[s];  // along the twin side from its corner
+      switch (tw.side) {
+        case 0: cand.push_back(Vec2(r, 0)); break;
+        case 1: cand.push_back(Vec2(1, r)); break;
+        case 2: cand.push_back(Vec2(1 - r, 1)); break;
+        default: cand.push_back(Vec2(0, 1 - r)); break;
+      }
+    }
+  }
+  if (cand.empty()) throw InternalError("remesh: a vertex next to a patch's interior vertex is not on that patch's border");
+  Vec2 best = cand[0];
+  for (const Vec2& x : cand)
+    if ((x - near).squaredNorm() < (best - near).squaredNorm()) best = x;
+  return best;
+}
+
+// sin of the smallest angle of triangle (a, b, c) (0 when degenerate).
+double sin_min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double lab = (b - a).squaredNorm(), lbc = (c - b).squaredNorm(), lca = (a - c).squaredNorm();
+  const double twice_area = (b - a).cross(c - a).norm();
+  const double denom2 = lab <= lbc && lab <= lca ? lbc * lca : lbc <= lca ? lab * lca : lab * lbc;
+  return denom2 > 0 ? twice_area / std::sqrt(denom2) : 0.0;
+}
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// A 3-triangle template cell (A, M, B, C, D counter-clockwise, M the hanging vertex between A and
+// B), emitted as (A, M, D), (M, B, C), (M, C, D): re-cut as the fan from C, (C, D, A), (C, A, M),
+// (C, M, B), or from D, (D, A, M), (D, M, B), (D, B, C), when that raises the smallest angle over
+// the set. Every inner edge of the three joins at most one point of the patch border (see the
+// header), so no other patch can emit it.
+void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const std::vector<std::vector<Vec3>>& positions) {
+  const int a = amcbd[0], m = amcbd[1], b = amcbd[2], c = amcbd[3], d = amcbd[4];
+  const std::array<std::array<Tri, 3>, 3> cuts = {{{Tri{a, m, d}, Tri{m, b, c}, Tri{m, c, d}},
+                                                   {Tri{c, d, a}, Tri{c, a, m}, Tri{c, m, b}},
+                                                   {Tri{d, a, m}, Tri{d, m, b}, Tri{d, b, c}}}};
+  int best = 0;
+  double best_q = -1;
+  for (int k = 0; k < 3; ++k) {
+    double q = 1;
+    for (const auto& x : positions)
+      for (const Tri& t : cuts[k]) q = std::min(q, sin_min_angle(x[t[0]], x[t[1]], x[t[2]]));
+    if (q > best_q) best_q = q, best = k;
+  }
+  for (int i = 0; i < 3; ++i) f[i] = cuts[best][i];
+}
+
+// Tangential smoothing of the patch-interior vertices (see the header): Gauss-Seidel in vertex
+// order, one uv per vertex for the whole set. Returns the number of accepted moves.
+int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
+                    std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees) {
+  if (iterations <= 0) return 0;
+  const BaseTopology& t = samplers[0].topology();
+  const int nv = c.num_vertices();
+  auto interior = [&](int v) {
+    const Vec2& uv = c.vertex_uv[v];
+    return v >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
+  };
+  // Incident faces of every interior vertex, as the two other corners in CCW order.
+  std::vector<int> offset(nv + 1, 0);
+  for (const Tri& f : c.faces)
+    for (int k = 0; k < 3; ++k)
+      if (interior(f[k])) ++offset[f[k] + 1];
+  for (int v = 0; v < nv; ++v) offset[v + 1] += offset[v];
+  std::vector<std::array<int, 2>> ring(offset[nv]);
+  {
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    for (const Tri& f : c.faces)
+      for (int k = 0; k < 3; ++k)
+        if (interior(f[k])) ring[fill[f[k]]++] = {f[(k + 1) % 3], f[(k + 2) % 3]};
+  }
+  // The uv (in the vertex's patch) of its fixed neighbours, ring entry by ring entry.
+  std::vector<std::array<Vec2, 2>> fixed_uv(ring.size());
+  for (int v = 0; v < nv; ++v) {
+    if (!interior(v)) continue;
+    const int p = c.vertex_patch[v];
+    for (int r = offset[v]; r < offset[v + 1]; ++r)
+      for (int k = 0; k < 2; ++k) {
+        const int w = ring[r][k];
+        if (!interior(w)) fixed_uv[r][k] = uv_in_patch(t, c, w, p, c.vertex_uv[v]);
+        else if (c.vertex_patch[w] != p) throw InternalError("remesh: a face joins the interiors of two patches");
+      }
+  }
+  const double threshold = std::sin(below_degrees * M_PI / 180);
+  const size_t meshes = samplers.size();
+  std::vector<int> hints(meshes, -1);
+  std::vector<Vec3> moved(meshes);
+  int accepted = 0;
+  for (int it = 0; it < iterations; ++it) {
+    int moves = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (!interior(v) || offset[v + 1] == offset[v]) continue;
+      const int b = offset[v], e = offset[v + 1];
+      auto nb_uv = [&](int r, int k) { const int w = ring[r][k]; return interior(w) ? c.vertex_uv[w] : fixed_uv[r][k]; };
+      // The ring's worst smallest angle over the set, with v at x[m] in mesh m.
+      // Also the sum over the set of the ring's angles' sines up to the bound.
+      auto worst = [&](auto&& at) {
+        double q = 1, sum = 0;
+        for (size_t m = 0; m < meshes; ++m)
+          for (int r = b; r < e; ++r) {
+            const double x = sin_min_angle(at(m), positions[m][ring[r][0]], positions[m][ring[r][1]]);
+            q = std::min(q, x);
+            sum += std::min(x, threshold);
+          }
+        return std::make_pair(q, sum);
+      };
+      const auto before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
+      if (before.first >= threshold) continue;
+      // A move is kept when the ring's worst angle rises, or when the sum rises and the worst
+      // keeps at least kSmoothWorstSlack of its sine.
+      auto better = [&](const std::pair<double, double>& q) {
+        if (q.first < 0) return false;
+        return q.first > before.first || (q.first >= kSmoothWorstSlack * before.first && q.second > before.second);
+      };
+      // Per mesh: the 3D target (area-weighted centroid of the ring's triangles), mapped back to uv
+      // through the least-squares affine map of the ring's edges; the set moves by the mean step.
+      const Vec2 uv = c.vertex_uv[v];
+      Vec2 step(0, 0);
+      int used = 0;
+      for (size_t m = 0; m < meshes; ++m) {
+        const auto& x = positions[m];
+        const Vec3 xv = x[v];
+        Vec3 target(0, 0, 0);
+        double area = 0;
+        Eigen::Matrix2d dd = Eigen::Matrix2d::Zero();
+        Eigen::Matrix<double, 3, 2> ed = Eigen::Matrix<double, 3, 2>::Zero();
+        for (int r = b; r < e; ++r) {
+          const Vec3 &x1 = x[ring[r][0]], &x2 = x[ring[r][1]];
+          const double a = 0.5 * (x1 - xv).cross(x2 - xv).norm();
+          target += a * (xv + x1 + x2) / 3;
+          area += a;
+          for (int k = 0; k < 2; ++k) {
+            const Vec2 d = nb_uv(r, k) - uv;
+            const Vec3 ex = x[ring[r][k]] - xv;
+            dd += d * d.transpose();
+            ed += ex * d.transpose();
+          }
+        }
+        if (!(area > 0) || std::abs(dd.determinant()) <= 0) continue;
+        const Eigen::Matrix<double, 3, 2> jac = ed * dd.inverse();
+        const Eigen::Matrix2d jtj = jac.transpose() * jac;
+        if (!(std::abs(jtj.determinant()) > 0)) continue;
+        const Vec2 s = jtj.ldlt().solve(jac.transpose() * (target / area - xv));
+        if (!s.allFinite()) continue;
+        step += s;
+        ++used;
+      }
+      // The ring's worst angle with v at uv + d, or -1 when a ring face would flip or shrink to
+      // under 5% of its uv area; `moved` then holds the 3D points.
+      auto trial = [&](const Vec2& d) {
+        const Vec2 nuv = uv + d;
+        if (!(nuv.x() > 0 && nuv.x() < 1 && nuv.y() > 0 && nuv.y() < 1)) return std::make_pair(-1.0, 0.0);
+        for (int r = b; r < e; ++r) {
+          const Vec2 a1 = nb_uv(r, 0), a2 = nb_uv(r, 1);
+          const double before_uv = cross2(a1 - uv, a2 - uv), after_uv = cross2(a1 - nuv, a2 - nuv);
+          if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv)) return std::make_pair(-1.0, 0.0);
+        }
+        for (size_t m = 0; m < meshes; ++m) moved[m] = samplers[m].point(c.vertex_patch[v], nuv, hints[m]);
+        return worst([&](size_t m) -> const Vec3& { return moved[m]; });
+      };
+      auto take = [&](const Vec2& d) {
+        c.vertex_uv[v] = uv + d;
+        for (size_t m = 0; m < meshes; ++m) positions[m][v] = moved[m];
+        ++moves;
+      };
+      // The centroid step, or its half, quarter, when the ring's worst angle rises.
+      if (used == 0) continue;
+      step /= used;
+      for (int tries = 0; tries < 3; ++tries, step *= 0.5)
+        if (better(trial(step))) {
+          take(step);
+          break;
+        }
+    }
+    accepted += moves;
+    if (moves == 0) break;
+  }
+  return accepted;
+}
+
 }  // namespace
 
 AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& charts, const AnisotropicOptions& options,
@@ -386,6 +594,12 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   if (options.max_level < 0 || options.max_level > kMaxAnisotropicLevel)
     throw InvalidInput("remesh: max level " + std::to_string(options.max_level) + " is out of range; expected 0.." +
                        std::to_string(kMaxAnisotropicLevel));
+  if (options.smooth_iterations < 0 || options.smooth_iterations > 100)
+    throw InvalidInput("remesh: smoothing sweeps " + std::to_string(options.smooth_iterations) +
+                       " are out of range; expected 0..100");
+  if (!(options.smooth_below >= 0 && options.smooth_below <= 60))
+    throw InvalidInput("remesh: the smoothing's angle bound must be 0..60 degrees, got " +
+                       std::to_string(options.smooth_below));
   if (charts.empty()) throw InvalidInput("remesh: no charts to remesh");
   const std::vector<ChartSampler> samplers = set_samplers(charts, context);
   const BaseTopology& topology = samplers[0].topology();
@@ -404,7 +618,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   for (const auto& n : out.leaves) out.stats.finest_level = std::max({out.stats.finest_level, n.lu, n.lv});
 
   std::vector<LeafCut> cuts;
-  out.remesh.connectivity = leaf_connectivity(topology, out.leaves, cuts, out.stats.fan_leaves);
+  std::vector<size_t> templates;
+  out.remesh.connectivity = leaf_connectivity(topology, out.leaves, cuts, templates, out.stats.fan_leaves);
   for (size_t m = 0; m < samplers.size(); ++m) {
     context.report("remesh", 0.7 + 0.3 * m / samplers.size());
     out.remesh.positions.push_back(sample_positions(samplers[m], out.remesh.connectivity, context));
@@ -412,6 +627,27 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   auto& faces = out.remesh.connectivity.faces;
   for (const auto& cut : cuts)
     recut_cell_best_angle(faces[cut.first_face], faces[cut.first_face + 1], cut.diag02, out.remesh.positions);
+  // The template cells' corners A, M, B, C, D (emitted as (A, M, D), (M, B, C), (M, C, D)).
+  std::vector<std::array<int, 5>> pentagons;
+  pentagons.reserve(templates.size());
+  for (size_t first : templates) {
+    const Tri &f0 = faces[first], &f1 = faces[first + 1];
+    pentagons.push_back({f0[0], f0[1], f1[1], f1[2], f0[2]});
+  }
+  for (size_t k = 0; k < templates.size(); ++k)
+    recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions);
+  if (options.smooth_iterations > 0) {
+    context.check_cancel();
+    out.stats.smoothed_moves = smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
+                                               options.smooth_iterations, options.smooth_below);
+    // The cells' diagonals again for the moved vertices (f1 starts at f0's first corner: cut 0-2).
+    for (const auto& cut : cuts) {
+      Tri &f0 = faces[cut.first_face], &f1 = faces[cut.first_face + 1];
+      recut_cell_best_angle(f0, f1, f1[0] == f0[0], out.remesh.positions);
+    }
+  }
+  for (size_t k = 0; k < templates.size(); ++k)
+    recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions);
   context.report("remesh", 1.0);
   return out;
 }

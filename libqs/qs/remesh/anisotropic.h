@@ -51,12 +51,29 @@
 //    the corner's base vertex has valence >= 3 (at valence 2 the other diagonal's two border
 //    points are the neighbour patch's too);
 //  - one hanging vertex M on side d and at most one border side: (C_d, M, C_d+3),
-//    (M, C_d+1, C_d+2), (M, C_d+2, C_d+3) (adaptive.h's template);
+//    (M, C_d+1, C_d+2), (M, C_d+2, C_d+3) (adaptive.h's template), re-cut as the fan from C_d+2 or
+//    from C_d+3 over the pentagon when that has the larger smallest angle over the set (before and
+//    after the smoothing; each inner edge still joins at most one border point);
 //  - otherwise: a fan around the leaf's centre (an interior point of the patch, used by no other
 //    patch) over the leaf's border with its hanging vertices: 4 + (hanging vertices) triangles.
 // Each leaf side piece is shared by exactly the two leaves beside it (or the two patches of a
 // base edge), so the result is closed, 2-manifold, with no T-junction, whatever the tree.
-// Every vertex is a point of the uniform level-L grid (L = the finest max(lu, lv) + 1, the leaf
+//
+// Smoothing (after the cut): the vertices inside a patch's square whose ring of triangles has a
+// smallest angle under smooth_below degrees (in the worst mesh of the set) move within their
+// patch, sweep after sweep (Gauss-Seidel in vertex order, at most smooth_iterations sweeps): each
+// mesh proposes the step in uv that takes the vertex to its ring's area-weighted centroid of
+// triangle centroids in 3D, mapped back to uv through the least-squares affine map of the ring's
+// edges; the set moves by the mean of the proposals (one uv per vertex, so the connectivity and
+// the correspondence stay common), halved up to twice when a ring face would flip or shrink to
+// under 5% in uv, and kept only when the ring's worst smallest angle over the set rises, or when
+// the sum over the set of its triangles' sin(smallest angle), each capped at sin(smooth_below),
+// rises while the worst keeps at least 0.9 of its sine (so the smallest angle may drop a little
+// where the ring as a whole gains; figures in README). A moved
+// vertex is evaluated through the chart at its new uv, so it stays on the surface; corners, patch
+// sides (features, seeds) and the connectivity do not move. The two-triangle cells are cut again
+// by the better diagonal afterwards. vertex_uv then holds the moved (u, v).
+// Before the smoothing every vertex is a point of the uniform level-L grid (L = the finest max(lu, lv) + 1, the leaf
 // centres), numbered in its order; SemiRegularConnectivity::level is the finest level a vertex
 // needs.
 
@@ -83,11 +100,17 @@ inline constexpr double kAnisoAreaFactor = 2.3;
 /// 2 4.2%, 3 4.1%; 3 gives a lower median angle, 40.4 degrees against 41.7).
 inline constexpr double kDefaultMaxAspect = 2.0;
 
+/// Default AnisotropicOptions::smooth_iterations and smooth_below (see "Smoothing" above).
+inline constexpr int kDefaultSmoothIterations = 8;
+inline constexpr double kDefaultSmoothBelow = 40.0;
+
 struct AnisotropicOptions {
   double max_area = 0;      ///< bound on A_C (a share of the surface, 0..1); > 0
   double max_aspect = kDefaultMaxAspect;  ///< bound on a leaf's aspect on the surface; >= 1.5
   int max_level = 10;       ///< no node is split in u beyond lu = max_level, nor in v beyond lv = max_level;
                             ///< 0..kMaxAnisotropicLevel
+  int smooth_iterations = kDefaultSmoothIterations;  ///< sweeps of the interior smoothing (below); 0: off; 0..100
+  double smooth_below = kDefaultSmoothBelow;  ///< only vertices with a ring angle under this many degrees move; 0..60
 };
 
 /// A node of an anisotropic tree (see the top of this file).
@@ -103,6 +126,7 @@ struct AnisotropicStats {
   int fan_leaves = 0;        ///< leaves cut as a fan around their centre (see above)
   double max_leaf_aspect = 1;  ///< the largest leaf_aspect (the worst mesh's, see above)
   int finest_level = 0;      ///< the largest max(lu, lv) over the leaves
+  int smoothed_moves = 0;    ///< vertex moves accepted by the interior smoothing, all sweeps together
 };
 
 struct AnisotropicRemesh {
