@@ -126,6 +126,24 @@ TEST(Anisotropic, OneConnectivityForTheSetAndDeterministic) {
 // Conforming and closed whatever the refinement: the two seed patches (valence-2 corners, every
 // side shared by the same two patches), a quinary-split star, a pair of different shapes, at
 // several area and aspect bounds, with levels from the roots only to deep trees.
+// Faces whose three corners lie inside one patch (one uv frame) that are not counter-clockwise in
+// (u,v) there: what qs-bake refuses ("lies in no patch with a counter-clockwise (u,v) triangle").
+int clockwise_uv_faces(const qs::remesh::SemiRegularConnectivity& c) {
+  int bad = 0;
+  for (const auto& f : c.faces) {
+    bool one_frame = true;
+    for (int v : f) {
+      const qs::Vec2& uv = c.vertex_uv[v];
+      one_frame = one_frame && v >= c.num_base_vertices && c.vertex_patch[v] == c.vertex_patch[f[0]] && uv.x() > 0 &&
+                  uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
+    }
+    if (!one_frame) continue;
+    const qs::Vec2 &a = c.vertex_uv[f[0]], &b = c.vertex_uv[f[1]], &d = c.vertex_uv[f[2]];
+    bad += !((b - a).x() * (d - a).y() - (b - a).y() * (d - a).x() > 0);
+  }
+  return bad;
+}
+
 TEST(Anisotropic, ClosedManifoldOnManyTrees) {
   struct Case {
     std::string name;
@@ -148,6 +166,7 @@ TEST(Anisotropic, ClosedManifoldOnManyTrees) {
           SCOPED_TRACE(k.name + " area " + std::to_string(area) + " aspect " + std::to_string(aspect) + " max level " +
                        std::to_string(max_level));
           EXPECT_EQ(expect_closed_manifold(c.faces, c.num_vertices()), 2);
+          EXPECT_EQ(clockwise_uv_faces(c), 0);
           EXPECT_LE(a.stats.finest_level, max_level);
           // Every leaf of the balanced trees has a neighbour at most one level coarser along each
           // side, so a leaf gets at most one hanging vertex per side: at most 8 fan triangles.
@@ -198,6 +217,7 @@ TEST(Anisotropic, SmoothingRemovesSliversOfShearedMaps) {
     ASSERT_EQ(c0.num_vertices(), c1.num_vertices());
     ASSERT_EQ(c0.num_faces(), c1.num_faces());
     EXPECT_EQ(expect_closed_manifold(c1.faces, c1.num_vertices()), 2);
+    EXPECT_EQ(clockwise_uv_faces(c1), 0);  // the re-cuts after smoothing keep every face counter-clockwise
     expect_valid_sphere(smooth.remesh.mesh(0), "smoothed anisotropic remesh");
     EXPECT_GT(smooth.stats.smoothed_moves, 0);
     // Corners and patch sides stay where they were; interior vertices stay inside their patch.

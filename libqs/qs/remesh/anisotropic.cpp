@@ -640,14 +640,40 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     context.check_cancel();
     out.stats.smoothed_moves = smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                options.smooth_iterations, options.smooth_below);
-    // The cells' diagonals again for the moved vertices (f1 starts at f0's first corner: cut 0-2).
+    // The cells' diagonals and templates again for the moved vertices. A moved cell need not be
+    // convex in (u,v) any more, so a new cut is kept only where every corner is inside one patch
+    // (one uv frame) and its triangles stay counter-clockwise there; elsewhere the cut the
+    // smoothing checked stays.
+    const auto& conn = out.remesh.connectivity;
+    auto ccw_in_one_patch = [&](const Tri* f, int n) {
+      const int patch = conn.vertex_patch[f[0][0]];
+      for (int i = 0; i < n; ++i) {
+        for (int v : f[i]) {
+          const Vec2& uv = conn.vertex_uv[v];
+          if (v < conn.num_base_vertices || conn.vertex_patch[v] != patch || !(uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1))
+            return false;
+        }
+        const Vec2 &a = conn.vertex_uv[f[i][0]], &b = conn.vertex_uv[f[i][1]], &c = conn.vertex_uv[f[i][2]];
+        if (!(cross2(b - a, c - a) > 0)) return false;
+      }
+      return true;
+    };
+    // (f1 starts at f0's first corner: cut 0-2.)
     for (const auto& cut : cuts) {
       Tri &f0 = faces[cut.first_face], &f1 = faces[cut.first_face + 1];
+      const Tri k0 = f0, k1 = f1;
       recut_cell_best_angle(f0, f1, f1[0] == f0[0], out.remesh.positions);
+      const Tri both[2] = {f0, f1};
+      if ((f0 != k0 || f1 != k1) && !ccw_in_one_patch(both, 2)) f0 = k0, f1 = k1;
+    }
+    for (size_t k = 0; k < templates.size(); ++k) {
+      Tri* f = &faces[templates[k]];
+      const Tri keep[3] = {f[0], f[1], f[2]};
+      recut_template_best_angle(f, pentagons[k], out.remesh.positions);
+      if ((f[0] != keep[0] || f[1] != keep[1] || f[2] != keep[2]) && !ccw_in_one_patch(f, 3))
+        for (int i = 0; i < 3; ++i) f[i] = keep[i];
     }
   }
-  for (size_t k = 0; k < templates.size(); ++k)
-    recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions);
   context.report("remesh", 1.0);
   return out;
 }
