@@ -167,25 +167,7 @@ FoldRepair repair_folds_locally(Displacement& d, double min_det, int max_rounds)
           }
         }
     if (!any || r.rounds == max_rounds) return r;
-    for (int step = 0; step < 4; ++step)
-      for (auto& comp : d.u) {
-        std::vector<float> next = comp.values;
-        for (int k = 0; k < nz; ++k)
-          for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) {
-              if (!mark[g.index(i, j, k)]) continue;
-              double sum = comp.values[g.index(i, j, k)];
-              int cnt = 1;
-              if (i > 0) sum += comp.values[g.index(i - 1, j, k)], ++cnt;
-              if (i + 1 < nx) sum += comp.values[g.index(i + 1, j, k)], ++cnt;
-              if (j > 0) sum += comp.values[g.index(i, j - 1, k)], ++cnt;
-              if (j + 1 < ny) sum += comp.values[g.index(i, j + 1, k)], ++cnt;
-              if (k > 0) sum += comp.values[g.index(i, j, k - 1)], ++cnt;
-              if (k + 1 < nz) sum += comp.values[g.index(i, j, k + 1)], ++cnt;
-              next[g.index(i, j, k)] = static_cast<float>(sum / cnt);
-            }
-        comp.values.swap(next);
-      }
+    jacobi_smooth(d, 4, &mark);
   }
 }
 

@@ -350,36 +350,13 @@ size_t fill_cavities(Grid& g) {
   return changed;
 }
 
-// A few Jacobi steps (each sample the mean of itself and its 6 neighbours) on every component.
-void smooth_displacement(Displacement& d, int steps) {
-  const Grid& g = d.u[0];
-  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  for (int step = 0; step < steps; ++step)
-    for (auto& comp : d.u) {
-      std::vector<float> next(comp.values.size());
-      for (int k = 0; k < nz; ++k)
-        for (int j = 0; j < ny; ++j)
-          for (int i = 0; i < nx; ++i) {
-            double sum = comp.values[g.index(i, j, k)];
-            int cnt = 1;
-            if (i > 0) sum += comp.values[g.index(i - 1, j, k)], ++cnt;
-            if (i + 1 < nx) sum += comp.values[g.index(i + 1, j, k)], ++cnt;
-            if (j > 0) sum += comp.values[g.index(i, j - 1, k)], ++cnt;
-            if (j + 1 < ny) sum += comp.values[g.index(i, j + 1, k)], ++cnt;
-            if (k > 0) sum += comp.values[g.index(i, j, k - 1)], ++cnt;
-            if (k + 1 < nz) sum += comp.values[g.index(i, j, k + 1)], ++cnt;
-            next[g.index(i, j, k)] = static_cast<float>(sum / cnt);
-          }
-      comp.values.swap(next);
-    }
-}
 
 // The bone warp at s, smoothed (blending the bones' transforms leaves creases where the nearest
 // bone changes).
 Displacement frame_bone_warp(const std::vector<Bone>& bones, const Grid& geometry, double s, int threads) {
   Displacement d = bone_displacement(bones, geometry, s, threads);
   const double cells = std::max({geometry.dims[0], geometry.dims[1], geometry.dims[2]}) - 3.0;
-  smooth_displacement(d, std::max(1, static_cast<int>(std::lround(kBoneSmoothing * (cells / 75) * (cells / 75)))));
+  jacobi_smooth(d, std::max(1, static_cast<int>(std::lround(kBoneSmoothing * (cells / 75) * (cells / 75)))));
   repair_folds_locally(d);  // bones.h
   return d;
 }

@@ -95,30 +95,37 @@ FoldCheck check_folds(const Displacement& d) {
   return f;
 }
 
+void jacobi_smooth(Displacement& d, int steps, const std::vector<char>* only) {
+  const Grid& g = d.u[0];
+  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  for (int step = 0; step < steps; ++step)
+    for (auto& comp : d.u) {
+      std::vector<float> next = comp.values;
+      for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+          for (int i = 0; i < nx; ++i) {
+            const size_t at = g.index(i, j, k);
+            if (only && !(*only)[at]) continue;
+            double sum = comp.values[at];
+            int cnt = 1;
+            if (i > 0) sum += comp.values[g.index(i - 1, j, k)], ++cnt;
+            if (i + 1 < nx) sum += comp.values[g.index(i + 1, j, k)], ++cnt;
+            if (j > 0) sum += comp.values[g.index(i, j - 1, k)], ++cnt;
+            if (j + 1 < ny) sum += comp.values[g.index(i, j + 1, k)], ++cnt;
+            if (k > 0) sum += comp.values[g.index(i, j, k - 1)], ++cnt;
+            if (k + 1 < nz) sum += comp.values[g.index(i, j, k + 1)], ++cnt;
+            next[at] = static_cast<float>(sum / cnt);
+          }
+      comp.values.swap(next);
+    }
+}
+
 FoldCheck remove_folds(Displacement& d, double wanted, int max_steps) {
   FoldCheck f = check_folds(d);
   int steps = 0;
-  const Grid& g = d.u[0];
-  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   while (f.min_det < wanted && steps < max_steps) {
-    for (int round = 0; round < 5; ++round, ++steps)
-      for (auto& comp : d.u) {
-        std::vector<float> next(comp.values.size());
-        for (int k = 0; k < nz; ++k)
-          for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) {
-              double sum = comp.values[g.index(i, j, k)];
-              int cnt = 1;
-              const int nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
-              for (const auto& q : nb) {
-                if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= nx || q[1] >= ny || q[2] >= nz) continue;
-                sum += comp.values[g.index(q[0], q[1], q[2])];
-                ++cnt;
-              }
-              next[g.index(i, j, k)] = static_cast<float>(sum / cnt);
-            }
-        comp.values.swap(next);
-      }
+    jacobi_smooth(d, 5);
+    steps += 5;
     f = check_folds(d);
   }
   f.smoothing_steps = steps;

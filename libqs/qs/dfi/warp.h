@@ -36,6 +36,10 @@ struct FoldCheck {
 /// differences over the cell's 4 edges along each axis; rows are the components.
 Eigen::Matrix3d cell_gradient(const Displacement& d, int i, int j, int k);
 
+/// `steps` Jacobi steps of the Laplacian on every component of u: each sample becomes the mean of
+/// itself and its (up to 6) grid neighbours; with `only`, just the samples marked there.
+void jacobi_smooth(Displacement& d, int steps, const std::vector<char>* only = nullptr);
+
 /// Smallest Jacobian determinant of x -> x + s u(x) over the cells, for s = 0.1, 0.2, ..., 1.
 FoldCheck check_folds(const Displacement& d);
 
