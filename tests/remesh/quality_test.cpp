@@ -284,8 +284,11 @@ TEST(BestAngleDiagonals, ClosedManifoldNeverWorseAndOneFaceListForASet) {
         return qs::remesh::smallest_angle_stats(cell).min;
       };
       const qs::TriMesh mp = pattern.mesh(), mc = chosen.mesh();
-      for (size_t k = 0; k + 1 < pf.size(); k += 2)
-        if (pf[k] != cf[k]) EXPECT_GT(worst(mc, k), worst(mp, k) - 1e-9) << "cell " << k / 2;
+      for (size_t k = 0; k + 1 < pf.size(); k += 2) {
+        if (pf[k] != cf[k]) {
+          EXPECT_GT(worst(mc, k), worst(mp, k) - 1e-9) << "cell " << k / 2;
+        }
+      }
     }
   }
   // A set: one decision per cell for all meshes, so they share the face list.

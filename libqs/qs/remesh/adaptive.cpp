@@ -410,31 +410,7 @@ SemiRegularConnectivity adaptive_connectivity(const BaseTopology& topology, cons
     for (size_t r = 0; r < ring.size(); ++r) faces.push_back({centre, ring[r], ring[(r + 1) % ring.size()]});
   }
 
-  std::vector<std::int64_t> ids;
-  ids.reserve(3 * faces.size());
-  for (const auto& tri : faces) ids.insert(ids.end(), tri.begin(), tri.end());
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  SemiRegularConnectivity out;
-  out.num_base_vertices = topology.num_vertices;
-  out.num_base_edges = topology.num_edges();
-  out.num_patches = topology.num_patches();
-  out.level = top;
-  out.faces.reserve(faces.size());
-  auto index = [&](std::int64_t id) {
-    return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
-  };
-  for (const auto& tri : faces) out.faces.push_back({index(tri[0]), index(tri[1]), index(tri[2])});
-  out.vertex_patch.resize(ids.size());
-  out.vertex_uv.resize(ids.size());
-  const double inv = 1.0 / num.cells();
-  for (size_t v = 0; v < ids.size(); ++v) {
-    int p, i, j;
-    num.site(ids[v], p, i, j);
-    out.vertex_patch[v] = p;
-    out.vertex_uv[v] = Vec2(i * inv, j * inv);
-  }
-  return out;
+  return compact_connectivity(topology, num, faces, "the adaptive remesh");
 }
 
 AdaptiveRemesh remesh_adaptive(const std::vector<const dissect::Chart*>& charts, const AdaptiveOptions& options,

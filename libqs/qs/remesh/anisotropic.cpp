@@ -344,35 +344,8 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
     for (size_t r = 0; r < ring.size(); ++r) faces.push_back({centre, ring[r], ring[(r + 1) % ring.size()]});
   }
 
-  std::vector<std::int64_t> ids;
-  ids.reserve(3 * faces.size());
-  for (const auto& tri : faces) ids.insert(ids.end(), tri.begin(), tri.end());
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  if (ids.size() > static_cast<size_t>(std::numeric_limits<int>::max()) ||
-      faces.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
-    throw InvalidInput("remesh: the anisotropic remesh would have " + std::to_string(ids.size()) + " vertices and " +
-                       std::to_string(faces.size()) + " faces; at most 2^31 - 1 each are supported");
-  SemiRegularConnectivity out;
-  out.num_base_vertices = t.num_vertices;
-  out.num_base_edges = t.num_edges();
-  out.num_patches = t.num_patches();
-  auto index = [&](std::int64_t id) {
-    return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
-  };
-  out.faces.reserve(faces.size());
-  for (const auto& tri : faces) out.faces.push_back({index(tri[0]), index(tri[1]), index(tri[2])});
-  out.vertex_patch.resize(ids.size());
-  out.vertex_uv.resize(ids.size());
-  const double inv = 1.0 / span;
   int used_bits = 0;
-  for (size_t v = 0; v < ids.size(); ++v) {
-    int p, i, j;
-    num.site(ids[v], p, i, j);
-    out.vertex_patch[v] = p;
-    out.vertex_uv[v] = Vec2(i * inv, j * inv);
-    used_bits |= i | j;
-  }
+  SemiRegularConnectivity out = compact_connectivity(t, num, faces, "the anisotropic remesh", &used_bits);
   // The finest grid level that any vertex needs.
   int level = top;
   while (level > 0 && (used_bits & ((1 << (top - level + 1)) - 1)) == 0) --level;

@@ -60,6 +60,42 @@ void UniformNumbering::site(std::int64_t id, int& patch, int& i, int& j) const {
   }
 }
 
+SemiRegularConnectivity compact_connectivity(const BaseTopology& topology, const UniformNumbering& num,
+                                             const std::vector<std::array<std::int64_t, 3>>& faces,
+                                             const std::string& what, int* used_bits) {
+  std::vector<std::int64_t> ids;
+  ids.reserve(3 * faces.size());
+  for (const auto& tri : faces) ids.insert(ids.end(), tri.begin(), tri.end());
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  if (ids.size() > static_cast<size_t>(INT_MAX) || faces.size() > static_cast<size_t>(INT_MAX))
+    throw InvalidInput("remesh: " + what + " would have " + std::to_string(ids.size()) + " vertices and " +
+                       std::to_string(faces.size()) + " faces; at most 2^31 - 1 each are supported");
+  SemiRegularConnectivity out;
+  out.num_base_vertices = topology.num_vertices;
+  out.num_base_edges = topology.num_edges();
+  out.num_patches = topology.num_patches();
+  out.level = num.level();
+  auto index = [&](std::int64_t id) {
+    return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
+  };
+  out.faces.reserve(faces.size());
+  for (const auto& tri : faces) out.faces.push_back({index(tri[0]), index(tri[1]), index(tri[2])});
+  out.vertex_patch.resize(ids.size());
+  out.vertex_uv.resize(ids.size());
+  const double inv = 1.0 / num.cells();
+  int bits = 0;
+  for (size_t v = 0; v < ids.size(); ++v) {
+    int p, i, j;
+    num.site(ids[v], p, i, j);
+    out.vertex_patch[v] = p;
+    out.vertex_uv[v] = Vec2(i * inv, j * inv);
+    bits |= i | j;
+  }
+  if (used_bits) *used_bits = bits;
+  return out;
+}
+
 SemiRegularConnectivity uniform_connectivity(const BaseTopology& topology, int level, const UniformOptions& options) {
   const UniformNumbering num(topology, level);
   const int n = num.cells(), np = topology.num_patches();

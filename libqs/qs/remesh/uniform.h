@@ -94,6 +94,14 @@ class UniformNumbering {
   std::int64_t edge_first_, interior_first_;
 };
 
+/// The connectivity of faces whose corners are `num` ids (the adaptive and anisotropic remeshes):
+/// the ids used, in increasing order, become vertices 0, 1, ...; each gets its recorded (patch,
+/// uv) site; `level` is the numbering's. With `used_bits`, the OR of every vertex's grid i and j.
+/// \throws InvalidInput (naming `what`) for more than 2^31 - 1 vertices or faces.
+SemiRegularConnectivity compact_connectivity(const BaseTopology& topology, const UniformNumbering& num,
+                                             const std::vector<std::array<std::int64_t, 3>>& faces,
+                                             const std::string& what, int* used_bits = nullptr);
+
 /// The connectivity of the uniform level-`level` remesh of a patch list (no geometry needed):
 /// meshes whose patch lists have the same structure get identical results.
 /// \throws InvalidInput for a bad patch list (see build_base_topology), a level outside
