@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "qs/core/error.h"
+#include "qs/dfi/topology.h"
 #include "qs/dfi/transport.h"
 #include "qs/metro/metro.h"
 
@@ -272,6 +273,29 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
   ctx.report("warp", 1.0);
 }
 
+// Marks every sample reachable from those on `stack` along the 14 lattice neighbours through
+// samples where take(sample) holds, emptying the stack; each newly marked sample is appended to
+// `reached` when given.
+template <class Take>
+void flood14(const Grid& g, std::vector<size_t>& stack, std::vector<char>& mark, Take take,
+             std::vector<size_t>* reached = nullptr) {
+  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  while (!stack.empty()) {
+    const size_t s = stack.back();
+    stack.pop_back();
+    if (reached) reached->push_back(s);
+    const int i = static_cast<int>(s % nx), j = static_cast<int>((s / nx) % ny), k = static_cast<int>(s / (static_cast<size_t>(nx) * ny));
+    for (const auto& o : kNeighbours14) {
+      const int a = i + o[0], b = j + o[1], c = k + o[2];
+      if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
+      const size_t t = g.index(a, b, c);
+      if (mark[t] || !take(t)) continue;
+      mark[t] = 1;
+      stack.push_back(t);
+    }
+  }
+}
+
 // Inside samples for the positive (outside) samples that no path of positive samples along the
 // edges of the Kuhn tetrahedra (the 14 neighbours of the polygonization's lattice) joins to the
 // grid's boundary: such a region's zero set would be an inner shell, a cavity, which neither input
@@ -290,21 +314,7 @@ size_t fill_cavities(Grid& g) {
           out[g.index(i, j, k)] = 1;
           stack.push_back(g.index(i, j, k));
         }
-  const int steps[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
-  while (!stack.empty()) {
-    const size_t s = stack.back();
-    stack.pop_back();
-    const int i = static_cast<int>(s % nx), j = static_cast<int>((s / nx) % ny), k = static_cast<int>(s / (static_cast<size_t>(nx) * ny));
-    for (const auto& st : steps)
-      for (int sign : {1, -1}) {
-        const int a = i + sign * st[0], b = j + sign * st[1], c = k + sign * st[2];
-        if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-        const size_t t = g.index(a, b, c);
-        if (out[t] || g.values[t] < 0) continue;
-        out[t] = 1;
-        stack.push_back(t);
-      }
-  }
+  flood14(g, stack, out, [&](size_t t) { return g.values[t] >= 0; });
   size_t changed = 0;
   const float inside = -static_cast<float>(g.spacing);
   for (size_t s = 0; s < g.size(); ++s)
@@ -312,9 +322,8 @@ size_t fill_cavities(Grid& g) {
       g.values[s] = inside;
       ++changed;
     }
-  // Islands of at most kSpeck inside samples (joined the same way): specks below the grid's
-  // resolution that a fold of the warp leaves, not parts of either shape.
-  // A piece is a speck up to kSpeck samples or kSpeckShare of the frame's inside samples: what a
+  // Islands of inside samples (joined the same way) up to kSpeck samples or kSpeckShare of the
+  // frame's inside samples are specks, not parts of either shape: what a warp's fold or a
   // part thinner than the grid leaves behind when the blend thins it (the camel's tail between
   // t = 0.8 and 0.9: 0.02-0.05% of the frame's volume); a part that comes off (a head, several %)
   // is kept, and shows.
@@ -329,21 +338,7 @@ size_t fill_cavities(Grid& g) {
     island.clear();
     stack.push_back(s0);
     seen[s0] = 1;
-    while (!stack.empty()) {
-      const size_t s = stack.back();
-      stack.pop_back();
-      island.push_back(s);
-      const int i = static_cast<int>(s % nx), j = static_cast<int>((s / nx) % ny), k = static_cast<int>(s / (static_cast<size_t>(nx) * ny));
-      for (const auto& st : steps)
-        for (int sign : {1, -1}) {
-          const int a = i + sign * st[0], b = j + sign * st[1], c = k + sign * st[2];
-          if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-          const size_t t = g.index(a, b, c);
-          if (seen[t] || g.values[t] >= 0) continue;
-          seen[t] = 1;
-          stack.push_back(t);
-        }
-    }
+    flood14(g, stack, seen, [&](size_t t) { return g.values[t] < 0; }, &island);
     if (island.size() <= speck)
       for (size_t s : island) g.values[s] = outside, ++changed;
   }

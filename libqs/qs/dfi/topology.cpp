@@ -13,10 +13,6 @@
 
 namespace qs::dfi {
 
-// The 7 non-zero offsets in {0,1}^3 and their negatives: the edges of the Kuhn tetrahedra.
-const int kNeighbours14[14][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 0},  {1, 0, 1},  {0, 1, 1},  {1, 1, 1},
-                                  {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}, {-1, -1, 0}, {-1, 0, -1}, {0, -1, -1}, {-1, -1, -1}};
-
 namespace {
 
 // Link edges: neighbours a and b of a sample are joined when b - a is one of the 14 offsets

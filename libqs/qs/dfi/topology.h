@@ -25,6 +25,12 @@
 
 namespace qs::dfi {
 
+/// The 7 non-zero offsets in {0,1}^3 and their negatives: the edges of the Kuhn tetrahedra, i.e.
+/// the neighbours that the polygonizer's surface joins (neighbour n is bit n of a mask below).
+inline constexpr int kNeighbours14[14][3] = {{1, 0, 0},   {0, 1, 0},   {0, 0, 1},    {1, 1, 0},  {1, 0, 1},
+                                             {0, 1, 1},   {1, 1, 1},   {-1, 0, 0},   {0, -1, 0}, {0, 0, -1},
+                                             {-1, -1, 0}, {-1, 0, -1}, {0, -1, -1}, {-1, -1, -1}};
+
 struct BallOptions {
   /// Value (in cells) given to inside samples that are not added: just outside, so the surface
   /// passes close to them. Must exceed the polygonizer's snap tolerance.
