@@ -146,85 +146,56 @@ int main(int argc, char** argv) {
         const auto t0 = Clock::now();
         const auto d = qs::dissect::dissect(mesh, std::nullopt, c.options);
         const double time = seconds_since(t0);
-        qs::remesh::UniformOptions uo;  // as qs-remesh cuts the cells
-        uo.diagonals = qs::remesh::DiagonalRule::BestAngle;
-        uo.relax = c.relax;
-        const auto r4 = qs::remesh::remesh_uniform(d.chart, 4, uo);
-        const auto a = qs::remesh::smallest_angle_stats(r4.mesh());
-        const auto r5 = qs::remesh::remesh_uniform(d.chart, 5, uo);
-        qs::metro::MetroOptions mo;
-        mo.face_samples = 20000;
-        mo.sample_vertices_b = false;
-        const auto e = qs::metro::metro(d.chart.mesh, r5.mesh(), mo);
-        const double err = 100 * e.mean / e.diagonal;
-        const auto vd = qs::remesh::vertex_density(r5.mesh());
-        const auto td = qs::remesh::chart_density(d.chart, 255);
-        std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
-                    c.name.c_str(), d.chart.patches.size(), err, 100 * a.under_5, 100 * a.under_10, 100 * a.under_20,
-                    a.median, vd.spread, td.spread, time);
-        std::fflush(stdout);
-        Sum& s = sums[c.name];
-        ++s.meshes;
-        s.err += err, s.u10 += 100 * a.under_10, s.med += a.median, s.time += time;
-        s.worst_vsp = std::max(s.worst_vsp, vd.spread);
-        s.worst_tsp = std::max(s.worst_tsp, td.spread);
-        s.worst_u10 = std::max(s.worst_u10, 100 * a.under_10);
-        s.worst_med = std::min(s.worst_med, a.median);
         const std::string stem = f.stem().string();
         const bool head = stem.rfind("igea", 0) == 0 || stem.rfind("mannequin", 0) == 0 ||
                           stem.rfind("max_planck", 0) == 0 || stem.rfind("venus_100k", 0) == 0;
-        if (head) s.heads_tsp_lo = std::min(s.heads_tsp_lo, td.spread), s.heads_tsp_hi = std::max(s.heads_tsp_hi, td.spread);
+        qs::metro::MetroOptions mo;
+        mo.face_samples = 20000;
+        mo.sample_vertices_b = false;
+        // One row: the level-4 remesh's angles, the level-5 remesh's error and vertex spread, the
+        // texel spread `tsp` and the last column; added to the candidate's summary `label`.
+        auto row = [&](const std::string& label, const qs::TriMesh& l4, const qs::TriMesh& l5, double tsp,
+                       double last) {
+          const auto a = qs::remesh::smallest_angle_stats(l4);
+          const auto e = qs::metro::metro(d.chart.mesh, l5, mo);
+          const double err = 100 * e.mean / e.diagonal;
+          const auto vd = qs::remesh::vertex_density(l5);
+          std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
+                      label.c_str(), d.chart.patches.size(), err, 100 * a.under_5, 100 * a.under_10,
+                      100 * a.under_20, a.median, vd.spread, tsp, last);
+          std::fflush(stdout);
+          Sum& s = sums[label];
+          ++s.meshes;
+          s.err += err, s.u10 += 100 * a.under_10, s.med += a.median, s.time += last;
+          s.worst_vsp = std::max(s.worst_vsp, vd.spread);
+          s.worst_tsp = std::max(s.worst_tsp, tsp);
+          s.worst_u10 = std::max(s.worst_u10, 100 * a.under_10);
+          s.worst_med = std::min(s.worst_med, a.median);
+          if (head) s.heads_tsp_lo = std::min(s.heads_tsp_lo, tsp), s.heads_tsp_hi = std::max(s.heads_tsp_hi, tsp);
+          return static_cast<double>(l5.faces.size());
+        };
 
-        // The same dissection, sampled by area: the even remesh and area-sized tiles.
+        qs::remesh::UniformOptions uo;  // as qs-remesh cuts the cells
+        uo.diagonals = qs::remesh::DiagonalRule::BestAngle;
+        uo.relax = c.relax;
+        const double uniform_faces = row(c.name, qs::remesh::remesh_uniform(d.chart, 4, uo).mesh(),
+                                         qs::remesh::remesh_uniform(d.chart, 5, uo).mesh(),
+                                         qs::remesh::chart_density(d.chart, 255).spread, time);
+
+        // The same dissection, sampled by area: the even remesh and area-sized tiles; then with
+        // anisotropic cells (qs-remesh --level: split in u or v alone on long cells). Their last
+        // column is the level-5 face count over the uniform grid's.
         const std::vector<const qs::dissect::Chart*> charts = {&d.chart};
-        const auto e4 = qs::remesh::remesh_even(charts, 4).remesh;
-        const auto ea = qs::remesh::smallest_angle_stats(e4.mesh(0));
-        const auto e5 = qs::remesh::remesh_even(charts, 5).remesh;
-        const auto ee = qs::metro::metro(d.chart.mesh, e5.mesh(0), mo);
-        const double eerr = 100 * ee.mean / ee.diagonal;
-        const auto evd = qs::remesh::vertex_density(e5.mesh(0));
         const std::vector<int> sides = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), 256);
         std::vector<double> per_patch(sides.size());
         for (size_t p = 0; p < sides.size(); ++p) per_patch[p] = sides[p] - 1.0;
-        const auto etd = qs::remesh::chart_density(d.chart, per_patch);
-        const double face_ratio =
-            static_cast<double>(e5.connectivity.faces.size()) / static_cast<double>(r5.connectivity.faces.size());
-        std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
-                    (c.name + "/even").c_str(), d.chart.patches.size(), eerr, 100 * ea.under_5, 100 * ea.under_10,
-                    100 * ea.under_20, ea.median, evd.spread, etd.spread, face_ratio);
-        std::fflush(stdout);
-        Sum& es = sums[c.name + "/even"];
-        ++es.meshes;
-        es.err += eerr, es.u10 += 100 * ea.under_10, es.med += ea.median, es.time += face_ratio;
-        es.worst_vsp = std::max(es.worst_vsp, evd.spread);
-        es.worst_tsp = std::max(es.worst_tsp, etd.spread);
-        es.worst_u10 = std::max(es.worst_u10, 100 * ea.under_10);
-        es.worst_med = std::min(es.worst_med, ea.median);
-        if (head)
-          es.heads_tsp_lo = std::min(es.heads_tsp_lo, etd.spread), es.heads_tsp_hi = std::max(es.heads_tsp_hi, etd.spread);
-
-        // The same with anisotropic cells (qs-remesh --even: split in u or v alone on long cells).
-        const auto a4 = qs::remesh::remesh_even_anisotropic(charts, 4).remesh;
-        const auto aa = qs::remesh::smallest_angle_stats(a4.mesh(0));
+        const double area_tsp = qs::remesh::chart_density(d.chart, per_patch).spread;
+        const auto e5 = qs::remesh::remesh_even(charts, 5).remesh;
+        row(c.name + "/even", qs::remesh::remesh_even(charts, 4).remesh.mesh(0), e5.mesh(0), area_tsp,
+            static_cast<double>(e5.connectivity.faces.size()) / uniform_faces);
         const auto a5 = qs::remesh::remesh_even_anisotropic(charts, 5).remesh;
-        const auto ae = qs::metro::metro(d.chart.mesh, a5.mesh(0), mo);
-        const double aerr = 100 * ae.mean / ae.diagonal;
-        const auto avd = qs::remesh::vertex_density(a5.mesh(0));
-        const double aface_ratio =
-            static_cast<double>(a5.connectivity.faces.size()) / static_cast<double>(r5.connectivity.faces.size());
-        std::printf("%-22s %-12s %6zu %8.4f %6.2f %6.2f %6.2f %6.1f %7.2f %7.2f %7.3f\n", f.filename().c_str(),
-                    (c.name + "/aniso").c_str(), d.chart.patches.size(), aerr, 100 * aa.under_5, 100 * aa.under_10,
-                    100 * aa.under_20, aa.median, avd.spread, etd.spread, aface_ratio);
-        std::fflush(stdout);
-        Sum& as = sums[c.name + "/aniso"];
-        ++as.meshes;
-        as.err += aerr, as.u10 += 100 * aa.under_10, as.med += aa.median, as.time += aface_ratio;
-        as.worst_vsp = std::max(as.worst_vsp, avd.spread);
-        as.worst_tsp = std::max(as.worst_tsp, etd.spread);
-        as.worst_u10 = std::max(as.worst_u10, 100 * aa.under_10);
-        as.worst_med = std::min(as.worst_med, aa.median);
-        if (head)
-          as.heads_tsp_lo = std::min(as.heads_tsp_lo, etd.spread), as.heads_tsp_hi = std::max(as.heads_tsp_hi, etd.spread);
+        row(c.name + "/aniso", qs::remesh::remesh_even_anisotropic(charts, 4).remesh.mesh(0), a5.mesh(0), area_tsp,
+            static_cast<double>(a5.connectivity.faces.size()) / uniform_faces);
       } catch (const qs::Error& e) {
         std::printf("%-22s %-12s error: %s\n", f.filename().c_str(), c.name.c_str(), e.what());
       }
