@@ -136,6 +136,17 @@ Funnel run_funnel(const CutMesh& cm, const std::vector<int>& faces, int s, int d
   std::vector<int> cidx{0}, cvert{s};
   Vec2 apex = S, left = S, right = S;
   int apex_i = 0, left_i = 0, right_i = 0;
+  // The funnel's side point `pi` becomes the new apex (a corner of the path); the walk restarts there.
+  auto restart_at = [&](int pi, const Vec2& p, int vertex, int& i) {
+    apex = p;
+    apex_i = pi;
+    cpos.push_back(apex);
+    cidx.push_back(apex_i);
+    cvert.push_back(vertex);
+    left = right = apex;
+    left_i = right_i = apex_i;
+    i = apex_i;
+  };
   for (int i = 1; i <= n + 1; ++i) {
     const Vec2& l = L[i];
     const Vec2& r = R[i];
@@ -144,14 +155,7 @@ Funnel run_funnel(const CutMesh& cm, const std::vector<int>& faces, int s, int d
         right = r;
         right_i = i;
       } else {
-        apex = left;
-        apex_i = left_i;
-        cpos.push_back(apex);
-        cidx.push_back(apex_i);
-        cvert.push_back(Lid[apex_i]);
-        left = right = apex;
-        left_i = right_i = apex_i;
-        i = apex_i;
+        restart_at(left_i, left, Lid[left_i], i);
         continue;
       }
     }
@@ -160,14 +164,7 @@ Funnel run_funnel(const CutMesh& cm, const std::vector<int>& faces, int s, int d
         left = l;
         left_i = i;
       } else {
-        apex = right;
-        apex_i = right_i;
-        cpos.push_back(apex);
-        cidx.push_back(apex_i);
-        cvert.push_back(Rid[apex_i]);
-        left = right = apex;
-        left_i = right_i = apex_i;
-        i = apex_i;
+        restart_at(right_i, right, Rid[right_i], i);
         continue;
       }
     }
