@@ -1,6 +1,7 @@
 #include "qs/remesh/anisotropic.h"
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -404,8 +405,10 @@ double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x
 // B), emitted as (A, M, D), (M, B, C), (M, C, D): re-cut as the fan from C, (C, D, A), (C, A, M),
 // (C, M, B), or from D, (D, A, M), (D, M, B), (D, B, C), when that raises the smallest angle over
 // the set. Every inner edge of the three joins at most one point of the patch border (see the
-// header), so no other patch can emit it.
-void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const std::vector<std::vector<Vec3>>& positions) {
+// header), so no other patch can emit it. With `accept`, only the present cut and the cuts it
+// accepts are candidates.
+void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const std::vector<std::vector<Vec3>>& positions,
+                               const std::function<bool(const std::array<Tri, 3>&)>& accept = {}) {
   const int a = amcbd[0], m = amcbd[1], b = amcbd[2], c = amcbd[3], d = amcbd[4];
   const std::array<std::array<Tri, 3>, 3> cuts = {{{Tri{a, m, d}, Tri{m, b, c}, Tri{m, c, d}},
                                                    {Tri{c, d, a}, Tri{c, a, m}, Tri{c, m, b}},
@@ -413,6 +416,8 @@ void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const st
   int best = 0;
   double best_q = -1;
   for (int k = 0; k < 3; ++k) {
+    const bool present = cuts[k][0] == f[0] && cuts[k][1] == f[1] && cuts[k][2] == f[2];
+    if (accept && !present && !accept(cuts[k])) continue;
     double q = 1;
     for (const auto& x : positions)
       for (const Tri& t : cuts[k]) q = std::min(q, sin_min_angle(x[t[0]], x[t[1]], x[t[2]]));
@@ -631,7 +636,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
       }
       return true;
     };
-    // (f1 starts at f0's first corner: cut 0-2.)
+    // (f1 starts at f0's first corner: cut 0-2.) A cell has two cuts: the other one is taken only
+    // where it is accepted.
     for (const auto& cut : cuts) {
       Tri &f0 = faces[cut.first_face], &f1 = faces[cut.first_face + 1];
       const Tri k0 = f0, k1 = f1;
@@ -639,13 +645,9 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
       const Tri both[2] = {f0, f1};
       if ((f0 != k0 || f1 != k1) && !ccw_in_one_patch(both, 2)) f0 = k0, f1 = k1;
     }
-    for (size_t k = 0; k < templates.size(); ++k) {
-      Tri* f = &faces[templates[k]];
-      const Tri keep[3] = {f[0], f[1], f[2]};
-      recut_template_best_angle(f, pentagons[k], out.remesh.positions);
-      if ((f[0] != keep[0] || f[1] != keep[1] || f[2] != keep[2]) && !ccw_in_one_patch(f, 3))
-        for (int i = 0; i < 3; ++i) f[i] = keep[i];
-    }
+    for (size_t k = 0; k < templates.size(); ++k)
+      recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions,
+                                [&](const std::array<Tri, 3>& cut) { return ccw_in_one_patch(cut.data(), 3); });
   }
   context.report("remesh", 1.0);
   return out;
