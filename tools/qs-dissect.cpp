@@ -148,6 +148,11 @@ int main(int argc, char** argv) {
                  "even when splitting made no progress (0: off)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--area-extra-depth", opt.area_extra_depth,
+                 "A patch over tau that holds at least --force-split-area of its mesh's area may be split this "
+                 "many levels past --max-depth (0: off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 12));
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");

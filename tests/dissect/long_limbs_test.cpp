@@ -170,6 +170,68 @@ TEST(LongLimbs, MinSplitAreaKeepsSmallPatchesOverTauWhole) {
   EXPECT_LT(l_on.patches, l_off.patches);
 }
 
+TEST(LongLimbs, AreaExtraDepthSplitsLargeLeavesOverTauPastMaxDepth) {
+  // Seeds on a belt around the body: every limb is a protrusion of a seed patch that
+  // each split hands to its centre child. With area_extra_depth 0, leaves over tau holding
+  // force_split_area or more stop at max_depth; with it (default 4), such a leaf stops for depth
+  // only at max_depth + area_extra_depth, and the largest over-tau leaf is smaller.
+  const Body& b = thin_body();
+  // Seeds on a belt around the waist, between the arms and the legs (the surface is a radial
+  // graph: the vertex whose direction is nearest each belt direction).
+  std::array<int, 4> belt{};
+  const std::array<qs::Vec3, 4> around = {qs::Vec3(1, -0.35, 0), qs::Vec3(0, -0.35, 1), qs::Vec3(-1, -0.35, 0),
+                                          qs::Vec3(0, -0.35, -1)};
+  for (int i = 0; i < 4; ++i) {
+    double best = -2;
+    for (int v = 0; v < b.mesh.num_vertices(); ++v) {
+      const double c = b.mesh.positions[v].normalized().dot(around[i].normalized());
+      if (c > best) best = c, belt[i] = v;
+    }
+  }
+  // A low max_depth (2) so that this small body reaches it with large leaves over tau.
+  qs::dissect::DissectOptions off;
+  off.max_depth = 2;
+  off.area_extra_depth = 0;
+  const auto d_off = qs::dissect::dissect(b.mesh, belt, off);
+  const Layout before = layout_of(d_off, off);
+  qs::dissect::DissectOptions on;
+  on.max_depth = 2;
+  const auto d = qs::dissect::dissect(b.mesh, belt, on);
+  const Layout after = layout_of(d, on);
+  auto large_at_depth = [](const qs::dissect::Dissection& x, const qs::dissect::DissectOptions& o, int depth) {
+    const auto share = leaf_area_shares(x);
+    int n = 0;
+    for (size_t i = 0; i < share.size(); ++i) {
+      const auto& p = x.chart.patches[i];
+      const int level = static_cast<int>(std::count(p.name.begin(), p.name.end(), '.'));
+      n += p.stretch > o.tau && share[i] >= o.force_split_area && p.stop == qs::dissect::StopReason::MaxDepth &&
+           level <= depth;
+    }
+    return n;
+  };
+  EXPECT_GT(large_at_depth(d_off, off, off.max_depth), 0) << "the test should exercise the rule";
+  EXPECT_EQ(large_at_depth(d, on, on.max_depth + on.area_extra_depth - 1), 0);
+  EXPECT_LT(after.largest_over_tau, before.largest_over_tau);
+  int deepest = 0;
+  for (const auto& n : d.tree) deepest = std::max(deepest, n.depth);
+  EXPECT_GT(deepest, on.max_depth);
+  EXPECT_TRUE(d.base.closed_conforming);
+}
+
+TEST(LongLimbs, AreaExtraDepthOutOfRangeIsRejected) {
+  const qs::TriMesh m = qs::shapes::icosphere(2);
+  for (int bad : {-1, 13}) {
+    qs::dissect::DissectOptions o;
+    o.area_extra_depth = bad;
+    try {
+      qs::dissect::dissect(m, std::nullopt, o);
+      ADD_FAILURE() << "area_extra_depth " << bad << " accepted";
+    } catch (const qs::InvalidInput& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("area_extra_depth"));
+    }
+  }
+}
+
 TEST(LongLimbs, AreaFractionsOutsideZeroOneAreRejected) {
   const qs::TriMesh m = qs::shapes::icosphere(2);
   for (double bad : {-0.1, 1.5, std::nan("")}) {

@@ -109,6 +109,7 @@ TEST_F(DissectTool, ExitCodes) {
   const RunResult nan_area = run_tool("qs-dissect", ball + " --min-split-area nan");
   EXPECT_EQ(nan_area.exit, 1) << nan_area.out;
   EXPECT_THAT(nan_area.out, HasSubstr("--min-split-area"));
+  EXPECT_EQ(run_tool("qs-dissect", ball + " --area-extra-depth 13").exit, 1);
   EXPECT_EQ(run_tool("qs-dissect", (dir_ / "missing.obj").string()).exit, 3);
   std::ofstream(dir_ / "ball.landmarks.json") << R"({"seeds": [0, 1, 1, 2]})";
   const RunResult dup = run_tool("qs-dissect", ball + " -o " + (dir_ / "b").string());

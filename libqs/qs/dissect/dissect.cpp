@@ -61,6 +61,9 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   if (!(options.force_split_area >= 0 && options.force_split_area <= 1))
     throw InvalidInput("force_split_area is " + std::to_string(options.force_split_area) +
                        "; expected a fraction of the surface in [0, 1] (0: off)");
+  if (options.area_extra_depth < 0 || options.area_extra_depth > 12)
+    throw InvalidInput("area_extra_depth is " + std::to_string(options.area_extra_depth) +
+                       "; expected 0 (off) to 12 levels past max_depth");
   if (meshes.empty()) throw InvalidInput("no mesh to dissect");
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");

@@ -23,11 +23,19 @@
 //      from the vertex nearest the weighted centroid, s2 = the vertex farthest from s0, s1 = the
 //      vertex maximizing min(d(s0,v), d(s2,v)), s3 = the vertex maximizing
 //      min(d(s0,v), d(s1,v), d(s2,v)); s1 and s3 swapped so that the loop runs counter-clockwise
-//      around +e3 (signed area of the quadrilateral projected on (e1, e2)).
+//      around +e3 (signed area of the quadrilateral projected on (e1, e2)). Last, two slab
+//      candidates (issue 13): the extreme vertices along +e2, +e3, -e2, -e3 (and the same turned
+//      by 45 degrees about e1) among those within 1% of the extent along e1 of the plane through
+//      the centroid normal to e1 (the slab doubled until it holds 4 vertices): a belt across the
+//      long axis where the centroid lies outside the body (a crouched figure: polygirl_20k), so
+//      that the rays start between the limbs and their loops run along the body.
 //   6. Every candidate is routed (trace_seed_loop's rule). Among those that route and leave at
 //      least 5% of the area on their smaller side, the largest
 //      (smaller side's area fraction) / (loop length / sqrt(total area)) wins; if none leaves 5%,
-//      the most even one. If none routes, choose_seeds throws InvalidInput asking for seeds.
+//      the most even one. A slab candidate must score more than 1.5 times the best of the others
+//      (where the rays give a belt, the slab's is about as good: 5 of the 26 shared meshes within
+//      1%, and the rays' choice is kept). If none routes, choose_seeds throws InvalidInput asking
+//      for seeds.
 //
 // Routing (trace_seed_loop): shortest paths on the vertex graph with 3D edge lengths, one path at
 // a time (A* with the straight-line distance to the target, which is exact for 3D edge lengths
@@ -640,6 +648,38 @@ std::array<int, 4> pca_seeds(const TriMesh& mesh, const std::vector<char>& used,
   return s;
 }
 
+/// A slab candidate (step 5 of the comment at the top): the extreme vertices along +a, +b, -a,
+/// -b among those within a thin slab around the plane through the centroid normal to n (half-width
+/// kSlabWidth of the extent along n, doubled until the slab holds 4 vertices): a belt around the
+/// body across n even where the centroid lies outside the body and the rays start elsewhere.
+constexpr double kSlabWidth = 0.01;
+/// A slab candidate replaces the best of the others only when its score is this many times theirs.
+constexpr double kSlabMargin = 1.5;
+
+std::array<int, 4> slab_seeds(const TriMesh& mesh, const std::vector<char>& used, const Vec3& centroid,
+                              const Vec3& n, const Vec3& a, const Vec3& b) {
+  const int nv = mesh.num_vertices();
+  std::vector<double> pn(nv), pa(nv), pb(nv);
+  double lo = INFINITY, hi = -INFINITY;
+  for (int v = 0; v < nv; ++v) {
+    const Vec3 d = mesh.positions[v] - centroid;
+    pn[v] = d.dot(n), pa[v] = d.dot(a), pb[v] = d.dot(b);
+    if (used[v]) lo = std::min(lo, pn[v]), hi = std::max(hi, pn[v]);
+  }
+  std::vector<char> in(nv, 0);
+  for (double h = kSlabWidth * (hi - lo); h <= 2 * (hi - lo); h *= 2) {
+    int count = 0;
+    for (int v = 0; v < nv; ++v) count += in[v] = used[v] && std::abs(pn[v]) <= h;
+    if (count >= 4) break;
+  }
+  std::array<int, 4> s{-1, -1, -1, -1};
+  s[0] = extreme(pa, +1, in, s);
+  s[1] = extreme(pb, +1, in, s);
+  s[2] = extreme(pa, -1, in, s);
+  s[3] = extreme(pb, -1, in, s);
+  return s;
+}
+
 /// The geodesic candidate (step 5 of the comment at the top).
 std::array<int, 4> farthest_seeds(const TriMesh& mesh, Dijkstra& dijkstra,
                                   const std::vector<char>& used, const Axes& axes) {
@@ -964,6 +1004,12 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
     }
   candidates.emplace_back("the principal-axis extremes", extreme_seeds(mesh, used, axes));
   candidates.emplace_back("the geodesically farthest vertices", farthest_seeds(mesh, dijkstra, used, axes));
+  const size_t others = candidates.size();
+  for (int turn = 0; turn < 2; ++turn) {
+    const double c = std::cos(turn * M_PI / 4), s = std::sin(turn * M_PI / 4);
+    candidates.emplace_back(std::string("the e1 slab extremes") + (turn ? " turned 45 degrees" : ""),
+                            slab_seeds(mesh, used, axes.centroid, axes.e1, c * axes.e2 + s * e3, -s * axes.e2 + c * e3));
+  }
   int best = -1;
   LoopScore best_score;
   bool best_ok = false;
@@ -971,8 +1017,11 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
     const auto score = route_score(mesh, g, dijkstra, area, candidates[i].first, candidates[i].second, why);
     if (!score) continue;
     const bool ok = score->fraction >= 0.05;
+    // A slab candidate must beat the others clearly (kSlabMargin): where the rays give a good belt
+    // the slab's is about as good, and the rays' choice is kept.
+    const double margin = i >= others && best >= 0 && static_cast<size_t>(best) < others ? kSlabMargin : 1.0;
     const bool better = best < 0 || (ok && !best_ok) ||
-                        (ok == best_ok && (ok ? score->value() > best_score.value() + 1e-12
+                        (ok == best_ok && (ok ? score->value() > margin * best_score.value() + 1e-12
                                               : score->fraction > best_score.fraction + 1e-12));
     if (better) {
       best = static_cast<int>(i);

@@ -67,10 +67,12 @@ std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop);
 /// Four seeds chosen automatically (the rule is in the README): with e1, e2, e3 the principal
 /// axes of the area-weighted vertices, the candidates are the ray seeds (where rays from the
 /// centroid first meet the surface, 4 rays 90 degrees apart) in each principal plane, also turned
-/// by 45 degrees, then the axis-extreme and the geodesically farthest vertices. Among the loops
+/// by 45 degrees, then the axis-extreme and the geodesically farthest vertices, then two slab
+/// candidates (the extremes in the plane through the centroid normal to e1). Among the loops
 /// that route and enclose at least 5% of the area, the largest (smaller side's area fraction) /
-/// (loop length / sqrt(area)) wins (else the most even loop): a short belt cutting the shape into
-/// two sizable parts. Deterministic.
+/// (loop length / sqrt(area)) wins (else the most even loop; a slab candidate must score 1.5
+/// times the best of the others): a short belt cutting the shape into two sizable parts.
+/// Deterministic.
 /// \throws InvalidInput when the mesh has fewer than 4 used vertices, or no candidate routes.
 std::array<int, 4> choose_seeds(const TriMesh& mesh);
 

@@ -257,8 +257,17 @@ DissectionSet SetDissector::run() {
     // one, local refinement is the last resort as everywhere else.
     bool folded = false;
     for (const auto& p : ps) folded = folded || !p.sp.bijective();
+    // Large over-tau patches outrank the depth bound too (area_extra_depth): a patch over tau (by its
+    // stretch, or folded) that holds at least force_split_area of its mesh's surface may be split
+    // up to area_extra_depth levels past max_depth. With seeds on a belt around a body, each limb
+    // is a protrusion of a seed patch that every split hands to its centre child, one level deeper.
+    bool large_over = false;
+    for (size_t i = 0; i < ps.size() && opt_.force_split_area > 0 && opt_.area_extra_depth > 0; ++i)
+      large_over = large_over || (over[i] && (ps[i].st.patch > opt_.tau || !ps[i].sp.bijective()) &&
+                                  ps[i].st.area3d >= opt_.force_split_area * mesh_area[i]);
     const int depth_limit =
-        opt_.max_depth + (folded && (node.depth > opt_.max_depth || squeezed_tip(ps)) ? kFoldExtraDepth : 0);
+        opt_.max_depth + (folded && (node.depth > opt_.max_depth || squeezed_tip(ps)) ? kFoldExtraDepth : 0) +
+        (large_over ? opt_.area_extra_depth : 0);
     StopReason stop = StopReason::None;
     std::string detail;
     if (small) {
