@@ -439,8 +439,12 @@ void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const st
 
 // Tangential smoothing of the patch-interior vertices (see the header): Gauss-Seidel in vertex
 // order, one uv per vertex for the whole set. Returns the number of accepted moves.
+// With `active` (#V flags), only the flagged vertices and, sweep after sweep, the neighbours of
+// the moved ones are tried (the flipped rings after a round of flips: the others are where the
+// previous smoothing left them).
 int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
-                    std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees) {
+                    std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees,
+                    std::vector<char>* active = nullptr) {
   if (iterations <= 0) return 0;
   const BaseTopology& t = samplers[0].topology();
   const int nv = c.num_vertices();
@@ -481,7 +485,7 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
   for (int it = 0; it < iterations; ++it) {
     int moves = 0;
     for (int v = 0; v < nv; ++v) {
-      if (!interior(v) || offset[v + 1] == offset[v]) continue;
+      if (!interior(v) || offset[v + 1] == offset[v] || (active && !(*active)[v])) continue;
       const int b = offset[v], e = offset[v + 1];
       auto nb_uv = [&](int r, int k) { const int w = ring[r][k]; return interior(w) ? c.vertex_uv[w] : fixed_uv[r][k]; };
       // The ring's worst smallest angle over the set, with v at x[m] in mesh m.
@@ -554,6 +558,8 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
         c.vertex_uv[v] = uv + d;
         for (size_t m = 0; m < meshes; ++m) positions[m][v] = moved[m];
         ++moves;
+        if (active)
+          for (int r = offset[v]; r < offset[v + 1]; ++r) (*active)[ring[r][0]] = (*active)[ring[r][1]] = 1;
       };
       // The centroid step, or its half, quarter, when the ring's worst angle rises.
       if (used == 0) continue;
@@ -576,8 +582,10 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
 // triangles are counter-clockwise in the patch's (u,v). Half-edge he = 3 f + k runs from corner k
 // of face f to corner k + 1; faces are replaced in place, edges visited from a stack (last in,
 // first out), so the result is a function of the input alone. Returns the number of flips.
+// `touched` (#V) flags the four corners of every flipped pair.
 int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
-                    const std::vector<std::vector<Vec3>>& positions, double below_degrees) {
+                    const std::vector<std::vector<Vec3>>& positions, double below_degrees,
+                    std::vector<char>& touched) {
   const BaseTopology& t = samplers[0].topology();
   auto interior = [&](int v) {
     const Vec2& uv = c.vertex_uv[v];
@@ -682,6 +690,7 @@ int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnec
     };
     link(3 * f, t_ca), link(3 * f + 1, t_ad), link(3 * g, t_db), link(3 * g + 1, t_bc), link(3 * f + 2, 3 * g + 2);
     ++flips;
+    touched[a] = touched[b] = touched[cc] = touched[d] = 1;
     for (int k = 0; k < 2; ++k) work.push_back(3 * f + k), work.push_back(3 * g + k);
   }
   return flips;
@@ -780,13 +789,16 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
       recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions,
                                 [&](const std::array<Tri, 3>& cut) { return ccw_in_one_patch(cut.data(), 3); });
   }
-  // Rounds of edge flips on the surface, each but the last followed by the interior smoothing.
+  // Rounds of edge flips on the surface, each but the last followed by the interior smoothing of
+  // the flipped rings.
   for (int r = 0; r < options.flip_rounds; ++r) {
     context.check_cancel();
-    out.stats.flips += flip_for_angles(samplers, out.remesh.connectivity, out.remesh.positions, options.smooth_below);
+    std::vector<char> touched(out.remesh.connectivity.num_vertices(), 0);
+    out.stats.flips +=
+        flip_for_angles(samplers, out.remesh.connectivity, out.remesh.positions, options.smooth_below, touched);
     if (r + 1 < options.flip_rounds)
       out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
-                                                  options.smooth_iterations, options.smooth_below);
+                                                  options.smooth_iterations, options.smooth_below, &touched);
   }
   context.report("remesh", 1.0);
   return out;

@@ -85,8 +85,13 @@
 // patch-interior end and is not an edge yet, and both new triangles are counter-clockwise in the
 // patch's (u,v) (so qs-bake still finds every face's patch). One decision for the whole set (the
 // connectivity stays common), no vertex moves (features stay exact), no edge along a patch side
-// changes (no T-junction, the patch structure stays). flip_rounds rounds of flips, each but the
-// last followed by the interior smoothing again. Faces are replaced in place: face_leaf then names
+// changes (no T-junction, the patch structure stays). The new edge must also stay as close to the
+// surface as the old one (its 3D midpoint's distance along the pair's normal from the chart's
+// point at its (u,v) midpoint: at most the old edge's or 0.005 of its length) and the pair's area
+// may grow by 5% at most (a flip across a bend or a fold would cut the surface: without these the
+// bodies' and polygirl_20k's level-5 errors rose). flip_rounds rounds of flips, each but the last
+// followed by the interior smoothing again (of the flipped pairs' corners, and of the neighbours
+// of the vertices it moves). Faces are replaced in place: face_leaf then names
 // the leaf of the face a flipped face replaced.
 // Before the smoothing every vertex is a point of the uniform level-L grid (L = the finest max(lu, lv) + 1, the leaf
 // centres), numbered in its order; SemiRegularConnectivity::level is the finest level a vertex
