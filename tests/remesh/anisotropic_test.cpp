@@ -410,6 +410,16 @@ TEST(Anisotropic, BadOptionsAreRejected) {
   } catch (const qs::InvalidInput& e) {
     EXPECT_THAT(e.what(), HasSubstr("0..60 degrees"));
   }
+  o.smooth_below = qs::remesh::kDefaultSmoothBelow;
+  for (int rounds : {-1, 11}) {
+    o.flip_rounds = rounds;
+    try {
+      qs::remesh::remesh_anisotropic(charts, o);
+      ADD_FAILURE() << "flip_rounds " << rounds << " accepted";
+    } catch (const qs::InvalidInput& e) {
+      EXPECT_THAT(e.what(), HasSubstr("flip rounds " + std::to_string(rounds) + " are out of range; expected 0..10"));
+    }
+  }
   EXPECT_THROW(qs::remesh::anisotropic_options(-1, 2), qs::InvalidInput);
   EXPECT_THROW(qs::remesh::anisotropic_options(3, 0), qs::InvalidInput);
 }
