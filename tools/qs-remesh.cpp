@@ -203,7 +203,9 @@ int main(int argc, char** argv) {
                         {"max_leaf_aspect", ar.stats.max_leaf_aspect},
                         {"smooth_iterations", ao.smooth_iterations},
                         {"smooth_below", ao.smooth_below},
-                        {"smoothed_moves", ar.stats.smoothed_moves}};
+                        {"smoothed_moves", ar.stats.smoothed_moves},
+                        {"flip_rounds", ao.flip_rounds},
+                        {"flips", ar.stats.flips}};
     } else if (even) {
       double share_sum = 0;
       for (double a : qs::remesh::patch_area_shares(charts)) share_sum += a;

@@ -8,6 +8,7 @@
 #include <set>
 #include <string>
 
+#include "qs/bake/split_mesh.h"
 #include "qs/core/error.h"
 #include "qs/remesh/adaptive.h"
 #include "qs/remesh/anisotropic.h"
@@ -176,15 +177,16 @@ TEST(Anisotropic, ClosedManifoldOnManyTrees) {
 }
 
 // A copy of a dissection's chart whose maps are sheared inside every patch: each wedge's u moves by
-// k sin(pi u) sin(2 pi v) / 2 (v kept; monotone in u for k < 2 / pi, the identity on the square's
-// border), so the remesh's cells are parallelograms on the surface, not rectangles. (A few thin
-// chart triangles may still turn over in uv, so points are not compared with an unhinted lookup.)
-qs::dissect::Chart sheared(const qs::dissect::Chart& in, double k) {
+// k sin(pi u) sin(2 pi waves v) / 2 (v kept; monotone in u for k < 2 / pi, the identity on the
+// square's border; the shear du'/dv reaches k pi waves), so the remesh's cells are parallelograms on
+// the surface, not rectangles. (A few thin chart triangles may still turn over in uv, so points are
+// not compared with an unhinted lookup.)
+qs::dissect::Chart sheared(const qs::dissect::Chart& in, double k, int waves = 1) {
   qs::dissect::Chart c = in;
   for (auto& w : c.face_uv)
     for (auto& uv : w) {
       const double u = uv.x(), v = uv.y();
-      if (u > 0 && u < 1 && v > 0 && v < 1) uv.x() = u + 0.5 * k * std::sin(M_PI * u) * std::sin(2 * M_PI * v);
+      if (u > 0 && u < 1 && v > 0 && v < 1) uv.x() = u + 0.5 * k * std::sin(M_PI * u) * std::sin(2 * M_PI * waves * v);
     }
   return c;
 }
@@ -209,6 +211,7 @@ TEST(Anisotropic, SmoothingRemovesSliversOfShearedMaps) {
     const std::vector<const qs::dissect::Chart*> charts = {&chart};
     qs::remesh::AnisotropicOptions o = qs::remesh::anisotropic_options(4, static_cast<int>(chart.patches.size()));
     o.smooth_iterations = 0;
+    o.flip_rounds = 0;  // the smoothing alone (the flips: FlipsRemoveNeedlesOfShearedMaps)
     const auto raw = qs::remesh::remesh_anisotropic(charts, o);
     o.smooth_iterations = qs::remesh::kDefaultSmoothIterations;
     const auto smooth = qs::remesh::remesh_anisotropic(charts, o);
@@ -243,6 +246,110 @@ TEST(Anisotropic, SmoothingRemovesSliversOfShearedMaps) {
     EXPECT_LE(after.under_10, before.under_10);
     EXPECT_GT(after.median, before.median);
   }
+}
+
+// Anisotropic remeshes of `charts` at level 4: without flips, with one round (flips only: the same
+// vertices) and with the default rounds.
+struct FlipRuns {
+  qs::remesh::AnisotropicRemesh none, one, full;
+  qs::remesh::AnisotropicOptions options;  ///< full's
+};
+FlipRuns flip_runs(const std::vector<const qs::dissect::Chart*>& charts, int level) {
+  qs::remesh::AnisotropicOptions o = qs::remesh::anisotropic_options(level, static_cast<int>(charts[0]->patches.size()));
+  FlipRuns r;
+  o.flip_rounds = 0;
+  r.none = qs::remesh::remesh_anisotropic(charts, o);
+  o.flip_rounds = 1;
+  r.one = qs::remesh::remesh_anisotropic(charts, o);
+  o.flip_rounds = qs::remesh::kDefaultFlipRounds;
+  r.full = qs::remesh::remesh_anisotropic(charts, o);
+  r.options = o;
+  return r;
+}
+
+// The worst over the meshes of a set: the largest share under 10 and 20 degrees, the lowest median.
+qs::remesh::AngleStats worst_angles(const qs::remesh::AnisotropicRemesh& a) {
+  qs::remesh::AngleStats w;
+  w.median = 90;
+  for (size_t m = 0; m < a.remesh.positions.size(); ++m) {
+    const auto s = qs::remesh::smallest_angle_stats(a.remesh.mesh(static_cast<int>(m)));
+    w.under_10 = std::max(w.under_10, s.under_10);
+    w.under_20 = std::max(w.under_20, s.under_20);
+    w.median = std::min(w.median, s.median);
+  }
+  return w;
+}
+
+// What the flips must keep: a closed 2-manifold, every face counter-clockwise in the (u,v) of a
+// patch that holds its three corners (qs-bake's split_by_patch finds each face's patch). (The
+// vertices' points are checked on unsheared charts, SmoothedSetSharesConnectivity; see sheared().)
+void expect_flipped_remesh_valid(const std::vector<const qs::dissect::Chart*>& charts,
+                                 const qs::remesh::AnisotropicRemesh& a, const std::string& what) {
+  SCOPED_TRACE(what);
+  const auto& c = a.remesh.connectivity;
+  EXPECT_EQ(expect_closed_manifold(c.faces, c.num_vertices()), 2);
+  EXPECT_EQ(clockwise_uv_faces(c), 0);
+  EXPECT_EQ(a.face_leaf.size(), c.faces.size());
+  for (size_t m = 0; m < charts.size(); ++m) {
+    const qs::remesh::ChartSampler s(*charts[m]);
+    EXPECT_NO_THROW(qs::bake::split_by_patch(c, a.remesh.positions[m], s.topology())) << "mesh " << m;
+    expect_valid_sphere(a.remesh.mesh(static_cast<int>(m)), what);
+  }
+}
+
+// Where the map shears, every cell is a thin parallelogram on the surface, and no cut of a cell nor
+// the affine-invariant smoothing gives triangles above the shear angle: the flips across cells do.
+// They move no vertex, keep the face count, and raise the angles a lot.
+TEST(Anisotropic, FlipsRemoveNeedlesOfShearedMaps) {
+  struct Case {
+    const qs::dissect::Chart* base;
+    int waves;
+  };
+  for (const Case& k : {Case{&qs::remesh_test::sphere_dissection().chart, 4}, Case{&qs::remesh_test::star_dissection().chart, 2}}) {
+    const qs::dissect::Chart chart = sheared(*k.base, 0.6, k.waves);
+    const std::vector<const qs::dissect::Chart*> charts = {&chart};
+    const FlipRuns r = flip_runs(charts, 4);
+    const auto none = worst_angles(r.none), one = worst_angles(r.one), full = worst_angles(r.full);
+    SCOPED_TRACE("waves " + std::to_string(k.waves));
+    ASSERT_GT(none.under_20, 0.05) << "the sheared maps should leave needles without flips";
+    EXPECT_EQ(r.none.stats.flips, 0);
+    EXPECT_GT(r.one.stats.flips, 0);
+    expect_flipped_remesh_valid(charts, r.one, "one round");
+    expect_flipped_remesh_valid(charts, r.full, "default rounds");
+    // One round flips edges only: the same vertices at the same points, as many faces.
+    EXPECT_EQ(r.one.remesh.connectivity.vertex_uv, r.none.remesh.connectivity.vertex_uv);
+    EXPECT_EQ(r.one.remesh.positions, r.none.remesh.positions);
+    EXPECT_EQ(r.one.remesh.connectivity.num_faces(), r.none.remesh.connectivity.num_faces());
+    EXPECT_NE(r.one.remesh.connectivity.faces, r.none.remesh.connectivity.faces);
+    EXPECT_LT(one.under_20, 0.6 * none.under_20);
+    EXPECT_LE(one.under_10, none.under_10);
+    EXPECT_GT(one.median, none.median + 2);
+    // The default rounds (flips, smoothing, flips, ...) do better still.
+    EXPECT_LT(full.under_20, 0.4 * none.under_20);
+    EXPECT_LE(full.under_10, one.under_10);
+    EXPECT_GT(full.median, none.median + 5);
+  }
+}
+
+// A set flips by its worst mesh: one connectivity for all, deterministic, valid in every mesh, and
+// the worst mesh's angles improve.
+TEST(Anisotropic, FlipsKeepOneConnectivityForASet) {
+  const auto& pair = qs::remesh_test::pair_dissection();
+  const qs::dissect::Chart a = sheared(pair.meshes[0].chart, 0.6, 3), b = sheared(pair.meshes[1].chart, 0.5, 2);
+  const std::vector<const qs::dissect::Chart*> charts = {&a, &b};
+  const FlipRuns r = flip_runs(charts, 3);
+  const auto again = qs::remesh::remesh_anisotropic(charts, r.options);
+  EXPECT_EQ(again.remesh.connectivity.faces, r.full.remesh.connectivity.faces);
+  EXPECT_EQ(again.remesh.connectivity.vertex_uv, r.full.remesh.connectivity.vertex_uv);
+  EXPECT_EQ(again.remesh.positions, r.full.remesh.positions);
+  EXPECT_GT(r.full.stats.flips, 0);
+  ASSERT_EQ(r.full.remesh.positions.size(), 2u);
+  expect_flipped_remesh_valid(charts, r.one, "one round");
+  expect_flipped_remesh_valid(charts, r.full, "default rounds");
+  const auto none = worst_angles(r.none), full = worst_angles(r.full);
+  EXPECT_LT(full.under_20, none.under_20);
+  EXPECT_LE(full.under_10, none.under_10);
+  EXPECT_GT(full.median, none.median);
 }
 
 // A set keeps one connectivity and one (u, v) per vertex with the smoothing, deterministically, and
@@ -302,6 +409,16 @@ TEST(Anisotropic, BadOptionsAreRejected) {
     ADD_FAILURE() << "smooth_below 75 accepted";
   } catch (const qs::InvalidInput& e) {
     EXPECT_THAT(e.what(), HasSubstr("0..60 degrees"));
+  }
+  o.smooth_below = qs::remesh::kDefaultSmoothBelow;
+  for (int rounds : {-1, 11}) {
+    o.flip_rounds = rounds;
+    try {
+      qs::remesh::remesh_anisotropic(charts, o);
+      ADD_FAILURE() << "flip_rounds " << rounds << " accepted";
+    } catch (const qs::InvalidInput& e) {
+      EXPECT_THAT(e.what(), HasSubstr("flip rounds " + std::to_string(rounds) + " are out of range; expected 0..10"));
+    }
   }
   EXPECT_THROW(qs::remesh::anisotropic_options(-1, 2), qs::InvalidInput);
   EXPECT_THROW(qs::remesh::anisotropic_options(3, 0), qs::InvalidInput);

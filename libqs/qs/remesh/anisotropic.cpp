@@ -32,6 +32,13 @@ constexpr double kAspectAreaFloor = 1.0 / 16;
 // worst angle keeps at least this share of its sine (see the header).
 constexpr double kSmoothWorstSlack = 0.9;
 
+// A flip's new edge may lie this share of its length off the surface (at its midpoint) where the
+// old edge lay closer (see flip_for_angles).
+constexpr double kFlipChordSlack = 0.005;
+// ... and its two triangles may cover this much more area than the old two (a flip across a fold
+// of a squeezed map does much more: polygirl_20k's level-5 vertex spread 33.8 -> 50 without it).
+constexpr double kFlipAreaGrowth = 1.05;
+
 constexpr double kHalfLog2 = 0.34657359027997264;  // log(2) / 2
 
 enum Split : int { kNone = 0, kU = 1, kV = 2, kUV = 3 };
@@ -256,7 +263,7 @@ struct LeafCut {
 // Faces of the leaves (see the header), the cells cut in two listed in `cuts`.
 SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vector<AnisoNode>& leaves,
                                           std::vector<LeafCut>& cuts, std::vector<size_t>& templates,
-                                          int& fan_leaves) {
+                                          int& fan_leaves, std::vector<int>& face_leaf) {
   int finest = 0;
   for (const auto& n : leaves) finest = std::max({finest, n.lu, n.lv});
   const int top = finest + 1;  // leaf centres
@@ -291,7 +298,10 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
   std::vector<std::array<std::int64_t, 3>> faces;
   faces.reserve(2 * leaves.size() + leaves.size() / 2);
   fan_leaves = 0;
-  for (const auto& n : leaves) {
+  face_leaf.clear();
+  for (size_t leaf = 0; leaf < leaves.size(); ++leaf) {
+    face_leaf.resize(faces.size(), static_cast<int>(leaf) - 1);
+    const AnisoNode& n = leaves[leaf];
     int x0, x1, y0, y1;
     rect(n, x0, x1, y0, y1);
     const int p = n.patch;
@@ -345,6 +355,7 @@ SemiRegularConnectivity leaf_connectivity(const BaseTopology& t, const std::vect
     for (size_t r = 0; r < ring.size(); ++r) faces.push_back({centre, ring[r], ring[(r + 1) % ring.size()]});
   }
 
+  face_leaf.resize(faces.size(), static_cast<int>(leaves.size()) - 1);
   int used_bits = 0;
   SemiRegularConnectivity out = compact_connectivity(t, num, faces, "the anisotropic remesh", &used_bits);
   // The finest grid level that any vertex needs.
@@ -428,8 +439,12 @@ void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const st
 
 // Tangential smoothing of the patch-interior vertices (see the header): Gauss-Seidel in vertex
 // order, one uv per vertex for the whole set. Returns the number of accepted moves.
+// With `active` (#V flags), only the flagged vertices and, sweep after sweep, the neighbours of
+// the moved ones are tried (the flipped rings after a round of flips: the others are where the
+// previous smoothing left them).
 int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
-                    std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees) {
+                    std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees,
+                    std::vector<char>* active = nullptr) {
   if (iterations <= 0) return 0;
   const BaseTopology& t = samplers[0].topology();
   const int nv = c.num_vertices();
@@ -470,7 +485,7 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
   for (int it = 0; it < iterations; ++it) {
     int moves = 0;
     for (int v = 0; v < nv; ++v) {
-      if (!interior(v) || offset[v + 1] == offset[v]) continue;
+      if (!interior(v) || offset[v + 1] == offset[v] || (active && !(*active)[v])) continue;
       const int b = offset[v], e = offset[v + 1];
       auto nb_uv = [&](int r, int k) { const int w = ring[r][k]; return interior(w) ? c.vertex_uv[w] : fixed_uv[r][k]; };
       // The ring's worst smallest angle over the set, with v at x[m] in mesh m.
@@ -543,6 +558,8 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
         c.vertex_uv[v] = uv + d;
         for (size_t m = 0; m < meshes; ++m) positions[m][v] = moved[m];
         ++moves;
+        if (active)
+          for (int r = offset[v]; r < offset[v + 1]; ++r) (*active)[ring[r][0]] = (*active)[ring[r][1]] = 1;
       };
       // The centroid step, or its half, quarter, when the ring's worst angle rises.
       if (used == 0) continue;
@@ -559,6 +576,126 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
   return accepted;
 }
 
+// Edge flips on the surface (see the header): an edge whose two triangles lie in one patch is
+// flipped when that raises the smallest angle of the two over the set, their worst angle is under
+// below_degrees, the new edge has a patch-interior end and is no edge yet, and the two new
+// triangles are counter-clockwise in the patch's (u,v). Half-edge he = 3 f + k runs from corner k
+// of face f to corner k + 1; faces are replaced in place, edges visited from a stack (last in,
+// first out), so the result is a function of the input alone. Returns the number of flips.
+// `touched` (#V) flags the four corners of every flipped pair.
+int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
+                    const std::vector<std::vector<Vec3>>& positions, double below_degrees,
+                    std::vector<char>& touched) {
+  const BaseTopology& t = samplers[0].topology();
+  auto interior = [&](int v) {
+    const Vec2& uv = c.vertex_uv[v];
+    return v >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
+  };
+  auto& faces = c.faces;
+  const int nf = c.num_faces(), nv = c.num_vertices();
+  auto from = [&](int he) { return faces[he / 3][he % 3]; };
+  auto to = [&](int he) { return faces[he / 3][(he % 3 + 1) % 3]; };
+  auto next = [](int he) { return he - he % 3 + (he % 3 + 1) % 3; };
+  auto prev = [](int he) { return he - he % 3 + (he % 3 + 2) % 3; };
+  // Twins through the half-edges leaving each vertex.
+  std::vector<int> out_offset(nv + 1, 0), out_he(3 * static_cast<size_t>(nf)), twin(3 * static_cast<size_t>(nf), -1);
+  for (int he = 0; he < 3 * nf; ++he) ++out_offset[from(he) + 1];
+  for (int v = 0; v < nv; ++v) out_offset[v + 1] += out_offset[v];
+  {
+    std::vector<int> fill(out_offset.begin(), out_offset.end() - 1);
+    for (int he = 0; he < 3 * nf; ++he) out_he[fill[from(he)]++] = he;
+  }
+  for (int he = 0; he < 3 * nf; ++he) {
+    const int b = to(he), a = from(he);
+    for (int k = out_offset[b]; k < out_offset[b + 1]; ++k)
+      if (to(out_he[k]) == a) twin[he] = out_he[k];
+  }
+  // Whether an edge joins v and w: around v through the twins (the mesh is closed and manifold).
+  auto joined = [&](int start, int w) {  // start: a half-edge leaving v
+    int he = start;
+    for (int guard = 0; guard < nf; ++guard) {
+      if (to(he) == w) return true;
+      he = twin[prev(he)];
+      if (he < 0 || he == start) return false;
+    }
+    return false;
+  };
+  auto patch_of = [&](int f) {
+    for (int v : faces[f])
+      if (interior(v)) return c.vertex_patch[v];
+    return -1;
+  };
+  auto quality = [&](const Tri& f, const Tri& g) {
+    double q = 1;
+    for (const auto& x : positions)
+      q = std::min({q, sin_min_angle(x[f[0]], x[f[1]], x[f[2]]), sin_min_angle(x[g[0]], x[g[1]], x[g[2]])});
+    return q;
+  };
+  const double threshold = std::sin(below_degrees * M_PI / 180);
+  std::vector<int> hints(samplers.size(), -1);
+  std::vector<int> work;
+  work.reserve(3 * static_cast<size_t>(nf));
+  for (int he = 3 * nf - 1; he >= 0; --he) work.push_back(he);
+  int flips = 0;
+  const long budget = 20L * nf;  // visits; flips raise the sorted angles, so this is a guard only
+  for (long visit = 0; !work.empty() && visit < budget; ++visit) {
+    const int h = work.back();
+    work.pop_back();
+    const int g_he = twin[h];
+    if (g_he < 0) continue;
+    const int f = h / 3, g = g_he / 3;
+    if (f == g) continue;
+    const int a = from(h), b = to(h), cc = to(next(h)), d = to(next(g_he));
+    if (cc == d || (!interior(cc) && !interior(d))) continue;
+    const int p = patch_of(f);
+    if (p < 0 || patch_of(g) != p) continue;
+    const double before = quality(faces[f], faces[g]);
+    if (!(before < threshold)) continue;
+    const Tri f_new = {cc, a, d}, g_new = {d, b, cc};
+    if (!(quality(f_new, g_new) > before * (1 + 1e-9))) continue;
+    if (joined(prev(h), d)) continue;  // prev(h) leaves cc
+    // Counter-clockwise in the patch's (u,v), with a margin against rounding.
+    const Vec2 near = c.vertex_uv[interior(cc) ? cc : d];
+    const Vec2 ua = uv_in_patch(t, c, a, p, near), ub = uv_in_patch(t, c, b, p, near),
+               uc = uv_in_patch(t, c, cc, p, near), ud = uv_in_patch(t, c, d, p, near);
+    const double total = std::abs(cross2(ub - ua, uc - ua)) + std::abs(cross2(ua - ub, ud - ub));
+    if (!(cross2(ua - uc, ud - uc) > 1e-6 * total && cross2(ub - ud, uc - ud) > 1e-6 * total)) continue;
+    // The new edge stays as close to the surface as the old one (in every mesh): the distance of
+    // its 3D midpoint from the chart's point at its (u,v) midpoint, along the normal of the two
+    // old triangles (the map's tangential distortion does not count), at most the old edge's or
+    // kFlipChordSlack of its length, and the pair's area grows by kFlipAreaGrowth at most, so
+    // that a flip across a bend or a fold does not cut the surface.
+    bool near_surface = true;
+    for (size_t m = 0; m < samplers.size() && near_surface; ++m) {
+      const auto& x = positions[m];
+      Vec3 n = (x[b] - x[a]).cross(x[cc] - x[a]) + (x[a] - x[b]).cross(x[d] - x[b]);
+      const double nn = n.norm();
+      if (!(nn > 0)) continue;
+      n /= nn;
+      const double old_gap = std::abs(n.dot(0.5 * (x[a] + x[b]) - samplers[m].point(p, 0.5 * (ua + ub), hints[m])));
+      const double new_gap = std::abs(n.dot(0.5 * (x[cc] + x[d]) - samplers[m].point(p, 0.5 * (uc + ud), hints[m])));
+      const double old_area = (x[b] - x[a]).cross(x[cc] - x[a]).norm() + (x[a] - x[b]).cross(x[d] - x[b]).norm();
+      const double new_area = (x[a] - x[cc]).cross(x[d] - x[cc]).norm() + (x[b] - x[d]).cross(x[cc] - x[d]).norm();
+      near_surface = new_gap <= std::max(old_gap, kFlipChordSlack * (x[cc] - x[d]).norm()) &&
+                     new_area <= kFlipAreaGrowth * old_area;
+    }
+    if (!near_surface) continue;
+    // The outer half-edges' twins, then the two faces and their six half-edges.
+    const int t_bc = twin[next(h)], t_ca = twin[prev(h)], t_ad = twin[next(g_he)], t_db = twin[prev(g_he)];
+    faces[f] = f_new;  // 3f: c->a, 3f+1: a->d, 3f+2: d->c
+    faces[g] = g_new;  // 3g: d->b, 3g+1: b->c, 3g+2: c->d
+    auto link = [&](int x, int y) {
+      twin[x] = y;
+      if (y >= 0) twin[y] = x;
+    };
+    link(3 * f, t_ca), link(3 * f + 1, t_ad), link(3 * g, t_db), link(3 * g + 1, t_bc), link(3 * f + 2, 3 * g + 2);
+    ++flips;
+    touched[a] = touched[b] = touched[cc] = touched[d] = 1;
+    for (int k = 0; k < 2; ++k) work.push_back(3 * f + k), work.push_back(3 * g + k);
+  }
+  return flips;
+}
+
 }  // namespace
 
 AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& charts, const AnisotropicOptions& options,
@@ -572,6 +709,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   if (options.max_level < 0 || options.max_level > kMaxAnisotropicLevel)
     throw InvalidInput("remesh: max level " + std::to_string(options.max_level) + " is out of range; expected 0.." +
                        std::to_string(kMaxAnisotropicLevel));
+  if (options.flip_rounds < 0 || options.flip_rounds > 10)
+    throw InvalidInput("remesh: flip rounds " + std::to_string(options.flip_rounds) + " are out of range; expected 0..10");
   if (options.smooth_iterations < 0 || options.smooth_iterations > 100)
     throw InvalidInput("remesh: smoothing sweeps " + std::to_string(options.smooth_iterations) +
                        " are out of range; expected 0..100");
@@ -597,7 +736,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
 
   std::vector<LeafCut> cuts;
   std::vector<size_t> templates;
-  out.remesh.connectivity = leaf_connectivity(topology, out.leaves, cuts, templates, out.stats.fan_leaves);
+  out.remesh.connectivity = leaf_connectivity(topology, out.leaves, cuts, templates, out.stats.fan_leaves,
+                                                  out.face_leaf);
   for (size_t m = 0; m < samplers.size(); ++m) {
     context.report("remesh", 0.7 + 0.3 * m / samplers.size());
     out.remesh.positions.push_back(sample_positions(samplers[m], out.remesh.connectivity, context));
@@ -648,6 +788,17 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     for (size_t k = 0; k < templates.size(); ++k)
       recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions,
                                 [&](const std::array<Tri, 3>& cut) { return ccw_in_one_patch(cut.data(), 3); });
+  }
+  // Rounds of edge flips on the surface, each but the last followed by the interior smoothing of
+  // the flipped rings.
+  for (int r = 0; r < options.flip_rounds; ++r) {
+    context.check_cancel();
+    std::vector<char> touched(out.remesh.connectivity.num_vertices(), 0);
+    out.stats.flips +=
+        flip_for_angles(samplers, out.remesh.connectivity, out.remesh.positions, options.smooth_below, touched);
+    if (r + 1 < options.flip_rounds)
+      out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
+                                                  options.smooth_iterations, options.smooth_below, &touched);
   }
   context.report("remesh", 1.0);
   return out;

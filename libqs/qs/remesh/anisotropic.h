@@ -73,6 +73,26 @@
 // vertex is evaluated through the chart at its new uv, so it stays on the surface; corners, patch
 // sides (features, seeds) and the connectivity do not move. The two-triangle cells are cut again
 // by the better diagonal afterwards. vertex_uv then holds the moved (u, v).
+//
+// Edge flips (after the smoothing and the re-cuts; issue 13): where the chart's map shears (the u
+// and v directions meet at a small angle on the surface) every cell is a thin parallelogram, and
+// no cut of a cell, no split and no affine-invariant smoothing gives its triangles a smallest angle
+// above the shear angle (qs-bench-slivers: on camel and lion 99% of the level-4 faces under 10
+// degrees are in cells with a 3D corner angle under 30 degrees, 92-95% with leaf_aspect < 1.5).
+// Flipping edges across cells finds the lattice's short vectors instead. An edge is flipped when
+// its two triangles lie in one patch (each has a patch-interior corner in it), the worst smallest
+// angle of the two over the set is under smooth_below and rises with the flip, the new edge has a
+// patch-interior end and is not an edge yet, and both new triangles are counter-clockwise in the
+// patch's (u,v) (so qs-bake still finds every face's patch). One decision for the whole set (the
+// connectivity stays common), no vertex moves (features stay exact), no edge along a patch side
+// changes (no T-junction, the patch structure stays). The new edge must also stay as close to the
+// surface as the old one (its 3D midpoint's distance along the pair's normal from the chart's
+// point at its (u,v) midpoint: at most the old edge's or 0.005 of its length) and the pair's area
+// may grow by 5% at most (a flip across a bend or a fold would cut the surface: without these the
+// bodies' and polygirl_20k's level-5 errors rose). flip_rounds rounds of flips, each but the last
+// followed by the interior smoothing again (of the flipped pairs' corners, and of the neighbours
+// of the vertices it moves). Faces are replaced in place: face_leaf then names
+// the leaf of the face a flipped face replaced.
 // Before the smoothing every vertex is a point of the uniform level-L grid (L = the finest max(lu, lv) + 1, the leaf
 // centres), numbered in its order; SemiRegularConnectivity::level is the finest level a vertex
 // needs.
@@ -104,13 +124,22 @@ inline constexpr double kDefaultMaxAspect = 2.0;
 inline constexpr int kDefaultSmoothIterations = 8;
 inline constexpr double kDefaultSmoothBelow = 40.0;
 
+/// Default AnisotropicOptions::flip_rounds (see "Edge flips" above). Share of level-4 faces under
+/// 10 degrees on camel_4k_fixed / lion_sumner_10k (qs-bench-slivers): 0 rounds 4.68% / 5.18%, 1
+/// 2.68% / 3.60%, 2 1.69% / 3.01%, 3 1.50% / 2.84%, 4 1.43% / 2.79% (each round after the first
+/// costs a smoothing: the example set's level-4 remesh step 0.22 s with none, 0.44 s with 3).
+inline constexpr int kDefaultFlipRounds = 3;
+
 struct AnisotropicOptions {
   double max_area = 0;      ///< bound on A_C (a share of the surface, 0..1); > 0
   double max_aspect = kDefaultMaxAspect;  ///< bound on a leaf's aspect on the surface; >= 1.5
   int max_level = 10;       ///< no node is split in u beyond lu = max_level, nor in v beyond lv = max_level;
                             ///< 0..kMaxAnisotropicLevel
   int smooth_iterations = kDefaultSmoothIterations;  ///< sweeps of the interior smoothing (below); 0: off; 0..100
-  double smooth_below = kDefaultSmoothBelow;  ///< only vertices with a ring angle under this many degrees move; 0..60
+  double smooth_below = kDefaultSmoothBelow;  ///< only vertices with a ring angle under this many degrees move,
+                                              ///< only edges whose triangles have one under it flip; 0..60
+  int flip_rounds = kDefaultFlipRounds;  ///< rounds of edge flips (see above), each but the last followed by the
+                                         ///< smoothing; 0: no flips; 0..10
 };
 
 /// A node of an anisotropic tree (see the top of this file).
@@ -126,21 +155,23 @@ struct AnisotropicStats {
   int fan_leaves = 0;        ///< leaves cut as a fan around their centre (see above)
   double max_leaf_aspect = 1;  ///< the largest leaf_aspect (the worst mesh's, see above)
   int finest_level = 0;      ///< the largest max(lu, lv) over the leaves
-  int smoothed_moves = 0;    ///< vertex moves accepted by the interior smoothing, all sweeps together
+  int smoothed_moves = 0;    ///< vertex moves accepted by the interior smoothing, all sweeps and rounds together
+  int flips = 0;             ///< edges flipped (see "Edge flips"), all rounds together
 };
 
 struct AnisotropicRemesh {
   SemiRegularSet remesh;          ///< one connectivity, one position array per chart
   std::vector<AnisoNode> leaves;  ///< patch by patch, depth first; faces come leaf by leaf
   std::vector<double> leaf_aspect;  ///< #leaves: the worst mesh's aspect exp(|log r| + w) of each leaf (>= 1)
+  std::vector<int> face_leaf;       ///< #F: the leaf (index into leaves) whose cell holds each face
   AnisotropicStats stats;
 };
 
 /// Anisotropic even remesh of a set of charts with one connectivity (for one mesh, pass one chart).
 /// Reports progress as "remesh" and checks the cancel flag.
 /// \pre the charts' patch lists have the same structure, as dissect_set produces.
-/// \throws InvalidInput for max_area <= 0 or not finite, max_aspect < 1.5 or not finite, max_level
-///         out of range, an empty set, or charts that do not match chart 0 (see set_samplers).
+/// \throws InvalidInput for max_area <= 0 or not finite, max_aspect < 1.5 or not finite, max_level,
+///         smooth_iterations, smooth_below or flip_rounds out of range, an empty set, or charts that do not match chart 0 (see set_samplers).
 AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& charts,
                                      const AnisotropicOptions& options, const Context& context = {});
 
