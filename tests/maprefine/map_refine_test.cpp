@@ -14,6 +14,7 @@
 #include "qs/dissect/dissection.h"
 #include "qs/family/family.h"
 #include "qs/maprefine/map_refine.h"
+#include "qs/merge/merge.h"
 #include "qs/param/square_param.h"
 #include "qs/remesh/chart_sampler.h"
 #include "qs/remesh/uniform.h"
@@ -631,6 +632,10 @@ TEST(MoveCorners, MovesCornersBijectivelyKeepingSeedsFeaturesAndTheBaseDomain) {
   EXPECT_EQ(c.mesh.num_vertices(), was.mesh.num_vertices() + r.corner_cut_vertices);
   for (int v = 0; v < was.mesh.num_vertices(); ++v) ASSERT_EQ(c.mesh.positions[v], was.mesh.positions[v]);
   EXPECT_NEAR(surface_area(c), surface_area(was), 1e-9 * surface_area(was));
+  std::vector<char> used(c.mesh.num_vertices(), 0);  // every chart vertex is in a face
+  for (const auto& t : c.mesh.faces)
+    for (int v : t) used[v] = 1;
+  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);
 
   // Corners moved to other vertices, the base domain is the same (patch count, quads, the
   // (patch, corner) incidences of every base vertex), and every corner sits at its square corner.
@@ -671,6 +676,8 @@ TEST(MoveCorners, MovesCornersBijectivelyKeepingSeedsFeaturesAndTheBaseDomain) {
   EXPECT_EQ(after.connectivity.faces, before.connectivity.faces);
   ASSERT_EQ(after.positions.size(), 2u);
   EXPECT_EQ(after.positions[0].size(), after.positions[1].size());
+  // And the embedding merge (qs-merge) overlays the two charts.
+  EXPECT_NO_THROW(qs::merge::merge_charts(moved[0].chart, c));
 }
 
 TEST(MoveCorners, ThePowerMapChartMovesCornersWithoutFolds) {

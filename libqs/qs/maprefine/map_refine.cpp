@@ -1725,9 +1725,26 @@ CornerCut plan_corner(const dissect::Chart& chart, const std::vector<ReferencePa
     if (!needle(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]]))
       return out.with(CornerOutcome::Skipped);
   }
+  // Keep only the new vertices that a piece uses (a crossing with a ray's continuation through
+  // the origin is made while clipping, then clipped away), in the order they were made.
+  std::vector<int> renumber(new_pos.size(), -1);
+  for (const auto& pc : sc.pieces)
+    for (int l : pc.c)
+      if (l >= nl) renumber[l - nl] = 0;
+  if (origin >= nl) renumber[origin - nl] = 0;
+  std::vector<Vec3> used_pos;
+  for (size_t i = 0; i < renumber.size(); ++i)
+    if (renumber[i] == 0) {
+      renumber[i] = nl + static_cast<int>(used_pos.size());
+      used_pos.push_back(new_pos[i]);
+    }
+  for (auto& pc : sc.pieces)
+    for (int& l : pc.c)
+      if (l >= nl) l = renumber[l - nl];
+  if (origin >= nl) origin = renumber[origin - nl];
   // Pieces of one face must be consecutive for commit_side: they are (faces in order).
   sc.vertices = std::move(pr.vertices);
-  sc.new_pos = std::move(new_pos);
+  sc.new_pos = std::move(used_pos);
   out.new_corner = origin;
   sc.outcome = SideOutcome::Refined;
   return out.with(CornerOutcome::Moved);
