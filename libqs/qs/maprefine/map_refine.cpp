@@ -1444,7 +1444,9 @@ CornerCut plan_corner(const dissect::Chart& chart, const std::vector<ReferencePa
     pr.basis.push_back(Vec2::Zero());
     if (free) pr.unknowns += 2;
   }
-  if (pr.unknowns == 0 || held[local.at(star.corner)]) return out.with(CornerOutcome::Irregular);
+  const auto corner_local = local.find(star.corner);
+  if (pr.unknowns == 0 || corner_local == local.end() || held[corner_local->second])
+    return out.with(CornerOutcome::Irregular);
 
   // The reference's metric glued the same way: M_glued = C^T (A M A^T) C with A the turn and C the
   // Jacobian of the inverse power map (never evaluated at the origin itself: face centroids).
@@ -1807,11 +1809,15 @@ CornerResult move_corners(dissect::Dissection& b, const std::vector<ReferencePat
   for (int sweep = 0; sweep < options.corner_sweeps; ++sweep) {
     int moved = 0;
     for (const auto& group : groups) {
-      std::vector<char> pinned(chart.mesh.num_vertices(), 0);
+      const int nv = chart.mesh.num_vertices();
+      std::vector<char> pinned(nv, 0);
+      auto pin = [&](int v) {
+        if (v >= 0 && v < nv) pinned[v] = 1;
+      };
       for (const auto& p : chart.patches)
-        for (int c : p.corners) pinned[c] = 1;
-      for (int s : b.seeds) pinned[s] = 1;
-      for (const auto& f : b.features) pinned[f.vertex] = 1;
+        for (int c : p.corners) pin(c);
+      for (int s : b.seeds) pin(s);
+      for (const auto& f : b.features) pin(f.vertex);
       const DirectedSides sides = directed_sides(chart);
       std::vector<CornerCut> cuts(group.size());
       parallel_for(static_cast<int>(group.size()), options.threads, context, [&](int i) {
