@@ -1928,6 +1928,10 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       before = b.area > 0 ? b.energy_before / b.area / 4 : 0;
     }
     if (corners) {
+      // An interior pass first: the corner stars then start from maps already refined inside
+      // their patches (measured: gen-s1 mean 1.23% -> 1.02% against moving the dissection's
+      // corners directly).
+      r.newton_steps += run_mesh(meshes[i], refs, options, true, context).steps;
       const CornerResult c = move_corners(meshes[i], refs, options, context);
       r.corners_moved = c.moved;
       r.corners_irregular = c.irregular;

@@ -87,8 +87,8 @@ struct RefineOptions {
   /// With across_borders: Newton steps per glued pair of patches at most (and at most
   /// `iterations`); the final interior pass polishes. \pre >= 0
   int border_iterations = 3;
-  /// Move the patch corners too (`qs-dissect --refine-corners`), before the across-border and
-  /// interior passes: every patch corner of a mesh but the reference that is not a seed or a
+  /// Move the patch corners too (`qs-dissect --refine-corners`), after a first interior pass and
+  /// before the across-border and final interior passes: every patch corner of a mesh but the reference that is not a seed or a
   /// feature, met by k >= 3 distinct patches once each, has its k patches glued into one disk
   /// chart (each square turned so that the corner is at its origin, then mapped by the power map
   /// z -> z^(4/k) rotated to its sector, a cone chart), B's (u, v) refined on the union against
