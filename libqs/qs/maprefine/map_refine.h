@@ -37,6 +37,14 @@
 // (3D points on the edges, so the surface is unchanged), faces split there, the old side
 // vertices kept as ordinary vertices. Corners, seeds, features and the reference stay exactly.
 //
+// Corner moves (RefineOptions::move_corners): after a first interior pass, every patch corner of
+// every mesh but the reference (not a seed or a feature, met by k >= 3 distinct patches once each)
+// has its k patches glued into one chart around it (each square turned so that the corner is at
+// the origin, then an affine sector or the power map z^(4/k), see CornerChart), B's union refined
+// with its outer border held and the corner and its sides free, and the union cut again along the
+// k rays from the origin; the new corner is the chart vertex at the origin. Corners in base-domain
+// order, stars that share no patch planned in parallel and committed in order.
+//
 // In the interior passes patches are independent (their borders are held), so they run in
 // parallel; the sliding pass is one problem. The result does not depend on the thread count.
 
