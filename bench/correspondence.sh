@@ -124,12 +124,12 @@ def timing(path, secs):
     m = re.search(r"dissect ([0-9.]+) s, refine maps ([0-9.]+) s", rep)
     return f"{secs} s (dissect {float(m.group(1)):.2f} + refine {float(m.group(2)):.2f})" if m else f"{secs} s"
 print()
-print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | level 4: mean / p95 / max | baseline mean | baseline p95 | baseline max | truth within (mean / max) |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | level 4: mean / p95 / max | baseline mean | baseline p95 | baseline max | truth within (mean / max) | corners (mean / max) |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for line in open(sys.argv[1]):
     name, rc, secs, path = line.rstrip("\n").split("\t")
     if path == "-":
-        print(f"| {name} | {rc} | {secs} s | | not measured | | | | | | | | | |")
+        print(f"| {name} | {rc} | {secs} s | | not measured | | | | | | | | | | |")
         continue
     doc = json.load(open(path))
     l4 = json.load(open(path.replace(".corr.json", ".corr-L4.json")))["pairs"]
@@ -146,7 +146,9 @@ for line in open(sys.argv[1]):
         print(f"| {name} (average of {len(P)} pairs, largest max) | {rc} | {timing(path, secs)} | {doc['patches']} | {m['mean']:.2f}% | "
               f"{m['median']:.2f}% | {m['p95']:.2f}% | {m['max']:.2f}% | {100*share:.1f}% | "
               f"{avg(Q, 'dissection', 'mean_percent'):.2f} / {avg(Q, 'dissection', 'p95_percent'):.2f} / "
-              f"{avg(Q, 'dissection', 'max_percent', max):.2f}% | {b['mean']:.2f}% | {b['p95']:.2f}% | {b['max']:.2f}% | exact |")
+              f"{avg(Q, 'dissection', 'max_percent', max):.2f}% | {b['mean']:.2f}% | {b['p95']:.2f}% | {b['max']:.2f}% | exact | "
+              f"{sum(p.get('corner_distance_mean_percent', 0) for p in P) / len(P):.2f} / "
+              f"{max(p.get('corner_distance_max_percent', 0) for p in P):.2f}% |")
         continue
     for p, q in rows:
         a = p["a"].rsplit("/", 1)[-1]; b = p["b"].rsplit("/", 1)[-1]
@@ -157,5 +159,6 @@ for line in open(sys.argv[1]):
         print(f"| {label} | {rc} | {timing(path, secs)} | {doc['patches']} | {d['mean_percent']:.2f}% | {d['median_percent']:.2f}% | "
               f"{d['p95_percent']:.2f}% | {d['max_percent']:.2f}% | {100*p['same_patch_share']:.1f}% | "
               f"{q['dissection']['mean_percent']:.2f} / {q['dissection']['p95_percent']:.2f} / {q['dissection']['max_percent']:.2f}% | "
-              f"{bl['mean_percent']:.2f}% | {bl['p95_percent']:.2f}% | {bl['max_percent']:.2f}% | {tol} |")
+              f"{bl['mean_percent']:.2f}% | {bl['p95_percent']:.2f}% | {bl['max_percent']:.2f}% | {tol} | "
+              f"{p.get('corner_distance_mean_percent', 0):.2f} / {p.get('corner_distance_max_percent', 0):.2f}% |")
 PY

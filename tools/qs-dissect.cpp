@@ -138,6 +138,22 @@ int main(int argc, char** argv) {
                  "Newton steps per glued pair of patches of --refine-across-borders")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
+  app.add_flag("--refine-corners", refine_opt.move_corners,
+               "Refine maps around the patch corners too: move the corners of every mesh but the first on cone "
+               "charts of their patches (implies --refine-maps; adds chart vertices; see README)");
+  app.add_option("--refine-corner-sweeps", refine_opt.corner_sweeps, "Passes over the corners of --refine-corners")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 20));
+  app.add_option("--refine-corner-iterations", refine_opt.corner_iterations,
+                 "Newton steps per corner star of --refine-corners")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  std::string corner_chart = "sector";
+  app.add_option("--refine-corner-chart", corner_chart,
+                 "Chart of a corner's patches for --refine-corners: sector (an affine map per patch) or power "
+                 "(z^(4/k)); see README")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"sector", "power"}));
   app.add_option("--min-split-area", opt.min_split_area,
                  "Do not split a patch over tau (bijective) that holds less than this fraction of its mesh's area; "
                  "the leaf repair takes it (0: off; fewer slivers along limbs)")
@@ -166,7 +182,9 @@ int main(int argc, char** argv) {
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");
-    const bool refine_maps = !no_refine || refine_opt.across_borders;  // --refine-across-borders implies it
+    refine_opt.corner_chart =
+        corner_chart == "power" ? qs::maprefine::CornerChart::Power : qs::maprefine::CornerChart::Sector;
+    const bool refine_maps = !no_refine || refine_opt.across_borders || refine_opt.move_corners;  // implied
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;
@@ -296,6 +314,10 @@ int main(int argc, char** argv) {
         if (!r.reference && refine_opt.across_borders)
           text << "  refine across borders: " << r.sides_refined << " side refinements kept, " << r.sides_skipped
                << " sides left as they were, " << r.cut_vertices << " chart vertices added by the cuts\n";
+        if (!r.reference && refine_opt.move_corners)
+          text << "  refine corners: " << r.corners_moved << " corner moves kept, " << r.corners_irregular
+               << " irregular corners and " << r.corners_skipped << " others left as they were, "
+               << r.corner_cut_vertices << " chart vertices added by the cuts\n";
       }
       for (const auto& n : d.tree)
         if (i < n.refined_faces.size() && n.refined_faces[i] > 0)

@@ -210,8 +210,13 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
     const auto pm = qs::correspondence::measure_pair(truth, inputs, 0, b, mo);
     char share[64];
     std::snprintf(share, sizeof share, "%.1f%%", 100 * pm.same_patch_share);
+    char corners[160];
+    std::snprintf(corners, sizeof corners,
+                  "B's corner to the exact image of A's corner (same patch and corner): mean %.3f%%, max %.3f%%\n",
+                  pm.corner_mean, pm.corner_max);
     text << truth.mesh(0).name << " -> " << truth.mesh(b).name << ":\n"
          << "  dissection: " << stats_text(pm.dissection) << "; same patch: " << share << " of A's area\n"
+         << "  patch corners: " << corners
          << "  baseline (similarity on " << pm.baseline_landmarks << " landmarks + nearest point): "
          << stats_text(pm.baseline) << "\n";
     if (pm.truth_tolerance > 0) {
@@ -226,6 +231,8 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                      {"diagonal_of_b", pm.diagonal},
                      {"dissection", stats_json(pm.dissection)},
                      {"same_patch_share", pm.same_patch_share},
+                     {"corner_distance_mean_percent", pm.corner_mean},
+                     {"corner_distance_max_percent", pm.corner_max},
                      {"baseline", stats_json(pm.baseline)},
                      {"baseline_landmarks", pm.baseline_landmarks},
                      {"truth_tolerance_percent", pm.truth_tolerance},

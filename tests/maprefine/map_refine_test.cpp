@@ -14,8 +14,10 @@
 #include "qs/dissect/dissection.h"
 #include "qs/family/family.h"
 #include "qs/maprefine/map_refine.h"
+#include "qs/merge/merge.h"
 #include "qs/param/square_param.h"
 #include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/uniform.h"
 
 using ::testing::HasSubstr;
 using qs::Vec2;
@@ -539,4 +541,196 @@ TEST(RefineAcrossBorders, ZeroSweepsIsTheInteriorRefinement) {
   EXPECT_EQ(a[1].chart.mesh.faces, b[1].chart.mesh.faces);
   o.border_sweeps = -1;
   EXPECT_THROW(mr::refine_maps(b, o), qs::InvalidInput);
+}
+
+TEST(ConeGlue, TheSquareGluedAndBackIsTheIdentityAndTheAxesGoOntoTheRays) {
+  for (int k : {3, 4, 5, 6})
+    for (int j = 0; j < k; ++j) {
+      for (int a = 0; a <= 20; ++a)
+        for (int b = 0; b <= 20; ++b) {
+          const Vec2 q(a / 20.0, b / 20.0);
+          const Vec2 g = mr::cone_glue(q, k, j);
+          const Vec2 back = mr::cone_unglue(g, k, j);
+          EXPECT_NEAR(back.x(), q.x(), 1e-12) << "k " << k << " sector " << j << " q " << q.transpose();
+          EXPECT_NEAR(back.y(), q.y(), 1e-12) << "k " << k << " sector " << j << " q " << q.transpose();
+          // Inside the sector: angle in [2 pi j / k, 2 pi (j + 1) / k], radius |q|^(4/k).
+          if (a + b > 0) {
+            double ang = std::atan2(g.y(), g.x());
+            if (ang < -1e-12) ang += 2 * M_PI;
+            if (j == k - 1 && ang < 1e-12) ang = 2 * M_PI;
+            EXPECT_GE(ang, 2 * M_PI * j / k - 1e-12);
+            EXPECT_LE(ang, 2 * M_PI * (j + 1) / k + 1e-12);
+            EXPECT_NEAR(g.norm(), std::pow(q.norm(), 4.0 / k), 1e-12);
+          }
+        }
+      // Patch j's +y side is patch j+1's +x side: the same glued points.
+      for (int a = 1; a <= 10; ++a) {
+        const Vec2 from_j = mr::cone_glue(Vec2(0, a / 10.0), k, j);
+        const Vec2 from_next = mr::cone_glue(Vec2(a / 10.0, 0), k, (j + 1) % k);
+        EXPECT_NEAR((from_j - from_next).norm(), 0, 1e-14);
+      }
+    }
+  // The sector glue (an affine map per patch): the identity back, and the sides on the rays.
+  for (int k : {3, 4, 5, 6, 7})
+    for (int j = 0; j < k; ++j)
+      for (int a = 0; a <= 10; ++a)
+        for (int b = 0; b <= 10; ++b) {
+          const Vec2 q(a / 10.0, b / 10.0);
+          const Vec2 back = mr::sector_unglue(mr::sector_glue(q, k, j), k, j);
+          EXPECT_NEAR((back - q).norm(), 0, 1e-12) << "k " << k << " sector " << j;
+          if (b == 0 && a > 0) {
+            EXPECT_NEAR((mr::sector_glue(Vec2(0, q.x()), k, (j + k - 1) % k) - mr::sector_glue(q, k, j)).norm(), 0,
+                        1e-14);
+          }
+        }
+  // Valence 4: the four squares are [-1, 1]^2 exactly.
+  EXPECT_EQ(mr::cone_glue(Vec2(1, 0), 4, 1), Vec2(0, 1));
+  EXPECT_EQ(mr::cone_glue(Vec2(0, 0.5), 4, 1), Vec2(-0.5, 0));
+}
+
+namespace {
+
+// The chart faces around each vertex: (patch, corner index) of every patch corner, per base vertex.
+std::vector<std::vector<std::pair<int, int>>> corner_incidences(const qs::dissect::Dissection& d) {
+  std::vector<std::vector<std::pair<int, int>>> out(d.base.vertices.size());
+  for (size_t b = 0; b < d.base.vertices.size(); ++b)
+    for (size_t p = 0; p < d.chart.patches.size(); ++p)
+      for (int k = 0; k < 4; ++k)
+        if (d.chart.patches[p].corners[k] == d.base.vertices[b]) out[b].push_back({static_cast<int>(p), k});
+  return out;
+}
+
+}  // namespace
+
+TEST(MoveCorners, MovesCornersBijectivelyKeepingSeedsFeaturesAndTheBaseDomain) {
+  const auto fam = same_shape_pair();  // one surface, two tessellations
+  qs::dissect::DissectOptions old_maps;  // tessellation-dependent maps: the corners disagree
+  old_maps.geodesic_seed_curves = false;
+  old_maps.intrinsic_cotan = false;
+  const auto dissected = dissect_pair(fam, old_maps);
+  auto moved = dissected;
+  mr::RefineOptions o;
+  o.move_corners = true;
+  const auto report = mr::refine_maps(moved, o);
+  const auto& r = report.meshes[1];
+  EXPECT_GT(r.corners_moved, 0);
+  EXPECT_GT(r.corner_cut_vertices, 0);
+  EXPECT_EQ(report.meshes[0].corners_moved, 0);  // the reference
+  EXPECT_EQ(r.flipped_faces + r.zero_area_faces, 0);
+  EXPECT_EQ(folded_faces(moved[1].chart), 0);
+  EXPECT_LT(r.energy_after, r.energy_before);
+  // Lower than refining the interiors alone.
+  auto inside = dissected;
+  mr::refine_maps(inside);
+  EXPECT_LT(mr::map_energy(moved[0], moved[1]), mr::map_energy(inside[0], inside[1]));
+
+  // The reference untouched; the surface unchanged (new vertices lie on B's faces).
+  EXPECT_EQ(moved[0].chart.face_uv, dissected[0].chart.face_uv);
+  EXPECT_EQ(moved[0].chart.patches[0].corners, dissected[0].chart.patches[0].corners);
+  const auto& c = moved[1].chart;
+  const auto& was = dissected[1].chart;
+  EXPECT_EQ(c.mesh.num_vertices(), was.mesh.num_vertices() + r.corner_cut_vertices);
+  for (int v = 0; v < was.mesh.num_vertices(); ++v) ASSERT_EQ(c.mesh.positions[v], was.mesh.positions[v]);
+  EXPECT_NEAR(surface_area(c), surface_area(was), 1e-9 * surface_area(was));
+  std::vector<char> used(c.mesh.num_vertices(), 0);  // every chart vertex is in a face
+  for (const auto& t : c.mesh.faces)
+    for (int v : t) used[v] = 1;
+  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);
+
+  // Corners moved to other vertices, the base domain is the same (patch count, quads, the
+  // (patch, corner) incidences of every base vertex), and every corner sits at its square corner.
+  ASSERT_EQ(c.patches.size(), was.patches.size());
+  int changed = 0;
+  for (size_t p = 0; p < c.patches.size(); ++p)
+    for (int k = 0; k < 4; ++k) changed += c.patches[p].corners[k] != was.patches[p].corners[k];
+  EXPECT_GT(changed, 0);
+  EXPECT_EQ(moved[1].base.quads, dissected[1].base.quads);
+  EXPECT_EQ(corner_incidences(moved[1]), corner_incidences(dissected[1]));
+  const Vec2 square[4] = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  for (size_t p = 0; p < c.patches.size(); ++p) {
+    EXPECT_EQ(c.patches[p].flipped_faces + c.patches[p].zero_area_faces, 0) << c.patches[p].name;
+    EXPECT_NEAR(c.patches[p].uv_area_sum, 1.0, 1e-9) << c.patches[p].name;
+    for (int k = 0; k < 4; ++k) {
+      const auto at = wedge_of(c, c.patches[p].corners[k], static_cast<int>(p));
+      ASSERT_TRUE(at.has_value()) << c.patches[p].name << " corner " << k;
+      EXPECT_EQ(*at, square[k]) << c.patches[p].name << " corner " << k;
+    }
+  }
+  // Seeds and features exactly where they were.
+  EXPECT_EQ(moved[1].seeds, dissected[1].seeds);
+  for (int s : moved[1].seeds) EXPECT_EQ(c.mesh.positions[s], was.mesh.positions[s]);
+  ASSERT_EQ(moved[1].features.size(), dissected[1].features.size());
+  for (size_t k = 0; k < moved[1].features.size(); ++k) {
+    const auto& f = moved[1].features[k];
+    EXPECT_EQ(f.vertex, dissected[1].features[k].vertex);
+    EXPECT_EQ(f.patch, dissected[1].features[k].patch);
+    EXPECT_EQ(f.uv, dissected[1].features[k].uv);
+    const auto at = wedge_of(c, f.vertex, f.patch);
+    ASSERT_TRUE(at.has_value()) << f.name;
+    EXPECT_EQ(*at, f.uv) << f.name;
+  }
+  // The later stages read it: the sampler's checks, and the set's remesh has one connectivity.
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(c));
+  const auto before = qs::remesh::remesh_uniform(std::vector<qs::dissect::Chart>{dissected[0].chart, was}, 3);
+  const auto after = qs::remesh::remesh_uniform(std::vector<qs::dissect::Chart>{moved[0].chart, c}, 3);
+  EXPECT_EQ(after.connectivity.faces, before.connectivity.faces);
+  ASSERT_EQ(after.positions.size(), 2u);
+  EXPECT_EQ(after.positions[0].size(), after.positions[1].size());
+  // And the embedding merge (qs-merge) overlays the two charts.
+  EXPECT_NO_THROW(qs::merge::merge_charts(moved[0].chart, c));
+}
+
+TEST(MoveCorners, ThePowerMapChartMovesCornersWithoutFolds) {
+  const auto fam = same_shape_pair();
+  qs::dissect::DissectOptions old_maps;
+  old_maps.geodesic_seed_curves = false;
+  old_maps.intrinsic_cotan = false;
+  auto set = dissect_pair(fam, old_maps);
+  const auto was = set;
+  mr::RefineOptions o;
+  o.move_corners = true;
+  o.corner_chart = mr::CornerChart::Power;
+  const auto r = mr::refine_maps(set, o).meshes[1];
+  EXPECT_GT(r.corners_moved, 0);
+  EXPECT_EQ(r.flipped_faces + r.zero_area_faces, 0);
+  EXPECT_EQ(folded_faces(set[1].chart), 0);
+  EXPECT_LT(r.energy_after, r.energy_before);
+  EXPECT_EQ(corner_incidences(set[1]), corner_incidences(was[1]));
+  EXPECT_EQ(set[1].seeds, was[1].seeds);
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set[1].chart));
+}
+
+TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothing) {
+  qs::family::FamilyOptions fo;
+  fo.shapes = 2;
+  fo.seed = 2;
+  fo.faces = 1600;
+  fo.limbs = 4;
+  const auto fam = qs::family::generate_family(fo);
+  auto set1 = dissect_pair(fam);
+  auto set4 = set1;
+  auto plain = set1;
+  auto zero = set1;
+  mr::RefineOptions o;
+  o.move_corners = true;
+  o.threads = 1;
+  const auto r1 = mr::refine_maps(set1, o);
+  o.threads = 4;
+  const auto r4 = mr::refine_maps(set4, o);
+  EXPECT_GT(r1.meshes[1].corners_moved, 0);
+  EXPECT_EQ(set1[1].chart.mesh.faces, set4[1].chart.mesh.faces);
+  EXPECT_EQ(set1[1].chart.mesh.positions, set4[1].chart.mesh.positions);
+  EXPECT_EQ(set1[1].chart.face_uv, set4[1].chart.face_uv);
+  EXPECT_EQ(set1[1].chart.face_patch, set4[1].chart.face_patch);
+  EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
+  EXPECT_EQ(folded_faces(set1[1].chart), 0);
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set1[1].chart));
+
+  mr::refine_maps(plain);
+  o.corner_sweeps = 0;
+  mr::refine_maps(zero, o);
+  EXPECT_EQ(zero[1].chart.face_uv, plain[1].chart.face_uv);
+  EXPECT_EQ(zero[1].chart.mesh.faces, plain[1].chart.mesh.faces);
+  o.corner_sweeps = -1;
+  EXPECT_THROW(mr::refine_maps(zero, o), qs::InvalidInput);
 }

@@ -102,3 +102,29 @@ TEST_F(RefineMapsTool, AcrossBordersMovesTheCurvesAndTheLaterStagesReadIt) {
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
+
+TEST_F(RefineMapsTool, CornersMoveDeterministicallyAndTheLaterStagesReadIt) {
+  RunResult r = run_tool("qs-dissect", pair() + " --refine-corners -o " + d() + "/corners");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));  // implies --refine-maps
+  EXPECT_THAT(r.out, HasSubstr("  refine corners: "));
+  EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "corners/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
+  EXPECT_NE(bytes(dir_ / "corners/shape01.chart.ply"), bytes(dir_ / "plain/shape01.chart.ply"));
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-corners --quiet -o " + d() + "/corners2").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "corners/shape01.chart.ply"), bytes(dir_ / "corners2/shape01.chart.ply"));
+  EXPECT_EQ(bytes(dir_ / "corners/dissection.json"), bytes(dir_ / "corners2/dissection.json"));
+  r = run_tool("qs-remesh", d() + "/corners --level 3 -q -o " + d() + "/remesh");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-merge", d() + "/corners -o " + d() + "/merge");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-metro", "--correspondence " + d() + "/corners --samples 5000");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("  patch corners: B's corner to the exact image of A's corner"));
+  for (const char* bad : {" --refine-corners --refine-corner-sweeps 21", " --refine-corners --refine-corner-chart cone"}) {
+    r = run_tool("qs-dissect", pair() + bad + " -o " + d() + "/bad");
+    EXPECT_EQ(r.exit, 1) << bad << "\n" << r.out;
+    EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  }
+}

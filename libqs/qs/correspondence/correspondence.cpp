@@ -424,6 +424,25 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   double s = 0;
   for (double v : same) s += v;
   pm.same_patch_share = s / n;
+  {
+    std::vector<char> seen(ca.mesh.num_vertices(), 0);
+    double sum = 0;
+    int count = 0;
+    for (std::size_t p = 0; p < ca.patches.size(); ++p)
+      for (int m = 0; m < 4; ++m) {
+        const int va = ca.patches[p].corners[m];
+        if (va < 0 || va >= ca.mesh.num_vertices() || seen[va]) continue;
+        seen[va] = 1;
+        const auto closest = on_a.closest(ca.mesh.positions[va]);
+        const Vec3 exact = landmarks::position_of(
+            mb, truth.map(a, b, surface_point_at(truth.mesh(a).mesh, closest.face, closest.point)));
+        const double d = 100 * (cb.mesh.positions[cb.patches[p].corners[m]] - exact).norm() / diag;
+        sum += d;
+        pm.corner_max = std::max(pm.corner_max, d);
+        ++count;
+      }
+    pm.corner_mean = count > 0 ? sum / count : 0;
+  }
   pm.baseline_landmarks = src.size() >= 3 ? static_cast<int>(src.size()) : 0;
   pm.truth_tolerance = 100 * truth.tolerance() / diag;
   pm.truth_tolerance_mean = 100 * truth.tolerance_mean() / diag;

@@ -102,6 +102,10 @@ struct PairMeasure {
   ErrorStats dissection;          ///< the dissection's map A -> B vs the exact image
   ErrorStats baseline;            ///< similarity on the landmarks + nearest point of B
   double same_patch_share = 0;    ///< share of A's area whose exact image is in the same patch of B
+  /// Distance between corresponding patch corners: the exact image on B of each of A's patch
+  /// corners (base-domain vertices) against B's corner of the same (patch, corner), in % of the
+  /// diagonal; mean and max over the corners.
+  double corner_mean = 0, corner_max = 0;
   int baseline_landmarks = 0;     ///< landmark pairs the similarity used
   double truth_tolerance = 0;     ///< GroundTruth::tolerance() in % of the diagonal
   double truth_tolerance_mean = 0;  ///< GroundTruth::tolerance_mean() in % of the diagonal

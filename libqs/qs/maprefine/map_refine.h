@@ -37,6 +37,14 @@
 // (3D points on the edges, so the surface is unchanged), faces split there, the old side
 // vertices kept as ordinary vertices. Corners, seeds, features and the reference stay exactly.
 //
+// Corner moves (RefineOptions::move_corners): after a first interior pass, every patch corner of
+// every mesh but the reference (not a seed or a feature, met by k >= 3 distinct patches once each)
+// has its k patches glued into one chart around it (each square turned so that the corner is at
+// the origin, then an affine sector or the power map z^(4/k), see CornerChart), B's union refined
+// with its outer border held and the corner and its sides free, and the union cut again along the
+// k rays from the origin; the new corner is the chart vertex at the origin. Corners in base-domain
+// order, stars that share no patch planned in parallel and committed in order.
+//
 // In the interior passes patches are independent (their borders are held), so they run in
 // parallel; the sliding pass is one problem. The result does not depend on the thread count.
 
@@ -46,6 +54,18 @@
 #include "qs/dissect/dissection.h"
 
 namespace qs::maprefine {
+
+/// The chart of a corner's star (RefineOptions::corner_chart).
+enum class CornerChart {
+  /// Patch j's square goes onto the parallelogram spanned by the rays at angles 2 pi j / k and
+  /// 2 pi (j+1) / k (an affine map per patch: a chart face stays a positive face, and the energy
+  /// in the glued chart is exactly the energy in the patches).
+  Sector,
+  /// The power map z -> z^(4/k) of Schmidt et al. 2019 (conformal away from the corner, but not
+  /// affine: a large chart face near the corner can fold in the glued chart, and such a corner is
+  /// left as it was).
+  Power,
+};
 
 struct RefineOptions {
   int reference = 0;         ///< the mesh of the set that is not moved. \pre 0 <= reference < #meshes
@@ -75,6 +95,26 @@ struct RefineOptions {
   /// With across_borders: Newton steps per glued pair of patches at most (and at most
   /// `iterations`); the final interior pass polishes. \pre >= 0
   int border_iterations = 3;
+  /// Move the patch corners too (`qs-dissect --refine-corners`), after a first interior pass and
+  /// before the across-border and final interior passes: every patch corner of a mesh but the reference that is not a seed or a
+  /// feature, met by k >= 3 distinct patches once each, has its k patches glued into one disk
+  /// chart (each square turned so that the corner is at its origin, then mapped by the power map
+  /// z -> z^(4/k) rotated to its sector, a cone chart), B's (u, v) refined on the union against
+  /// the reference's metric glued the same way (the union's outer border held; the corner and
+  /// the vertices of its k sides free), and the union cut again along the k rays from the origin:
+  /// the new corner is the chart vertex at the origin (a vertex snapped there, or a new vertex in
+  /// the face that holds it), new chart vertices where a ray crosses an edge (exactly on the
+  /// surface). A corner is left as it was when its star is irregular, the union is folded, the
+  /// energy does not go down, or a piece of the cut is not a positive uv triangle inside its
+  /// square. Off by default (see the README for what it measured).
+  bool move_corners = false;
+  /// With move_corners: passes over the corners (in base-domain order; a pass that moves none
+  /// ends them). \pre >= 0
+  int corner_sweeps = 1;
+  /// With move_corners: Newton steps per corner star at most (and at most `iterations`). \pre >= 0
+  int corner_iterations = 5;
+  /// With move_corners: how the patches around a corner are glued into one chart (see CornerChart).
+  CornerChart corner_chart = CornerChart::Sector;
 };
 
 /// What refinement did to one mesh of the set.
@@ -100,6 +140,14 @@ struct MeshRefineReport {
   int sides_refined = 0;
   int sides_skipped = 0;
   int cut_vertices = 0;
+  /// With RefineOptions::move_corners: corner moves kept (summed over the sweeps); corners left as
+  /// they were in the first sweep because their star is irregular (fewer than 3 patches, a patch
+  /// met twice, an inconsistent glue), or because the move failed (folded union, no gain, a bad
+  /// piece); chart vertices added by the cuts (the new corners inside faces included).
+  int corners_moved = 0;
+  int corners_irregular = 0;
+  int corners_skipped = 0;
+  int corner_cut_vertices = 0;
 };
 
 struct RefineReport {
@@ -113,10 +161,12 @@ struct RefineReport {
 /// curves moved. The PatchInfo figures that depend on the chart (faces, stretch, flipped and
 /// zero-area counts, uv area sum) and Dissection::max_stretch are recomputed; patch names,
 /// corners, the base domain, features (vertex, patch, uv) and seeds are unchanged, so every later
-/// stage reads the refined charts as before.
+/// stage reads the refined charts as before. With move_corners, a moved corner is another chart
+/// vertex (PatchInfo::corners and BaseDomain::vertices name it; the base domain's quads and every
+/// (patch, corner) incidence stay), and the chart gains vertices and faces as with across_borders.
 /// \pre the meshes come from one dissect_set (same patches in the same order, base domains
 /// identical). \throws InvalidInput for an empty set, a reference out of range, options out of
-/// range (iterations, tolerance or border_sweeps below 0) or charts that do not share their patches (naming the mesh and patch count);
+/// range (iterations, tolerance, border or corner sweeps or iterations below 0) or charts that do not share their patches (naming the mesh and patch count);
 /// Error(Internal "cancelled") when context's cancel flag is raised.
 /// Progress stage: "refine maps".
 RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options = {},
@@ -125,6 +175,18 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
 /// The normalized distortion energy of mesh `b`'s map to mesh `a` (as MeshRefineReport::
 /// energy_after): for tests and reports. \pre as refine_maps.
 double map_energy(const dissect::Dissection& a, const dissect::Dissection& b);
+
+/// The cone glue of a patch corner met by k patches (RefineOptions::move_corners): a point q of
+/// the unit square turned so that the corner is at the origin and its two sides lie along +x and
+/// +y goes to r^(4/k) (cos, sin)(4 theta / k + 2 pi sector / k), (r, theta) the polar coordinates
+/// of q; cone_unglue is its inverse on the sector. Points on the axes go exactly onto the rays.
+/// Exposed for tests. \pre k >= 3, 0 <= sector < k.
+Vec2 cone_glue(const Vec2& q, int k, int sector);
+Vec2 cone_unglue(const Vec2& g, int k, int sector);
+/// The sector glue (CornerChart::Sector): q goes to q.x a + q.y b, a and b the unit vectors at
+/// angles 2 pi sector / k and 2 pi (sector + 1) / k; sector_unglue is its inverse. Exposed for tests.
+Vec2 sector_glue(const Vec2& q, int k, int sector);
+Vec2 sector_unglue(const Vec2& g, int k, int sector);
 
 /// symDirichlet(J) = |J|_F^2 + |J^-1|_F^2 of a 2x2 matrix with det > 0, its gradient and the
 /// Hessian with respect to J's entries in row-major order (J00, J01, J10, J11). Exposed for tests.
