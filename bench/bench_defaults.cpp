@@ -46,6 +46,12 @@ struct Candidate {
   double relax = qs::remesh::UniformOptions{}.relax;  ///< the uniform remesh's grid relaxation
 };
 
+qs::dissect::DissectOptions predict() {
+  qs::dissect::DissectOptions o;
+  o.predict_split = true;
+  return o;
+}
+
 qs::dissect::DissectOptions cotan() {
   qs::dissect::DissectOptions o;
   o.intrinsic_cotan = true;
@@ -77,6 +83,8 @@ std::vector<Candidate> candidates() {
       {"relax90", qs::dissect::DissectOptions{}, 0.9},
       {"cotan", cotan(), 0.0},
       {"cotan_relax90", cotan(), 0.9},
+      // Splits chosen by the children's stretch predicted from the parent's map.
+      {"predict", predict()},
   };
 }
 
