@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "qs/bake/atlas.h"
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
@@ -88,19 +89,11 @@ std::vector<Candidate> candidates() {
   };
 }
 
-std::vector<std::string> split_list(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string x; std::getline(in, x, ',');)
-    if (!x.empty()) out.push_back(x);
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   const fs::path dir = argc > 1 ? argv[1] : QS_SOURCE_DIR "/../shared/meshes";
-  const std::vector<std::string> wanted = argc > 2 ? split_list(argv[2]) : std::vector<std::string>{};
+  const std::vector<std::string> wanted = argc > 2 ? qs::bench::split_list(argv[2]) : std::vector<std::string>{};
   const std::string filter = argc > 3 ? argv[3] : "";
   if (!fs::is_directory(dir)) {
     std::fprintf(stderr, "qs-bench-defaults: %s is not a folder of meshes\n", dir.string().c_str());

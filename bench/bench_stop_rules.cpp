@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
 #include "qs/io/read_mesh.h"
@@ -61,14 +62,6 @@ std::vector<Variant> variants() {
   return v;
 }
 
-std::vector<std::string> split_list(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string x; std::getline(in, x, ',');)
-    if (!x.empty()) out.push_back(x);
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,7 +71,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::vector<Variant> chosen;
-  const std::vector<std::string> wanted = split_list(argv[1]);
+  const std::vector<std::string> wanted = qs::bench::split_list(argv[1]);
   for (const auto& v : variants())
     if (wanted == std::vector<std::string>{"all"} || std::find(wanted.begin(), wanted.end(), v.name) != wanted.end())
       chosen.push_back(v);

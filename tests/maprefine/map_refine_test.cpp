@@ -61,6 +61,24 @@ cr::ErrorStats measure(const cr::GroundTruth& truth, const std::vector<qs::disse
   return cr::measure_pair(truth, in, 0, 1, o).dissection;
 }
 
+// A small generated pair (2 shapes, 1600 faces, 4 limbs), dissected together.
+std::vector<qs::dissect::Dissection> small_pair(std::uint64_t seed) {
+  qs::family::FamilyOptions fo;
+  fo.shapes = 2;
+  fo.seed = seed;
+  fo.faces = 1600;
+  fo.limbs = 4;
+  return dissect_pair(qs::family::generate_family(fo));
+}
+
+// Two charts are the same, bit for bit.
+void expect_same_chart(const qs::dissect::Chart& a, const qs::dissect::Chart& b) {
+  EXPECT_EQ(a.mesh.faces, b.mesh.faces);
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.face_uv, b.face_uv);
+  EXPECT_EQ(a.face_patch, b.face_patch);
+}
+
 int folded_faces(const qs::dissect::Chart& chart) {
   int n = 0;
   for (const auto& uv : chart.face_uv) {
@@ -381,7 +399,9 @@ TEST(RefineMaps, AFoldedPatchIsLeftAsItWas) {
   const auto r = mr::refine_maps(set);
   EXPECT_GE(r.meshes[1].patches_skipped, 1);
   for (int f = 0; f < c.mesh.num_faces(); ++f)
-    if (c.face_patch[f] == patch) EXPECT_EQ(c.face_uv[f], before[1].chart.face_uv[f]) << "face " << f;
+    if (c.face_patch[f] == patch) {
+      EXPECT_EQ(c.face_uv[f], before[1].chart.face_uv[f]) << "face " << f;
+    }
   EXPECT_EQ(folded_faces(c), folded);  // no new folds anywhere, the folded patch untouched
   EXPECT_EQ(r.meshes[1].flipped_faces + r.meshes[1].zero_area_faces, folded);
 }
@@ -408,7 +428,9 @@ TEST(RefineMaps, AFamilyOfThreeRefinesEveryMeshButTheReference) {
       const int v = set[i].features[k].vertex;
       for (int f = 0; f < set[i].chart.mesh.num_faces(); ++f)
         for (int j = 0; j < 3; ++j)
-          if (set[i].chart.mesh.faces[f][j] == v) EXPECT_EQ(set[i].chart.face_uv[f][j], set[i].features[k].uv);
+          if (set[i].chart.mesh.faces[f][j] == v) {
+            EXPECT_EQ(set[i].chart.face_uv[f][j], set[i].features[k].uv);
+          }
     }
   }
 }
@@ -504,13 +526,7 @@ TEST(RefineAcrossBorders, MovesThePatchCurvesBijectivelyAndLowersTheErrorOfARete
 }
 
 TEST(RefineAcrossBorders, IsDeterministicWhateverTheThreadCount) {
-  qs::family::FamilyOptions fo;
-  fo.shapes = 2;
-  fo.seed = 2;
-  fo.faces = 1600;
-  fo.limbs = 4;
-  const auto fam = qs::family::generate_family(fo);
-  auto set1 = dissect_pair(fam);
+  auto set1 = small_pair(2);
   auto set4 = set1;
   mr::RefineOptions o;
   o.across_borders = true;
@@ -519,10 +535,7 @@ TEST(RefineAcrossBorders, IsDeterministicWhateverTheThreadCount) {
   o.threads = 4;
   const auto r4 = mr::refine_maps(set4, o);
   EXPECT_GT(r1.meshes[1].sides_refined, 0);
-  EXPECT_EQ(set1[1].chart.mesh.faces, set4[1].chart.mesh.faces);
-  EXPECT_EQ(set1[1].chart.mesh.positions, set4[1].chart.mesh.positions);
-  EXPECT_EQ(set1[1].chart.face_uv, set4[1].chart.face_uv);
-  EXPECT_EQ(set1[1].chart.face_patch, set4[1].chart.face_patch);
+  expect_same_chart(set1[1].chart, set4[1].chart);
   EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
   EXPECT_EQ(folded_faces(set1[1].chart), 0);
   EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set1[1].chart));
@@ -701,13 +714,7 @@ TEST(MoveCorners, ThePowerMapChartMovesCornersWithoutFolds) {
 }
 
 TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothing) {
-  qs::family::FamilyOptions fo;
-  fo.shapes = 2;
-  fo.seed = 2;
-  fo.faces = 1600;
-  fo.limbs = 4;
-  const auto fam = qs::family::generate_family(fo);
-  auto set1 = dissect_pair(fam);
+  auto set1 = small_pair(2);
   auto set4 = set1;
   auto plain = set1;
   auto zero = set1;
@@ -718,10 +725,7 @@ TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothin
   o.threads = 4;
   const auto r4 = mr::refine_maps(set4, o);
   EXPECT_GT(r1.meshes[1].corners_moved, 0);
-  EXPECT_EQ(set1[1].chart.mesh.faces, set4[1].chart.mesh.faces);
-  EXPECT_EQ(set1[1].chart.mesh.positions, set4[1].chart.mesh.positions);
-  EXPECT_EQ(set1[1].chart.face_uv, set4[1].chart.face_uv);
-  EXPECT_EQ(set1[1].chart.face_patch, set4[1].chart.face_patch);
+  expect_same_chart(set1[1].chart, set4[1].chart);
   EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
   EXPECT_EQ(folded_faces(set1[1].chart), 0);
   EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set1[1].chart));

@@ -181,6 +181,11 @@ struct PatchProblem {
   std::vector<double> area;            // per face: 3D area (the energy's weight)
   int unknowns = 0;
   double total_area = 0;
+
+  /// Appends chart face f of `chart` (patch `patch`) with local corners c: its 3D frame and area.
+  void add_face(const dissect::Chart& chart, int f, int patch, const std::array<int, 3>& c);
+  /// Gives every local vertex not held two unknowns (var, dims, basis appended in local order).
+  void add_unknowns(const std::vector<char>& held);
 };
 
 // The 2D edge matrix of a 3D triangle in its own frame (first edge along x), with its height
@@ -199,6 +204,28 @@ Eigen::Matrix2d local_edges(const Vec3& x0, const Vec3& x1, const Vec3& x2, doub
   const double h = std::max(2.0 * area / l1, 1e-3 * longest);
   dm << l1, a, 0, h;
   return dm;
+}
+
+void PatchProblem::add_face(const dissect::Chart& chart, int f, int patch, const std::array<int, 3>& c) {
+  tri.push_back(c);
+  faces.push_back(f);
+  face_patch.push_back(patch);
+  double a = 0;
+  const auto& t = chart.mesh.faces[f];
+  const Eigen::Matrix2d dm = local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], a);
+  dm_inv.push_back(dm.inverse());
+  area.push_back(a);
+  total_area += a;
+}
+
+void PatchProblem::add_unknowns(const std::vector<char>& held) {
+  for (size_t l = 0; l < held.size(); ++l) {
+    const bool free = !held[l];
+    var.push_back(free ? unknowns : -1);
+    dims.push_back(free ? 2 : 0);
+    basis.push_back(Vec2::Zero());
+    if (free) unknowns += 2;
+  }
 }
 
 // vec(J) = A x for J = Q [x1 - x0, x2 - x0] P, x = (u0, v0, u1, v1, u2, v2), vec row-major.
@@ -497,11 +524,12 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
       if (c >= 0 && c < nv) held[c] = 1;
 
   std::vector<PatchProblem> probs(np);
-  for (int f = 0; f < chart.mesh.num_faces(); ++f) probs[chart.face_patch[f]].faces.push_back(f);
+  std::vector<std::vector<int>> patch_faces(np);
+  for (int f = 0; f < chart.mesh.num_faces(); ++f) patch_faces[chart.face_patch[f]].push_back(f);
   std::vector<int> local(nv, -1);
   for (int p = 0; p < np; ++p) {
     auto& pr = probs[p];
-    for (int f : pr.faces) {
+    for (int f : patch_faces[p]) {
       std::array<int, 3> c{};
       for (int k = 0; k < 3; ++k) {
         const int v = chart.mesh.faces[f][k];
@@ -517,15 +545,7 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
         }
         c[k] = local[v];
       }
-      pr.tri.push_back(c);
-      pr.face_patch.push_back(p);
-      double area = 0;
-      const auto& t = chart.mesh.faces[f];
-      const Eigen::Matrix2d dm = local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]],
-                                             chart.mesh.positions[t[2]], area);
-      pr.dm_inv.push_back(dm.inverse());
-      pr.area.push_back(area);
-      pr.total_area += area;
+      pr.add_face(chart, f, p, c);
     }
     for (size_t v = 0; v < pr.var.size(); ++v)
       if (pr.var[v] == 0) {
@@ -985,27 +1005,12 @@ SideCut plan_side(const dissect::Chart& chart, const std::vector<ReferencePatch>
       }
       c[k] = l;
     }
-    pr.tri.push_back(c);
-    pr.faces.push_back(f);
-    pr.face_patch.push_back(chart.face_patch[f]);
-    double area = 0;
-    const auto& t = chart.mesh.faces[f];
-    const Eigen::Matrix2d dm =
-        local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], area);
-    pr.dm_inv.push_back(dm.inverse());
-    pr.area.push_back(area);
-    pr.total_area += area;
+    pr.add_face(chart, f, chart.face_patch[f], c);
   }
+  // A vertex of both patches off the shared side (checked above) cannot occur; the side's own
+  // vertices become interior unknowns unless pinned.
+  pr.add_unknowns(held);
   const int nl = static_cast<int>(pr.vertices.size());
-  for (int l = 0; l < nl; ++l) {
-    // A vertex of both patches off the shared side (checked above) cannot occur; the side's own
-    // vertices become interior unknowns unless pinned.
-    const bool free = !held[l];
-    pr.var.push_back(free ? pr.unknowns : -1);
-    pr.dims.push_back(free ? 2 : 0);
-    pr.basis.push_back(Vec2::Zero());
-    if (free) pr.unknowns += 2;
-  }
   if (pr.unknowns == 0) return out.with(SideOutcome::Unchanged);
   // The reference's metric on the same union, scaled by area_B(union) / area_A(union).
   const double area_a = refs[side.p].area() + refs[side.q].area();
@@ -1424,26 +1429,11 @@ CornerCut plan_corner(const dissect::Chart& chart, const std::vector<ReferencePa
       }
       c[i] = l;
     }
-    pr.tri.push_back(c);
-    pr.faces.push_back(f);
-    pr.face_patch.push_back(chart.face_patch[f]);
+    pr.add_face(chart, f, chart.face_patch[f], c);
     face_sector.push_back(w);
-    double area = 0;
-    const auto& t = chart.mesh.faces[f];
-    const Eigen::Matrix2d dm =
-        local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], area);
-    pr.dm_inv.push_back(dm.inverse());
-    pr.area.push_back(area);
-    pr.total_area += area;
   }
+  pr.add_unknowns(held);
   const int nl = static_cast<int>(pr.vertices.size());
-  for (int l = 0; l < nl; ++l) {
-    const bool free = !held[l];
-    pr.var.push_back(free ? pr.unknowns : -1);
-    pr.dims.push_back(free ? 2 : 0);
-    pr.basis.push_back(Vec2::Zero());
-    if (free) pr.unknowns += 2;
-  }
   const auto corner_local = local.find(star.corner);
   if (pr.unknowns == 0 || corner_local == local.end() || held[corner_local->second])
     return out.with(CornerOutcome::Irregular);
