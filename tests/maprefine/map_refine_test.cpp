@@ -88,6 +88,21 @@ int folded_faces(const qs::dissect::Chart& chart) {
   return n;
 }
 
+// Refines `set` with options at 1 and at 4 threads: the two results must be bit-identical, unfolded
+// and sampleable. Returns the 1-thread report and leaves the 1-thread result in `set`.
+mr::RefineReport expect_thread_independent(std::vector<qs::dissect::Dissection>& set, mr::RefineOptions o) {
+  auto set4 = set;
+  o.threads = 1;
+  const auto r1 = mr::refine_maps(set, o);
+  o.threads = 4;
+  const auto r4 = mr::refine_maps(set4, o);
+  expect_same_chart(set[1].chart, set4[1].chart);
+  EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
+  EXPECT_EQ(folded_faces(set[1].chart), 0);
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set[1].chart));
+  return r1;
+}
+
 // Vertices on a patch border, seeds and features (held by the interior passes).
 std::vector<char> held_vertices(const qs::dissect::Dissection& d) {
   const auto& c = d.chart;
@@ -527,18 +542,10 @@ TEST(RefineAcrossBorders, MovesThePatchCurvesBijectivelyAndLowersTheErrorOfARete
 
 TEST(RefineAcrossBorders, IsDeterministicWhateverTheThreadCount) {
   auto set1 = small_pair(2);
-  auto set4 = set1;
   mr::RefineOptions o;
   o.across_borders = true;
-  o.threads = 1;
-  const auto r1 = mr::refine_maps(set1, o);
-  o.threads = 4;
-  const auto r4 = mr::refine_maps(set4, o);
+  const auto r1 = expect_thread_independent(set1, o);
   EXPECT_GT(r1.meshes[1].sides_refined, 0);
-  expect_same_chart(set1[1].chart, set4[1].chart);
-  EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
-  EXPECT_EQ(folded_faces(set1[1].chart), 0);
-  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set1[1].chart));
 }
 
 TEST(RefineAcrossBorders, ZeroSweepsIsTheInteriorRefinement) {
@@ -715,20 +722,12 @@ TEST(MoveCorners, ThePowerMapChartMovesCornersWithoutFolds) {
 
 TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothing) {
   auto set1 = small_pair(2);
-  auto set4 = set1;
   auto plain = set1;
   auto zero = set1;
   mr::RefineOptions o;
   o.move_corners = true;
-  o.threads = 1;
-  const auto r1 = mr::refine_maps(set1, o);
-  o.threads = 4;
-  const auto r4 = mr::refine_maps(set4, o);
+  const auto r1 = expect_thread_independent(set1, o);
   EXPECT_GT(r1.meshes[1].corners_moved, 0);
-  expect_same_chart(set1[1].chart, set4[1].chart);
-  EXPECT_EQ(r1.meshes[1].energy_after, r4.meshes[1].energy_after);
-  EXPECT_EQ(folded_faces(set1[1].chart), 0);
-  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set1[1].chart));
 
   mr::refine_maps(plain);
   o.corner_sweeps = 0;

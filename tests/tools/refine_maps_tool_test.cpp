@@ -32,6 +32,31 @@ class RefineMapsTool : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   std::string d() const { return dir_.string(); }
   std::string pair() const { return d() + "/shape00.obj " + d() + "/shape01.obj"; }
+  // Dissects the pair with `flags` into d()/name twice, checks that the reference's chart is left
+  // as the default refinement leaves it, that the runs are byte-identical and that the remesh,
+  // merge and correspondence measure read the result; returns qs-metro's run on it.
+  RunResult expect_refined_run(const std::string& flags, const std::string& name, const std::string& report_line) {
+    RunResult r = run_tool("qs-dissect", pair() + " " + flags + " -o " + d() + "/" + name);
+    EXPECT_EQ(r.exit, 0) << r.out;
+    EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));  // implies --refine-maps
+    EXPECT_THAT(r.out, HasSubstr(report_line));
+    EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
+    EXPECT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
+    const fs::path out = dir_ / name;
+    EXPECT_EQ(bytes(out / "shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
+    // The cuts add vertices and faces to the refined mesh's chart.
+    EXPECT_GT(bytes(out / "shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
+    EXPECT_EQ(run_tool("qs-dissect", pair() + " " + flags + " --quiet -o " + d() + "/" + name + "2").exit, 0);
+    EXPECT_EQ(bytes(out / "shape01.chart.ply"), bytes(dir_ / (name + "2") / "shape01.chart.ply"));
+    EXPECT_EQ(bytes(out / "dissection.json"), bytes(dir_ / (name + "2") / "dissection.json"));
+    r = run_tool("qs-remesh", d() + "/" + name + " --level 3 -q -o " + d() + "/" + name + "-remesh");
+    EXPECT_EQ(r.exit, 0) << r.out;
+    r = run_tool("qs-merge", d() + "/" + name + " -o " + d() + "/" + name + "-merge");
+    EXPECT_EQ(r.exit, 0) << r.out;
+    r = run_tool("qs-metro", "--correspondence " + d() + "/" + name + " --samples 5000");
+    EXPECT_EQ(r.exit, 0) << r.out;
+    return r;
+  }
   fs::path dir_;
 };
 
@@ -78,49 +103,17 @@ TEST_F(RefineMapsTool, OneMeshIsLeftAsDissectedAndBadOptionsAreUsageErrors) {
 }
 
 TEST_F(RefineMapsTool, AcrossBordersMovesTheCurvesAndTheLaterStagesReadIt) {
-  RunResult r = run_tool("qs-dissect", pair() + " --refine-across-borders -o " + d() + "/across");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));  // implies --refine-maps
-  EXPECT_THAT(r.out, HasSubstr("  refine across borders: "));
-  EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
-  EXPECT_EQ(bytes(dir_ / "across/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
-  // The cuts add vertices and faces to the refined mesh's chart.
-  EXPECT_GT(bytes(dir_ / "across/shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-across-borders --quiet -o " + d() + "/across2").exit, 0);
-  EXPECT_EQ(bytes(dir_ / "across/shape01.chart.ply"), bytes(dir_ / "across2/shape01.chart.ply"));
-  EXPECT_EQ(bytes(dir_ / "across/dissection.json"), bytes(dir_ / "across2/dissection.json"));
-  r = run_tool("qs-remesh", d() + "/across --level 3 -q -o " + d() + "/remesh");
+  expect_refined_run("--refine-across-borders", "across", "  refine across borders: ");
+  const RunResult r = run_tool("qs-morph", d() + "/across-remesh -o " + d() + "/morph");
   EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-morph", d() + "/remesh -o " + d() + "/morph");
-  EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-merge", d() + "/across -o " + d() + "/merge");
-  EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-metro", "--correspondence " + d() + "/across --samples 5000");
-  EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-dissect", pair() + " --refine-across-borders --refine-border-sweeps 21 -o " + d() + "/bad");
-  EXPECT_EQ(r.exit, 1) << r.out;
+  const RunResult bad =
+      run_tool("qs-dissect", pair() + " --refine-across-borders --refine-border-sweeps 21 -o " + d() + "/bad");
+  EXPECT_EQ(bad.exit, 1) << bad.out;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 
 TEST_F(RefineMapsTool, CornersMoveDeterministicallyAndTheLaterStagesReadIt) {
-  RunResult r = run_tool("qs-dissect", pair() + " --refine-corners -o " + d() + "/corners");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));  // implies --refine-maps
-  EXPECT_THAT(r.out, HasSubstr("  refine corners: "));
-  EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
-  EXPECT_EQ(bytes(dir_ / "corners/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
-  EXPECT_NE(bytes(dir_ / "corners/shape01.chart.ply"), bytes(dir_ / "plain/shape01.chart.ply"));
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-corners --quiet -o " + d() + "/corners2").exit, 0);
-  EXPECT_EQ(bytes(dir_ / "corners/shape01.chart.ply"), bytes(dir_ / "corners2/shape01.chart.ply"));
-  EXPECT_EQ(bytes(dir_ / "corners/dissection.json"), bytes(dir_ / "corners2/dissection.json"));
-  r = run_tool("qs-remesh", d() + "/corners --level 3 -q -o " + d() + "/remesh");
-  EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-merge", d() + "/corners -o " + d() + "/merge");
-  EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-metro", "--correspondence " + d() + "/corners --samples 5000");
-  EXPECT_EQ(r.exit, 0) << r.out;
+  RunResult r = expect_refined_run("--refine-corners", "corners", "  refine corners: ");
   EXPECT_THAT(r.out, HasSubstr("  patch corners: B's corner to the exact image of A's corner"));
   for (const char* bad : {" --refine-corners --refine-corner-sweeps 21", " --refine-corners --refine-corner-chart cone"}) {
     r = run_tool("qs-dissect", pair() + bad + " -o " + d() + "/bad");
