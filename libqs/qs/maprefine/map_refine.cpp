@@ -924,6 +924,56 @@ std::vector<SharedSide> shared_sides(const dissect::Chart& chart) {
   return out;
 }
 
+// Faces per patch and per vertex of a chart, built once per group of sides or corners planned
+// together (the chart does not change while they are planned), so that gathering the faces of
+// two or k patches does not pass over the whole chart for every side or corner.
+struct ChartIndex {
+  std::vector<std::vector<int>> patch_faces;
+  std::vector<int> vertex_offset, vertex_faces;  // vertex v's faces: [offset[v], offset[v + 1])
+
+  explicit ChartIndex(const dissect::Chart& chart) : patch_faces(chart.patches.size()) {
+    const int nf = chart.mesh.num_faces();
+    vertex_offset.assign(chart.mesh.num_vertices() + 1, 0);
+    for (int f = 0; f < nf; ++f) {
+      patch_faces[chart.face_patch[f]].push_back(f);
+      for (int v : chart.mesh.faces[f]) ++vertex_offset[v + 1];
+    }
+    for (size_t v = 1; v < vertex_offset.size(); ++v) vertex_offset[v] += vertex_offset[v - 1];
+    vertex_faces.resize(vertex_offset.back());
+    std::vector<int> fill(vertex_offset.begin(), vertex_offset.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int v : chart.mesh.faces[f]) vertex_faces[fill[v]++] = f;
+  }
+
+  /// The faces of `patches` (distinct), ascending; `outside` (#V, zero) gets 1 at their vertices
+  /// that also lie on a face of another patch.
+  std::vector<int> gather(const dissect::Chart& chart, const std::vector<int>& patches,
+                          std::vector<char>& outside) const {
+    std::vector<int> faces;
+    for (int p : patches) faces.insert(faces.end(), patch_faces[p].begin(), patch_faces[p].end());
+    std::sort(faces.begin(), faces.end());
+    for (int f : faces)
+      for (int v : chart.mesh.faces[f])
+        for (int i = vertex_offset[v]; i < vertex_offset[v + 1] && !outside[v]; ++i)
+          if (std::find(patches.begin(), patches.end(), chart.face_patch[vertex_faces[i]]) == patches.end())
+            outside[v] = 1;
+    return faces;
+  }
+};
+
+// Corners, seeds and features of a mesh (#V flags): what the side and corner moves never move.
+std::vector<char> pinned_vertices(const dissect::Dissection& d) {
+  std::vector<char> pinned(d.chart.mesh.num_vertices(), 0);
+  auto pin = [&](int v) {
+    if (v >= 0 && v < static_cast<int>(pinned.size())) pinned[v] = 1;
+  };
+  for (const auto& p : d.chart.patches)
+    for (int c : p.corners) pin(c);
+  for (int v : d.seeds) pin(v);
+  for (const auto& f : d.features) pin(f.vertex);
+  return pinned;
+}
+
 enum class SideOutcome { Refined, Unchanged, Skipped };
 
 // A free vertex this close to the cut line (as a fraction of a crossing edge's extent across it)
@@ -954,21 +1004,14 @@ struct SideCut {
 // u = 1. `pinned`: corners, seeds and features of B (never moved). Only an outcome Refined has a
 // cut to commit: the refined union was bijective, lower in energy, and every piece is a positive
 // uv triangle inside its square.
-SideCut plan_side(const dissect::Chart& chart, const std::vector<ReferencePatch>& refs, const SharedSide& side,
-                  const std::vector<char>& pinned, const RefineOptions& options) {
+SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const std::vector<ReferencePatch>& refs,
+                  const SharedSide& side, const std::vector<char>& pinned, const RefineOptions& options) {
   SideCut out;
   const int nv = chart.mesh.num_vertices();
-  const int nf = chart.mesh.num_faces();
   const std::array<Glue, 2> glue = {Glue{side.p, (1 - side.side_p + 4) % 4, 0.0},
                                     Glue{side.q, (3 - side.side_q + 4) % 4, 1.0}};
-  std::vector<int> faces;
   std::vector<char> outside(nv, 0);
-  for (int f = 0; f < nf; ++f) {
-    const int p = chart.face_patch[f];
-    if (p == side.p || p == side.q) faces.push_back(f);
-    else
-      for (int v : chart.mesh.faces[f]) outside[v] = 1;
-  }
+  const std::vector<int> faces = index.gather(chart, {side.p, side.q}, outside);
   // Local vertices (one per chart vertex, glued (u, v)), with their original wedges per patch.
   PatchProblem pr;
   std::unordered_map<int, int> local;
@@ -1194,20 +1237,14 @@ AcrossResult refine_across(dissect::Dissection& b, const std::vector<ReferencePa
     }
   }
   for (int sweep = 0; sweep < options.border_sweeps; ++sweep) {
-    std::vector<char> pinned(b.chart.mesh.num_vertices(), 0);
-    for (const auto& p : b.chart.patches)
-      for (int c : p.corners)
-        if (c >= 0 && c < static_cast<int>(pinned.size())) pinned[c] = 1;
-    for (int s : b.seeds)
-      if (s >= 0 && s < static_cast<int>(pinned.size())) pinned[s] = 1;
-    for (const auto& f : b.features)
-      if (f.vertex >= 0 && f.vertex < static_cast<int>(pinned.size())) pinned[f.vertex] = 1;
+    std::vector<char> pinned = pinned_vertices(b);
     int refined = 0;
     for (const auto& group : groups) {
       pinned.resize(b.chart.mesh.num_vertices(), 0);
+      const ChartIndex index(b.chart);
       std::vector<SideCut> cuts(group.size());
       parallel_for(static_cast<int>(group.size()), options.threads, context, [&](int i) {
-        cuts[i] = plan_side(b.chart, refs, sides[group[i]], pinned, options);
+        cuts[i] = plan_side(b.chart, index, refs, sides[group[i]], pinned, options);
       });
       for (const auto& cut : cuts) {
         out.steps += cut.steps;
@@ -1362,8 +1399,8 @@ constexpr int kOrigin = -2, kGeneric = -1;
 
 // Refines B's map on the star of a corner and plans the cut along the k rays (see above). `pinned`:
 // corners, seeds and features of B. Only an outcome Moved has a cut to commit.
-CornerCut plan_corner(const dissect::Chart& chart, const std::vector<ReferencePatch>& refs, const CornerStar& star,
-                      const std::vector<char>& pinned, const RefineOptions& options) {
+CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, const std::vector<ReferencePatch>& refs,
+                      const CornerStar& star, const std::vector<char>& pinned, const RefineOptions& options) {
   CornerCut out;
   const int k = static_cast<int>(star.patches.size());
   const bool power = options.corner_chart == CornerChart::Power;
@@ -1385,13 +1422,8 @@ CornerCut plan_corner(const dissect::Chart& chart, const std::vector<ReferencePa
     turns[j] = (4 - star.index[j]) % 4;
     sector_of[star.patches[j]] = j;
   }
-  std::vector<int> faces;
   std::vector<char> outside(nv, 0);
-  for (int f = 0; f < chart.mesh.num_faces(); ++f) {
-    if (sector_of.count(chart.face_patch[f])) faces.push_back(f);
-    else
-      for (int v : chart.mesh.faces[f]) outside[v] = 1;
-  }
+  const std::vector<int> faces = index.gather(chart, star.patches, outside);
   PatchProblem pr;
   std::unordered_map<int, int> local;
   std::vector<int> tag;
@@ -1799,16 +1831,9 @@ CornerResult move_corners(dissect::Dissection& b, const std::vector<ReferencePat
   for (int sweep = 0; sweep < options.corner_sweeps; ++sweep) {
     int moved = 0;
     for (const auto& group : groups) {
-      const int nv = chart.mesh.num_vertices();
-      std::vector<char> pinned(nv, 0);
-      auto pin = [&](int v) {
-        if (v >= 0 && v < nv) pinned[v] = 1;
-      };
-      for (const auto& p : chart.patches)
-        for (int c : p.corners) pin(c);
-      for (int s : b.seeds) pin(s);
-      for (const auto& f : b.features) pin(f.vertex);
+      const std::vector<char> pinned = pinned_vertices(b);
       const DirectedSides sides = directed_sides(chart);
+      const ChartIndex index(chart);
       std::vector<CornerCut> cuts(group.size());
       parallel_for(static_cast<int>(group.size()), options.threads, context, [&](int i) {
         const auto [p, m] = corners[group[i]];
@@ -1817,7 +1842,7 @@ CornerResult move_corners(dissect::Dissection& b, const std::vector<ReferencePat
           cuts[i].outcome = CornerOutcome::Irregular;
           return;
         }
-        cuts[i] = plan_corner(chart, refs, *star, pinned, options);
+        cuts[i] = plan_corner(chart, index, refs, *star, pinned, options);
       });
       for (size_t i = 0; i < cuts.size(); ++i) {
         const auto& cc = cuts[i];

@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "qs/core/error.h"
+#include "qs/mesh/connectivity.h"
 #include "qs/remesh/chart_sampler.h"
 #include "qs/remesh/quality.h"
 #include "qs/remesh/uniform.h"
@@ -592,24 +593,13 @@ int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnec
     return v >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
   };
   auto& faces = c.faces;
-  const int nf = c.num_faces(), nv = c.num_vertices();
+  const int nf = c.num_faces();
   auto from = [&](int he) { return faces[he / 3][he % 3]; };
   auto to = [&](int he) { return faces[he / 3][(he % 3 + 1) % 3]; };
   auto next = [](int he) { return he - he % 3 + (he % 3 + 1) % 3; };
   auto prev = [](int he) { return he - he % 3 + (he % 3 + 2) % 3; };
-  // Twins through the half-edges leaving each vertex.
-  std::vector<int> out_offset(nv + 1, 0), out_he(3 * static_cast<size_t>(nf)), twin(3 * static_cast<size_t>(nf), -1);
-  for (int he = 0; he < 3 * nf; ++he) ++out_offset[from(he) + 1];
-  for (int v = 0; v < nv; ++v) out_offset[v + 1] += out_offset[v];
-  {
-    std::vector<int> fill(out_offset.begin(), out_offset.end() - 1);
-    for (int he = 0; he < 3 * nf; ++he) out_he[fill[from(he)]++] = he;
-  }
-  for (int he = 0; he < 3 * nf; ++he) {
-    const int b = to(he), a = from(he);
-    for (int k = out_offset[b]; k < out_offset[b + 1]; ++k)
-      if (to(out_he[k]) == a) twin[he] = out_he[k];
-  }
+  // Twins (the same half-edge numbering as qs::mesh::Connectivity), kept up to date by the flips.
+  std::vector<int> twin = mesh::build_connectivity(TriMesh{positions[0], faces}).opposite;
   // Whether an edge joins v and w: around v through the twins (the mesh is closed and manifold).
   auto joined = [&](int start, int w) {  // start: a half-edge leaving v
     int he = start;
