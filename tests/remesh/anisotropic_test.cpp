@@ -212,6 +212,7 @@ TEST(Anisotropic, SmoothingRemovesSliversOfShearedMaps) {
     qs::remesh::AnisotropicOptions o = qs::remesh::anisotropic_options(4, static_cast<int>(chart.patches.size()));
     o.smooth_iterations = 0;
     o.flip_rounds = 0;  // the smoothing alone (the flips: FlipsRemoveNeedlesOfShearedMaps)
+    o.slide_sides = false;  // the interior alone (the sides: SideVerticesSlideAlongTheirSideOnly)
     const auto raw = qs::remesh::remesh_anisotropic(charts, o);
     o.smooth_iterations = qs::remesh::kDefaultSmoothIterations;
     const auto smooth = qs::remesh::remesh_anisotropic(charts, o);
@@ -350,6 +351,72 @@ TEST(Anisotropic, FlipsKeepOneConnectivityForASet) {
   EXPECT_LT(full.under_20, none.under_20);
   EXPECT_LE(full.under_10, none.under_10);
   EXPECT_GT(full.median, none.median);
+}
+
+// The fraction along side s (0 bottom, 1 right, 2 top, 3 left) from corner s of a point on it.
+double side_fraction(int s, const qs::Vec2& uv) {
+  return s == 0 ? uv.x() : s == 1 ? uv.y() : s == 2 ? 1 - uv.x() : 1 - uv.y();
+}
+int side_of(const qs::Vec2& uv) {
+  if ((uv.y() == 0) + (uv.x() == 1) + (uv.y() == 1) + (uv.x() == 0) != 1) return -1;
+  return uv.y() == 0 ? 0 : uv.x() == 1 ? 1 : uv.y() == 1 ? 2 : 3;
+}
+
+// With the sliding, a patch-side vertex moves along its side only: the same patch, the same side
+// (its fixed coordinate bit-identical), its point in every mesh the chart's point there seen from
+// both patches of the side (the side's polyline), corners fixed; the set keeps one connectivity,
+// closed and 2-manifold, every face counter-clockwise in a patch's (u,v) (qs-bake's
+// split_by_patch), deterministically; interior vertices stay inside their patch.
+TEST(Anisotropic, SideVerticesSlideAlongTheirSideOnly) {
+  const auto& pair = qs::remesh_test::pair_dissection();
+  const qs::dissect::Chart a = sheared(pair.meshes[0].chart, 0.6, 3), b = sheared(pair.meshes[1].chart, 0.5, 2);
+  const std::vector<const qs::dissect::Chart*> charts = {&a, &b};
+  qs::remesh::AnisotropicOptions o = qs::remesh::anisotropic_options(3, static_cast<int>(a.patches.size()));
+  ASSERT_TRUE(o.slide_sides) << "sliding is the default";
+  const auto on = qs::remesh::remesh_anisotropic(charts, o);
+  const auto again = qs::remesh::remesh_anisotropic(charts, o);
+  o.slide_sides = false;
+  const auto off = qs::remesh::remesh_anisotropic(charts, o);
+  EXPECT_EQ(off.stats.slid_moves, 0);
+  EXPECT_GT(on.stats.slid_moves, 0);
+  EXPECT_EQ(again.remesh.connectivity.faces, on.remesh.connectivity.faces);
+  EXPECT_EQ(again.remesh.connectivity.vertex_uv, on.remesh.connectivity.vertex_uv);
+  EXPECT_EQ(again.remesh.positions, on.remesh.positions);
+  expect_flipped_remesh_valid(charts, on, "sliding");
+  const auto& c0 = off.remesh.connectivity;
+  const auto& c1 = on.remesh.connectivity;
+  ASSERT_EQ(c0.num_vertices(), c1.num_vertices());
+  ASSERT_EQ(c0.vertex_patch, c1.vertex_patch);
+  std::vector<qs::remesh::ChartSampler> samplers;
+  for (const auto* c : charts) samplers.emplace_back(*c);
+  const auto& t = samplers[0].topology();
+  int slid = 0;
+  for (int v = 0; v < c1.num_vertices(); ++v) {
+    const qs::Vec2 u0 = c0.vertex_uv[v], u1 = c1.vertex_uv[v];
+    const int p = c1.vertex_patch[v], s = side_of(u0);
+    if (v < c1.num_base_vertices) {
+      EXPECT_EQ(u0, u1) << "corner " << v;
+      for (size_t m = 0; m < charts.size(); ++m) EXPECT_EQ(off.remesh.positions[m][v], on.remesh.positions[m][v]);
+      continue;
+    }
+    if (s < 0) {
+      EXPECT_TRUE(u1.x() > 0 && u1.x() < 1 && u1.y() > 0 && u1.y() < 1) << "interior vertex " << v << " left its patch";
+      continue;
+    }
+    ASSERT_EQ(side_of(u1), s) << "side vertex " << v << " left side " << s << " of patch " << p;
+    slid += u0 != u1;
+    const double f = side_fraction(s, u1);
+    EXPECT_TRUE(f > 0 && f < 1) << "vertex " << v;
+    const qs::remesh::PatchSide tw = t.twin(p, s);
+    const double r = 1 - f;
+    const qs::Vec2 twin_uv = tw.side == 0 ? qs::Vec2(r, 0) : tw.side == 1 ? qs::Vec2(1, r) : tw.side == 2 ? qs::Vec2(1 - r, 1) : qs::Vec2(0, 1 - r);
+    for (size_t m = 0; m < charts.size(); ++m) {
+      EXPECT_LT((samplers[m].point(p, u1) - on.remesh.positions[m][v]).norm(), 1e-12) << "vertex " << v << " mesh " << m;
+      EXPECT_LT((samplers[m].point(tw.patch, twin_uv) - on.remesh.positions[m][v]).norm(), 1e-9)
+          << "vertex " << v << " seen from the twin patch " << tw.patch << ", mesh " << m;
+    }
+  }
+  EXPECT_GT(slid, 0);
 }
 
 // A set keeps one connectivity and one (u, v) per vertex with the smoothing, deterministically, and

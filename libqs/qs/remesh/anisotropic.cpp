@@ -577,6 +577,195 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
   return accepted;
 }
 
+// The side of patch p that (u,v) lies on (0 bottom, 1 right, 2 top, 3 left), or -1 inside or at a
+// corner; and the fraction along side s from corner s, and back.
+int side_of(const Vec2& uv) {
+  const int on = (uv.y() == 0) + (uv.x() == 1) + (uv.y() == 1) + (uv.x() == 0);
+  if (on != 1) return -1;
+  return uv.y() == 0 ? 0 : uv.x() == 1 ? 1 : uv.y() == 1 ? 2 : 3;
+}
+double side_fraction(int s, const Vec2& uv) {
+  return s == 0 ? uv.x() : s == 1 ? uv.y() : s == 2 ? 1 - uv.x() : 1 - uv.y();
+}
+Vec2 side_point(int s, double f) {
+  return s == 0 ? Vec2(f, 0) : s == 1 ? Vec2(1, f) : s == 2 ? Vec2(1 - f, 1) : Vec2(0, 1 - f);
+}
+
+// The (u,v) in the twin patch across side s of patch p of the point uv on that side.
+Vec2 twin_side_uv(const BaseTopology& t, int p, int s, const Vec2& uv) {
+  const PatchSide tw = t.twin(p, s);
+  const double r = 1 - side_fraction(s, uv);  // along the twin side from its corner
+  switch (tw.side) {
+    case 0: return Vec2(r, 0);
+    case 1: return Vec2(1, r);
+    case 2: return Vec2(1 - r, 1);
+    default: return Vec2(0, 1 - r);
+  }
+}
+
+// Sliding of the patch-side vertices along their side (see the header): like smooth_interior, but
+// a side vertex has one unknown, its fraction along the side, shared by the two patches of the
+// side (its (patch, u, v) stays on that side of its patch, so both patches still evaluate it on
+// the side's polyline, bit-identical). Only vertices whose every ring face has a patch-interior
+// corner in one of the side's two (distinct) patches move. Returns the number of accepted moves;
+// `moved_rings` (#V), when given, flags the ring of every moved vertex.
+int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
+                std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees,
+                const std::vector<char>* active, std::vector<char>* moved_rings) {
+  if (iterations <= 0) return 0;
+  const BaseTopology& t = samplers[0].topology();
+  const int nv = c.num_vertices();
+  auto interior = [&](int w) {
+    const Vec2& uv = c.vertex_uv[w];
+    return w >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
+  };
+  auto slidable_side = [&](int v) { return v >= c.num_base_vertices ? side_of(c.vertex_uv[v]) : -1; };
+  // Ring faces of every side vertex: the two other corners (CCW) and the face's patch.
+  struct RingFace {
+    int w1, w2, patch;
+  };
+  std::vector<int> offset(nv + 1, 0);
+  for (const Tri& f : c.faces)
+    for (int k = 0; k < 3; ++k)
+      if (slidable_side(f[k]) >= 0) ++offset[f[k] + 1];
+  for (int v = 0; v < nv; ++v) offset[v + 1] += offset[v];
+  std::vector<RingFace> ring(offset[nv]);
+  std::vector<char> ok(nv, 0);
+  {
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    for (const Tri& f : c.faces) {
+      int patch = -1;
+      for (int w : f)
+        if (interior(w)) patch = c.vertex_patch[w];
+      for (int k = 0; k < 3; ++k)
+        if (slidable_side(f[k]) >= 0) ring[fill[f[k]]++] = {f[(k + 1) % 3], f[(k + 2) % 3], patch};
+    }
+    for (int v = 0; v < nv; ++v) {
+      const int s = slidable_side(v);
+      if (s < 0 || offset[v + 1] == offset[v]) continue;
+      const int p = c.vertex_patch[v], q = t.twin(p, s).patch;
+      bool good = p != q;
+      for (int r = offset[v]; r < offset[v + 1] && good; ++r) good = ring[r].patch == p || ring[r].patch == q;
+      ok[v] = good;
+    }
+  }
+  const double threshold = std::sin(below_degrees * M_PI / 180);
+  const size_t meshes = samplers.size();
+  std::vector<int> hints(meshes, -1);
+  std::vector<Vec3> moved(meshes);
+  std::vector<std::array<Vec2, 3>> ring_uv;  // per ring face: v, w1, w2 in the face's patch
+  int accepted = 0;
+  for (int it = 0; it < iterations; ++it) {
+    int moves = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (!ok[v] || (active && !(*active)[v])) continue;
+      const int b = offset[v], e = offset[v + 1];
+      auto worst = [&](auto&& at) {
+        double qmin = 1, sum = 0;
+        for (size_t m = 0; m < meshes; ++m)
+          for (int r = b; r < e; ++r) {
+            const double x = sin_min_angle(at(m), positions[m][ring[r].w1], positions[m][ring[r].w2]);
+            qmin = std::min(qmin, x);
+            sum += std::min(x, threshold);
+          }
+        return std::make_pair(qmin, sum);
+      };
+      const auto before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
+      if (before.first >= threshold) continue;
+      auto better = [&](const std::pair<double, double>& qq) {
+        if (qq.first < 0) return false;
+        return qq.first > before.first || (qq.first >= kSmoothWorstSlack * before.first && qq.second > before.second);
+      };
+      const int p = c.vertex_patch[v];
+      const Vec2 uv = c.vertex_uv[v];
+      const int s = side_of(uv);
+      const double f0 = side_fraction(s, uv);
+      // The ring in its faces' patches, and the nearest ring vertices on the side (fractions).
+      ring_uv.resize(e - b);
+      double lo = 0, hi = 1;
+      for (int r = b; r < e; ++r) {
+        const int patch = ring[r].patch;
+        ring_uv[r - b][0] = uv_in_patch(t, c, v, patch, uv);
+        for (int k = 0; k < 2; ++k) {
+          const int w = k == 0 ? ring[r].w1 : ring[r].w2;
+          ring_uv[r - b][k + 1] = uv_in_patch(t, c, w, patch, ring_uv[r - b][0]);
+          if (patch != p) continue;
+          const Vec2& wu = ring_uv[r - b][k + 1];
+          const bool on_side = s == 0 ? wu.y() == 0 : s == 1 ? wu.x() == 1 : s == 2 ? wu.y() == 1 : wu.x() == 0;
+          if (!on_side) continue;
+          const double fw = side_fraction(s, wu);
+          if (fw < f0) lo = std::max(lo, fw);
+          if (fw > f0) hi = std::min(hi, fw);
+        }
+      }
+      const double room = std::min(f0 - lo, hi - f0);
+      if (!(room > 0)) continue;
+      // Per mesh: the step along the side toward the ring's area-weighted centroid (its projection
+      // on the side's tangent); the set moves by the mean.
+      const double h = 0.25 * room;
+      double step = 0;
+      int used = 0;
+      for (size_t m = 0; m < meshes; ++m) {
+        const auto& x = positions[m];
+        const Vec3 xv = x[v];
+        Vec3 target(0, 0, 0);
+        double area = 0;
+        for (int r = b; r < e; ++r) {
+          const Vec3 &x1 = x[ring[r].w1], &x2 = x[ring[r].w2];
+          const double a = 0.5 * (x1 - xv).cross(x2 - xv).norm();
+          target += a * (xv + x1 + x2) / 3;
+          area += a;
+        }
+        const Vec3 tangent = (samplers[m].point(p, side_point(s, f0 + h)) - samplers[m].point(p, side_point(s, f0 - h))) / (2 * h);
+        const double tt = tangent.squaredNorm();
+        if (!(area > 0) || !(tt > 0)) continue;
+        const double ds = tangent.dot(target / area - xv) / tt;
+        if (!std::isfinite(ds)) continue;
+        step += ds;
+        ++used;
+      }
+      if (used == 0) continue;
+      step = std::clamp(step / used, -0.5 * room, 0.5 * room);
+      auto trial = [&](double ds) {
+        const double f = f0 + ds;
+        if (!(f > lo && f < hi)) return std::make_pair(-1.0, 0.0);
+        const Vec2 nuv = side_point(s, f);
+        for (int r = b; r < e; ++r) {
+          const int patch = ring[r].patch;
+          const Vec2 vn = patch == p ? nuv : twin_side_uv(t, p, s, nuv);
+          const Vec2 &a1 = ring_uv[r - b][1], &a2 = ring_uv[r - b][2], &vo = ring_uv[r - b][0];
+          const double before_uv = cross2(a1 - vo, a2 - vo), after_uv = cross2(a1 - vn, a2 - vn);
+          if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv))
+            return std::make_pair(-1.0, 0.0);
+        }
+        for (size_t m = 0; m < meshes; ++m) moved[m] = samplers[m].point(p, nuv, hints[m]);
+        return worst([&](size_t m) -> const Vec3& { return moved[m]; });
+      };
+      for (int tries = 0; tries < 3; ++tries, step *= 0.5)
+        if (better(trial(step))) {
+          c.vertex_uv[v] = side_point(s, f0 + step);
+          for (size_t m = 0; m < meshes; ++m) positions[m][v] = moved[m];
+          ++moves;
+          if (moved_rings) {
+            (*moved_rings)[v] = 1;
+            for (int r = b; r < e; ++r) (*moved_rings)[ring[r].w1] = (*moved_rings)[ring[r].w2] = 1;
+          }
+          break;
+        }
+    }
+    accepted += moves;
+    if (moves == 0) break;
+  }
+  return accepted;
+}
+
+// How far the chord from xa to xb (the 3D points of (u,v) ua, ub of patch p) passes from the
+// surface, along n: the distance of its 3D midpoint from the chart's point at its (u,v) midpoint.
+double chord_gap(const ChartSampler& s, int p, const Vec2& ua, const Vec2& ub, const Vec3& xa, const Vec3& xb,
+                 const Vec3& n, int& hint) {
+  return std::abs(n.dot(0.5 * (xa + xb) - s.point(p, 0.5 * (ua + ub), hint)));
+}
+
 // Edge flips on the surface (see the header): an edge whose two triangles lie in one patch is
 // flipped when that raises the smallest angle of the two over the set, their worst angle is under
 // below_degrees, the new edge has a patch-interior end and is no edge yet, and the two new
@@ -662,12 +851,21 @@ int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       const double nn = n.norm();
       if (!(nn > 0)) continue;
       n /= nn;
-      const double old_gap = std::abs(n.dot(0.5 * (x[a] + x[b]) - samplers[m].point(p, 0.5 * (ua + ub), hints[m])));
-      const double new_gap = std::abs(n.dot(0.5 * (x[cc] + x[d]) - samplers[m].point(p, 0.5 * (uc + ud), hints[m])));
+      const double old_gap = chord_gap(samplers[m], p, ua, ub, x[a], x[b], n, hints[m]);
+      const double new_gap = chord_gap(samplers[m], p, uc, ud, x[cc], x[d], n, hints[m]);
+      double allowed = std::max(old_gap, kFlipChordSlack * (x[cc] - x[d]).norm());
+      // The pair's four sides, only when needed (in a set, a mesh sampled more coarsely than the
+      // remesh has chords off its surface everywhere: its old diagonal happening to lie on one
+      // chart face must not block a flip that another mesh needs).
+      const std::array<std::pair<int, Vec2>, 4> quad = {{{a, ua}, {d, ud}, {b, ub}, {cc, uc}}};
+      for (int k = 0; k < 4 && new_gap > allowed; ++k) {
+        const auto& [v0, w0] = quad[k];
+        const auto& [v1, w1] = quad[(k + 1) % 4];
+        allowed = std::max(allowed, chord_gap(samplers[m], p, w0, w1, x[v0], x[v1], n, hints[m]));
+      }
       const double old_area = (x[b] - x[a]).cross(x[cc] - x[a]).norm() + (x[a] - x[b]).cross(x[d] - x[b]).norm();
       const double new_area = (x[a] - x[cc]).cross(x[d] - x[cc]).norm() + (x[b] - x[d]).cross(x[cc] - x[d]).norm();
-      near_surface = new_gap <= std::max(old_gap, kFlipChordSlack * (x[cc] - x[d]).norm()) &&
-                     new_area <= kFlipAreaGrowth * old_area;
+      near_surface = new_gap <= allowed && new_area <= kFlipAreaGrowth * old_area;
     }
     if (!near_surface) continue;
     // The outer half-edges' twins, then the two faces and their six half-edges.
@@ -748,6 +946,13 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     context.check_cancel();
     out.stats.smoothed_moves = smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                options.smooth_iterations, options.smooth_below);
+    if (options.slide_sides) {
+      std::vector<char> rings(out.remesh.connectivity.num_vertices(), 0);
+      out.stats.slid_moves += slide_sides(samplers, out.remesh.connectivity, out.remesh.positions,
+                                          options.smooth_iterations, options.smooth_below, nullptr, &rings);
+      out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
+                                                  options.smooth_iterations, options.smooth_below, &rings);
+    }
     // The cells' diagonals and templates again for the moved vertices. A moved cell need not be
     // convex in (u,v) any more, so a new cut is kept only where every corner is inside one patch
     // (one uv frame) and its triangles stay counter-clockwise there; elsewhere the cut the
@@ -786,9 +991,17 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     std::vector<char> touched(out.remesh.connectivity.num_vertices(), 0);
     out.stats.flips +=
         flip_for_angles(samplers, out.remesh.connectivity, out.remesh.positions, options.smooth_below, touched);
-    if (r + 1 < options.flip_rounds)
+    if (r + 1 < options.flip_rounds) {
       out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                   options.smooth_iterations, options.smooth_below, &touched);
+      if (options.slide_sides && options.smooth_iterations > 0) {
+        std::vector<char> rings(out.remesh.connectivity.num_vertices(), 0);
+        out.stats.slid_moves += slide_sides(samplers, out.remesh.connectivity, out.remesh.positions,
+                                            options.smooth_iterations, options.smooth_below, &touched, &rings);
+        out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
+                                                    options.smooth_iterations, options.smooth_below, &rings);
+      }
+    }
   }
   context.report("remesh", 1.0);
   return out;

@@ -70,8 +70,9 @@
 // the sum over the set of its triangles' sin(smallest angle), each capped at sin(smooth_below),
 // rises while the worst keeps at least 0.9 of its sine (so the smallest angle may drop a little
 // where the ring as a whole gains; figures in README). A moved
-// vertex is evaluated through the chart at its new uv, so it stays on the surface; corners, patch
-// sides (features, seeds) and the connectivity do not move. The two-triangle cells are cut again
+// vertex is evaluated through the chart at its new uv, so it stays on the surface; corners (seeds)
+// and the connectivity do not move, patch-side vertices move only along their side (see
+// "Sliding" below). The two-triangle cells are cut again
 // by the better diagonal afterwards. vertex_uv then holds the moved (u, v).
 //
 // Edge flips (after the smoothing and the re-cuts; issue 13): where the chart's map shears (the u
@@ -87,12 +88,27 @@
 // connectivity stays common), no vertex moves (features stay exact), no edge along a patch side
 // changes (no T-junction, the patch structure stays). The new edge must also stay as close to the
 // surface as the old one (its 3D midpoint's distance along the pair's normal from the chart's
-// point at its (u,v) midpoint: at most the old edge's or 0.005 of its length) and the pair's area
+// point at its (u,v) midpoint: at most the old edge's, 0.005 of its length, or the largest of the
+// pair's four sides' distances, measured the same way: in a set, a mesh sampled more coarsely
+// than the remesh has chords off its surface everywhere, and its old diagonal happening to lie
+// on one chart face must not block the flip another mesh needs) and the pair's area
 // may grow by 5% at most (a flip across a bend or a fold would cut the surface: without these the
 // bodies' and polygirl_20k's level-5 errors rose). flip_rounds rounds of flips, each but the last
 // followed by the interior smoothing again (of the flipped pairs' corners, and of the neighbours
 // of the vertices it moves). Faces are replaced in place: face_leaf then names
 // the leaf of the face a flipped face replaced.
+// Sliding (with the smoothing, slide_sides; issue 13): the vertices on a patch side (not the
+// corners) move along their side, one unknown per vertex (its fraction along the side) shared by
+// the two patches of the side, so that the side stays one polyline for both and the set one
+// connectivity. As in the smoothing: only vertices whose ring has a smallest angle under
+// smooth_below in the worst mesh, the mean over the set of each mesh's step toward its ring's
+// area-weighted centroid (projected on the side's tangent), halved up to twice when a ring face
+// would flip or shrink to under 5% in its patch's (u,v) (so a vertex never passes its
+// neighbours on the side), kept when the ring's worst angle rises or its summed quality rises as
+// above. Only vertices whose every ring face has a patch-interior corner (its patch known) in one
+// of the side's two distinct patches move. The sides move after the interior's first smoothing
+// (whose moved rings are then smoothed again) and in each flip round's smoothing. The corners
+// (seeds, and every base vertex) never move; features are not remesh vertices.
 // Before the smoothing every vertex is a point of the uniform level-L grid (L = the finest max(lu, lv) + 1, the leaf
 // centres), numbered in its order; SemiRegularConnectivity::level is the finest level a vertex
 // needs.
@@ -140,6 +156,7 @@ struct AnisotropicOptions {
                                               ///< only edges whose triangles have one under it flip; 0..60
   int flip_rounds = kDefaultFlipRounds;  ///< rounds of edge flips (see above), each but the last followed by the
                                          ///< smoothing; 0: no flips; 0..10
+  bool slide_sides = true;  ///< with the smoothing: patch-side vertices slide along their side (see "Sliding")
 };
 
 /// A node of an anisotropic tree (see the top of this file).
@@ -156,6 +173,7 @@ struct AnisotropicStats {
   double max_leaf_aspect = 1;  ///< the largest leaf_aspect (the worst mesh's, see above)
   int finest_level = 0;      ///< the largest max(lu, lv) over the leaves
   int smoothed_moves = 0;    ///< vertex moves accepted by the interior smoothing, all sweeps and rounds together
+  int slid_moves = 0;        ///< side-vertex moves accepted by the sliding (see "Sliding"), all sweeps and rounds
   int flips = 0;             ///< edges flipped (see "Edge flips"), all rounds together
 };
 
