@@ -845,6 +845,7 @@ int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnec
     // kFlipChordSlack of its length, and the pair's area grows by kFlipAreaGrowth at most, so
     // that a flip across a bend or a fold does not cut the surface.
     bool near_surface = true;
+    const bool set = samplers.size() > 1;
     for (size_t m = 0; m < samplers.size() && near_surface; ++m) {
       const auto& x = positions[m];
       Vec3 n = (x[b] - x[a]).cross(x[cc] - x[a]) + (x[a] - x[b]).cross(x[d] - x[b]);
@@ -858,7 +859,7 @@ int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       // remesh has chords off its surface everywhere: its old diagonal happening to lie on one
       // chart face must not block a flip that another mesh needs).
       const std::array<std::pair<int, Vec2>, 4> quad = {{{a, ua}, {d, ud}, {b, ub}, {cc, uc}}};
-      for (int k = 0; k < 4 && new_gap > allowed; ++k) {
+      for (int k = 0; k < 4 && set && new_gap > allowed; ++k) {
         const auto& [v0, w0] = quad[k];
         const auto& [v1, w1] = quad[(k + 1) % 4];
         allowed = std::max(allowed, chord_gap(samplers[m], p, w0, w1, x[v0], x[v1], n, hints[m]));
@@ -942,11 +943,13 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
   }
   for (size_t k = 0; k < templates.size(); ++k)
     recut_template_best_angle(&faces[templates[k]], pentagons[k], out.remesh.positions);
+  // The sides slide in a set only (see the header).
+  const bool slide = options.slide_sides && samplers.size() > 1;
   if (options.smooth_iterations > 0) {
     context.check_cancel();
     out.stats.smoothed_moves = smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                options.smooth_iterations, options.smooth_below);
-    if (options.slide_sides) {
+    if (slide) {
       std::vector<char> rings(out.remesh.connectivity.num_vertices(), 0);
       out.stats.slid_moves += slide_sides(samplers, out.remesh.connectivity, out.remesh.positions,
                                           options.smooth_iterations, options.smooth_below, nullptr, &rings);
@@ -994,7 +997,7 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     if (r + 1 < options.flip_rounds) {
       out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                   options.smooth_iterations, options.smooth_below, &touched);
-      if (options.slide_sides && options.smooth_iterations > 0) {
+      if (slide && options.smooth_iterations > 0) {
         std::vector<char> rings(out.remesh.connectivity.num_vertices(), 0);
         out.stats.slid_moves += slide_sides(samplers, out.remesh.connectivity, out.remesh.positions,
                                             options.smooth_iterations, options.smooth_below, &touched, &rings);
