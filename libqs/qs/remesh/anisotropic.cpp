@@ -607,11 +607,11 @@ Vec2 twin_side_uv(const BaseTopology& t, int p, int s, const Vec2& uv) {
 // a side vertex has one unknown, its fraction along the side, shared by the two patches of the
 // side (its (patch, u, v) stays on that side of its patch, so both patches still evaluate it on
 // the side's polyline, bit-identical). Only vertices whose every ring face has a patch-interior
-// corner in one of the side's two (distinct) patches move. Returns the number of accepted moves;
-// `moved_rings` (#V), when given, flags the ring of every moved vertex.
+// corner in one of the side's two (distinct) patches move. Returns the number of accepted moves.
+// With `active` (#V flags), only the flagged vertices are tried (the flipped rings of a round).
 int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivity& c,
                 std::vector<std::vector<Vec3>>& positions, int iterations, double below_degrees,
-                const std::vector<char>* active, std::vector<char>* moved_rings) {
+                const std::vector<char>* active = nullptr) {
   if (iterations <= 0) return 0;
   const BaseTopology& t = samplers[0].topology();
   const int nv = c.num_vertices();
@@ -746,10 +746,6 @@ int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivi
           c.vertex_uv[v] = side_point(s, f0 + step);
           for (size_t m = 0; m < meshes; ++m) positions[m][v] = moved[m];
           ++moves;
-          if (moved_rings) {
-            (*moved_rings)[v] = 1;
-            for (int r = b; r < e; ++r) (*moved_rings)[ring[r].w1] = (*moved_rings)[ring[r].w2] = 1;
-          }
           break;
         }
     }
@@ -949,13 +945,9 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     context.check_cancel();
     out.stats.smoothed_moves = smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                options.smooth_iterations, options.smooth_below);
-    if (slide) {
-      std::vector<char> rings(out.remesh.connectivity.num_vertices(), 0);
+    if (slide)
       out.stats.slid_moves += slide_sides(samplers, out.remesh.connectivity, out.remesh.positions,
-                                          options.smooth_iterations, options.smooth_below, nullptr, &rings);
-      out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
-                                                  options.smooth_iterations, options.smooth_below, &rings);
-    }
+                                          options.smooth_iterations, options.smooth_below);
     // The cells' diagonals and templates again for the moved vertices. A moved cell need not be
     // convex in (u,v) any more, so a new cut is kept only where every corner is inside one patch
     // (one uv frame) and its triangles stay counter-clockwise there; elsewhere the cut the
@@ -997,13 +989,9 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     if (r + 1 < options.flip_rounds) {
       out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
                                                   options.smooth_iterations, options.smooth_below, &touched);
-      if (slide && options.smooth_iterations > 0) {
-        std::vector<char> rings(out.remesh.connectivity.num_vertices(), 0);
+      if (slide)
         out.stats.slid_moves += slide_sides(samplers, out.remesh.connectivity, out.remesh.positions,
-                                            options.smooth_iterations, options.smooth_below, &touched, &rings);
-        out.stats.smoothed_moves += smooth_interior(samplers, out.remesh.connectivity, out.remesh.positions,
-                                                    options.smooth_iterations, options.smooth_below, &rings);
-      }
+                                            options.smooth_iterations, options.smooth_below, &touched);
     }
   }
   context.report("remesh", 1.0);

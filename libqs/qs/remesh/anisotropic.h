@@ -107,7 +107,7 @@
 // neighbours on the side), kept when the ring's worst angle rises or its summed quality rises as
 // above. Only vertices whose every ring face has a patch-interior corner (its patch known) in one
 // of the side's two distinct patches move. The sides move after the interior's first smoothing
-// (whose moved rings are then smoothed again) and in each flip round's smoothing. The corners
+// and after each flip round's smoothing (the flipped rings' side vertices). The corners
 // (seeds, and every base vertex) never move; features are not remesh vertices. In a set only (two
 // or more charts): one mesh keeps the result it had before (measured on the 26 shared meshes,
 // sliding and the flips' side allowance changed single meshes by a few faces and up to 2% of
