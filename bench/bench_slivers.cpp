@@ -10,6 +10,9 @@
 //             the cell (more than four corners tell);
 //   aspect    the cell's worst measured aspect (leaf_aspect) and its four 3D sides' ratio and
 //             smallest corner angle (shear).
+// and, for the four patches with the most such faces, their share of the mesh's area and their
+// squareness on the surface (area / (perimeter / 4)^2: 1 for a square, near 0 for a leaf whose
+// sides run close together, where every face is a sliver whatever the remesh does).
 //   usage: qs-bench-slivers [MESH_DIR | DISSECTION_DIR] [MESH_FILTER] [LEVEL] [BOUND_DEG] [PATCH...]
 //   (a folder with dissection.json: its set remeshed together, each mesh's faces; PATCH: print the
 //   map's angle between u and v on an 8 x 8 grid of that patch)
@@ -158,6 +161,28 @@ void analyze(const std::string& name, const std::vector<const qs::dissect::Chart
   std::printf("   worst patches:");
   for (size_t k = 0; k < std::min<size_t>(8, pp.size()); ++k) std::printf(" p%d:%ld", pp[k].second, pp[k].first);
   std::printf("\n");
+  // The worst patches' shape on the surface: their share of the mesh's area and their squareness,
+  // the area over (perimeter / 4)^2 (1 for a square, near 0 for a leaf whose sides run close
+  // together: every cell of such a patch is a sliver whatever one (u,v) per vertex does).
+  const auto& mesh = charts[m]->mesh;
+  double total = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) total += qs::face_area(mesh, f);
+  for (size_t k = 0; k < std::min<size_t>(4, pp.size()); ++k) {
+    const int p = pp[k].second;
+    double area = 0;
+    for (const int* f = s.patch_faces_begin(p); f != s.patch_faces_end(p); ++f) area += qs::face_area(mesh, *f);
+    double perimeter = 0;
+    const int n = 64;
+    for (int side = 0; side < 4; ++side)
+      for (int i = 0; i < n; ++i) {
+        auto at = [&](double f) {
+          return side == 0 ? Vec2(f, 0) : side == 1 ? Vec2(1, f) : side == 2 ? Vec2(1 - f, 1) : Vec2(0, 1 - f);
+        };
+        perimeter += (s.point(p, at(static_cast<double>(i + 1) / n)) - s.point(p, at(static_cast<double>(i) / n))).norm();
+      }
+    std::printf("   p%d: %.2f%% of the area, squareness %.2f (area / (perimeter / 4)^2)\n", p, 100 * area / total,
+                perimeter > 0 ? area / (perimeter * perimeter / 16) : 0.0);
+  }
 }
 
 }  // namespace
