@@ -204,6 +204,7 @@ int main(int argc, char** argv) {
                         {"smooth_iterations", ao.smooth_iterations},
                         {"smooth_below", ao.smooth_below},
                         {"smoothed_moves", ar.stats.smoothed_moves},
+                        {"slid_moves", ar.stats.slid_moves},
                         {"flip_rounds", ao.flip_rounds},
                         {"flips", ar.stats.flips}};
     } else if (even) {
