@@ -1904,6 +1904,250 @@ double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient, Eigen:
   return s * (1 + id2);
 }
 
+namespace {
+
+// The reference patch of refine_patch as it is, for NodeMetric::Face and ::Composition: its uv
+// triangles located exactly (a uniform grid over the unit square, about one cell per face), the
+// metric of each face unclamped but for a floor of 1e-12 x the patch's mean that keeps it positive
+// definite (a face with a zero-area 3D triangle), and the 3D point at any uv.
+class ExactReference {
+ public:
+  ExactReference(const param::PatchMesh& ref, const std::vector<Vec2>& uv) : ref_(ref), uv_(uv) {
+    const size_t nf = ref.faces.size();
+    metric_.assign(nf, Eigen::Matrix2d::Identity());
+    std::vector<char> positive(nf, 0);
+    double total_uv = 0;
+    for (size_t f = 0; f < nf; ++f) {
+      const auto& t = ref.faces[f];
+      Mat32 e;
+      e.col(0) = ref.positions[t[1]] - ref.positions[t[0]];
+      e.col(1) = ref.positions[t[2]] - ref.positions[t[0]];
+      Eigen::Matrix2d ds;
+      ds.col(0) = uv[t[1]] - uv[t[0]];
+      ds.col(1) = uv[t[2]] - uv[t[0]];
+      area_ += 0.5 * e.col(0).cross(e.col(1)).norm();
+      const double auv = 0.5 * ds.determinant();
+      if (!(auv > param::kZeroUvArea)) continue;
+      const Mat32 g = e * ds.inverse();
+      metric_[f] = g.transpose() * g;
+      positive[f] = 1;
+      total_uv += auv;
+    }
+    mean_ = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
+    for (size_t f = 0; f < nf; ++f) metric_[f] = positive[f] ? floored(metric_[f]) : mean_ * Eigen::Matrix2d::Identity();
+    size_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(nf)))), 1, 1024);
+    offsets_.assign(static_cast<size_t>(size_) * size_ + 1, 0);
+    auto cells = [&](size_t f, auto&& visit) {
+      const auto& t = ref.faces[f];
+      const Vec2 lo = uv[t[0]].cwiseMin(uv[t[1]]).cwiseMin(uv[t[2]]);
+      const Vec2 hi = uv[t[0]].cwiseMax(uv[t[1]]).cwiseMax(uv[t[2]]);
+      for (int y = cell(lo.y()); y <= cell(hi.y()); ++y)
+        for (int x = cell(lo.x()); x <= cell(hi.x()); ++x) visit(y * size_ + x);
+    };
+    for (size_t f = 0; f < nf; ++f)
+      if (positive[f]) cells(f, [&](int c) { ++offsets_[c + 1]; });
+    for (size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
+    grid_.resize(offsets_.back());
+    std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
+    for (size_t f = 0; f < nf; ++f)
+      if (positive[f]) cells(f, [&](int c) { grid_[fill[c]++] = static_cast<int>(f); });
+    positive_ = std::move(positive);
+  }
+
+  double area() const { return area_; }
+
+  // Eigenvalues floored at 1e-12 x the patch's mean (no upper clamp).
+  Eigen::Matrix2d floored(const Eigen::Matrix2d& m) const { return clamp_metric(m, 1e-12 * mean_, kInf); }
+
+  // The face holding q (clamped to the square; the face where q is least outside when it lies in
+  // none, e.g. by rounding on an edge) and q's barycentric coordinates in it, clamped to the
+  // face; -1 when the patch has no positive uv face. `hint`: a face to try first, updated.
+  int locate(const Vec2& q_in, int& hint, Vec3& bary) const {
+    const Vec2 q = q_in.cwiseMax(0.0).cwiseMin(1.0);
+    double score = -kInf;
+    int best = -1;
+    if (hint >= 0) try_face(hint, q, best, bary, score);
+    if (score < 0) {
+      const int c = cell(q.y()) * size_ + cell(q.x());
+      for (int k = offsets_[c]; k < offsets_[c + 1] && score < 0; ++k) try_face(grid_[k], q, best, bary, score);
+    }
+    if (score < 0)
+      for (size_t f = 0; f < ref_.faces.size() && score < 0; ++f)
+        if (positive_[f]) try_face(static_cast<int>(f), q, best, bary, score);
+    if (best < 0) return -1;
+    hint = best;
+    bary = bary.cwiseMax(0.0);
+    bary /= bary.sum();
+    return best;
+  }
+
+  // The reference's metric at q: that of the face holding q (piecewise constant).
+  Eigen::Matrix2d metric(const Vec2& q, int& hint) const {
+    Vec3 b;
+    const int f = locate(q, hint, b);
+    return f < 0 ? Eigen::Matrix2d(mean_ * Eigen::Matrix2d::Identity()) : metric_[f];
+  }
+
+  // The reference's 3D point at q (linear in the face holding q); false when there is none.
+  bool point(const Vec2& q, int& hint, Vec3& x) const {
+    Vec3 b;
+    const int f = locate(q, hint, b);
+    if (f < 0) return false;
+    const auto& t = ref_.faces[f];
+    x = b[0] * ref_.positions[t[0]] + b[1] * ref_.positions[t[1]] + b[2] * ref_.positions[t[2]];
+    return true;
+  }
+
+ private:
+  int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
+  void try_face(int f, const Vec2& q, int& best, Vec3& bary, double& score) const {
+    const auto& t = ref_.faces[f];
+    const Vec2 &a = uv_[t[0]], &b = uv_[t[1]], &c = uv_[t[2]];
+    const double area = cross2(b - a, c - a);
+    if (!(area > 0)) return;
+    const Vec3 w(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
+    const double s = w.minCoeff();
+    if (s > score) {
+      score = s;
+      bary = w;
+      best = f;
+    }
+  }
+
+  const param::PatchMesh& ref_;
+  const std::vector<Vec2>& uv_;
+  std::vector<Eigen::Matrix2d> metric_;
+  std::vector<char> positive_;
+  double area_ = 0, mean_ = 1;
+  int size_ = 1;
+  std::vector<int> offsets_, grid_;
+};
+
+// NodeMetric::Composition for a one-patch problem: per face t of B, the secant map of the
+// composition B -> uv -> A on t (A's points at t's three uv corners, over t's uv triangle), as a
+// metric: J^T J of the composed map on t is then exactly that of the triangle of A's points, at
+// the current (u, v) (re-evaluated after every Newton step like the other metrics).
+MetricFn composition_metric(const PatchProblem& prob, const ExactReference& ref, double scale) {
+  auto hints = std::make_shared<std::vector<int>>(3 * prob.faces.size(), -1);
+  auto centre = std::make_shared<std::vector<int>>(prob.faces.size(), -1);
+  return [&prob, &ref, scale, hints, centre](size_t t, const Vec2& q) {
+    const auto& c = prob.tri[t];
+    Vec3 x[3];
+    bool ok = true;
+    for (int k = 0; k < 3; ++k) ok = ok && ref.point(prob.uv[c[k]], (*hints)[3 * t + k], x[k]);
+    Eigen::Matrix2d d;
+    d.col(0) = prob.uv[c[1]] - prob.uv[c[0]];
+    d.col(1) = prob.uv[c[2]] - prob.uv[c[0]];
+    if (!ok || !(d.determinant() > 2 * param::kZeroUvArea))  // no composition: the face's metric there
+      return Eigen::Matrix2d(scale * ref.metric(q, (*centre)[t]));
+    Mat32 e;
+    e.col(0) = x[1] - x[0];
+    e.col(1) = x[2] - x[0];
+    const Mat32 g = e * d.inverse();
+    return Eigen::Matrix2d(scale * ref.floored(g.transpose() * g));
+  };
+}
+
+}  // namespace
+
+bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
+                  std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options,
+                  NodeMetric node_metric) {
+  if (ref_uv.size() != ref.positions.size() || uv.size() != patch.positions.size() ||
+      held.size() != patch.positions.size())
+    throw InvalidInput("refine_patch: the reference patch has " + std::to_string(ref.positions.size()) +
+                       " vertices and " + std::to_string(ref_uv.size()) + " uv, the patch " +
+                       std::to_string(patch.positions.size()) + " vertices, " + std::to_string(uv.size()) +
+                       " uv and " + std::to_string(held.size()) + " held flags; expected equal counts");
+  if (options.iterations < 0 || !(options.tolerance >= 0))
+    throw InvalidInput("refine_patch: iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
+                       std::to_string(options.tolerance) + ") must be >= 0");
+  if (ref.faces.empty() || patch.faces.empty() || options.iterations == 0) return false;
+  for (const auto& t : ref.faces)
+    for (int v : t)
+      if (v < 0 || v >= static_cast<int>(ref.positions.size()))
+        throw InvalidInput("refine_patch: a face of the reference uses vertex " + std::to_string(v) +
+                           ", expected 0.." + std::to_string(ref.positions.size() - 1));
+  // The patch as a problem: every vertex its own wedge; boundary loop, held and unused ones fixed.
+  const size_t nv = patch.positions.size();
+  std::vector<char> fixed(nv, 1);
+  for (const auto& t : patch.faces)
+    for (int v : t)
+      if (v < 0 || v >= static_cast<int>(nv))
+        throw InvalidInput("refine_patch: a face uses vertex " + std::to_string(v) + ", expected 0.." +
+                           std::to_string(nv - 1));
+      else
+        fixed[v] = held[v] != 0;
+  for (int v : patch.boundary)
+    if (v >= 0 && v < static_cast<int>(nv)) fixed[v] = 1;
+  PatchProblem pr;
+  pr.vertices.resize(nv);
+  pr.uv = uv;
+  pr.var.assign(nv, -1);
+  pr.dims.assign(nv, 0);
+  pr.basis.assign(nv, Vec2::Zero());
+  for (size_t v = 0; v < nv; ++v) {
+    pr.vertices[v] = static_cast<int>(v);
+    if (!fixed[v]) {
+      pr.var[v] = pr.unknowns;
+      pr.dims[v] = 2;
+      pr.unknowns += 2;
+    }
+  }
+  for (size_t f = 0; f < patch.faces.size(); ++f) {
+    const auto& t = patch.faces[f];
+    pr.faces.push_back(static_cast<int>(f));
+    pr.face_patch.push_back(0);
+    pr.tri.push_back({t[0], t[1], t[2]});
+    double area = 0;
+    const Eigen::Matrix2d dm = local_edges(patch.positions[t[0]], patch.positions[t[1]], patch.positions[t[2]], area);
+    pr.dm_inv.push_back(dm.inverse());
+    pr.area.push_back(area);
+    pr.total_area += area;
+  }
+  if (pr.unknowns == 0) return false;
+  PatchResult r;
+  if (node_metric == NodeMetric::Vertex) {
+    // The reference as a one-patch chart (refine_maps's metric and location grid).
+    dissect::Chart chart;
+    chart.mesh.positions = ref.positions;
+    chart.mesh.faces = ref.faces;
+    chart.face_patch.assign(ref.faces.size(), 0);
+    chart.face_uv.resize(ref.faces.size());
+    std::vector<int> ref_faces(ref.faces.size());
+    for (size_t f = 0; f < ref.faces.size(); ++f) {
+      for (int k = 0; k < 3; ++k) chart.face_uv[f][k] = ref_uv[ref.faces[f][k]];
+      ref_faces[f] = static_cast<int>(f);
+    }
+    std::vector<ReferencePatch> refs;
+    refs.emplace_back(chart, std::move(ref_faces));
+    const std::vector<double> scale{refs[0].area() > 0 ? pr.total_area / refs[0].area() : 1.0};
+    r = solve_problem(pr, patch_metric(pr, refs, scale), options, true);
+  } else {
+    const ExactReference exact(ref, ref_uv);
+    const double scale = exact.area() > 0 ? pr.total_area / exact.area() : 1.0;
+    if (node_metric == NodeMetric::Face) {
+      auto hints = std::make_shared<std::vector<int>>(pr.faces.size(), -1);
+      const MetricFn metric = [&exact, scale, hints](size_t t, const Vec2& q) {
+        return Eigen::Matrix2d(scale * exact.metric(q, (*hints)[t]));
+      };
+      r = solve_problem(pr, metric, options, true);
+    } else {
+      r = solve_problem(pr, composition_metric(pr, exact, scale), options, true);
+    }
+  }
+  if (!r.changed) return false;
+  uv = pr.uv;
+  return true;
+}
+
+dissect::NodeMapRefiner node_refiner(const RefineOptions& options, NodeMetric node_metric) {
+  return [options, node_metric](const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv,
+                                const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held) {
+    return refine_patch(ref, ref_uv, patch, uv, held, options, node_metric);
+  };
+}
+
 double map_energy(const dissect::Dissection& a, const dissect::Dissection& b) {
   std::vector<dissect::Dissection> pair{a, b};
   RefineOptions o;
