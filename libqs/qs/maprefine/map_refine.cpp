@@ -301,6 +301,11 @@ namespace {
 // The reference's metric seen by one face of a problem: (local face, uv point) -> 2x2 metric.
 using MetricFn = std::function<Eigen::Matrix2d(size_t, const Vec2&)>;
 
+// Instead of a metric: the Jacobian of local face t's map to the reference, linearized at the
+// current uv, vec(J_t) = a x + b (x: the face's corner uv, as jacobian_matrix); refine_patch's
+// NodeMetric::Composition.
+using LinearizeFn = std::function<void(size_t, Mat46&, Eigen::Vector4d&)>;
+
 // The metric of a problem whose faces lie in their own patches' unit squares: per patch, the
 // reference patch and area_B(patch) / area_A(patch); one location hint per face.
 MetricFn patch_metric(const PatchProblem& prob, const std::vector<ReferencePatch>& refs,
@@ -314,13 +319,20 @@ MetricFn patch_metric(const PatchProblem& prob, const std::vector<ReferencePatch
 
 class PatchSolver {
  public:
-  // `metric`: the reference's (scaled) metric for local face t at uv point q of the problem.
-  PatchSolver(PatchProblem& prob, const MetricFn& metric) : prob_(prob), metric_(metric) {
+  // `metric`: the reference's (scaled) metric for local face t at uv point q of the problem;
+  // `linearize`, when given, replaces it (the per-face Jacobian's affine model at the current uv).
+  PatchSolver(PatchProblem& prob, const MetricFn& metric, const LinearizeFn* linearize = nullptr)
+      : prob_(prob), metric_(metric), linearize_(linearize) {
     a_.resize(prob.faces.size());
+    b_.assign(prob.faces.size(), Eigen::Vector4d::Zero());
   }
 
   // Re-evaluates the reference metric at the faces' uv centroids and the per-face Jacobian maps.
   void update_metric() {
+    if (linearize_) {
+      for (size_t t = 0; t < prob_.faces.size(); ++t) (*linearize_)(t, a_[t], b_[t]);
+      return;
+    }
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       const Vec2 centroid = (prob_.uv[c[0]] + prob_.uv[c[1]] + prob_.uv[c[2]]) / 3.0;
@@ -346,7 +358,7 @@ class PatchSolver {
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       if (tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) <= 2 * param::kZeroUvArea) return kInf;
-      const Eigen::Vector4d j = a_[t] * corner_uv(t, uv);
+      const Eigen::Vector4d j = a_[t] * corner_uv(t, uv) + b_[t];
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
       const double f = sym_dirichlet(jm);
@@ -364,7 +376,7 @@ class PatchSolver {
     std::vector<Eigen::Triplet<double>> trip;
     trip.reserve(prob_.faces.size() * 36);
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
-      const Eigen::Vector4d j = a_[t] * corner_uv(t, prob_.uv);
+      const Eigen::Vector4d j = a_[t] * corner_uv(t, prob_.uv) + b_[t];
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
       Eigen::Vector4d gj;
@@ -452,7 +464,9 @@ class PatchSolver {
  private:
   PatchProblem& prob_;
   const MetricFn& metric_;
+  const LinearizeFn* linearize_;
   std::vector<Mat46> a_;
+  std::vector<Eigen::Vector4d> b_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analyzed_ = false;
 };
@@ -654,12 +668,13 @@ PatchProblem build_side_problem(const dissect::Dissection& d) {
 
 // Refines a problem's free (u, v) (all inside [0, hi.x] x [0, hi.y]) under `metric`.
 PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const RefineOptions& options, bool optimize,
-                          const Vec2& hi = Vec2(1, 1), const Vec2& lo = Vec2(0, 0)) {
+                          const Vec2& hi = Vec2(1, 1), const Vec2& lo = Vec2(0, 0),
+                          const LinearizeFn* linearize = nullptr) {
   PatchResult res;
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
   if (pr.faces.empty()) return res;
-  PatchSolver solver(pr, metric);
+  PatchSolver solver(pr, metric, linearize);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
@@ -1915,6 +1930,7 @@ class ExactReference {
   ExactReference(const param::PatchMesh& ref, const std::vector<Vec2>& uv) : ref_(ref), uv_(uv) {
     const size_t nf = ref.faces.size();
     metric_.assign(nf, Eigen::Matrix2d::Identity());
+    jacobian_.assign(nf, Mat32::Zero());
     std::vector<char> positive(nf, 0);
     double total_uv = 0;
     for (size_t f = 0; f < nf; ++f) {
@@ -1930,6 +1946,7 @@ class ExactReference {
       if (!(auv > param::kZeroUvArea)) continue;
       const Mat32 g = e * ds.inverse();
       metric_[f] = g.transpose() * g;
+      jacobian_[f] = g;
       positive[f] = 1;
       total_uv += auv;
     }
@@ -1998,6 +2015,13 @@ class ExactReference {
     return true;
   }
 
+  // point(), and d point / d uv there (the Jacobian of the face holding q).
+  bool point(const Vec2& q, int& hint, Vec3& x, Mat32& jacobian) const {
+    if (!point(q, hint, x)) return false;
+    jacobian = jacobian_[hint];
+    return true;
+  }
+
  private:
   int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
   void try_face(int f, const Vec2& q, int& best, Vec3& bary, double& score) const {
@@ -2017,34 +2041,70 @@ class ExactReference {
   const param::PatchMesh& ref_;
   const std::vector<Vec2>& uv_;
   std::vector<Eigen::Matrix2d> metric_;
+  std::vector<Mat32> jacobian_;
   std::vector<char> positive_;
   double area_ = 0, mean_ = 1;
   int size_ = 1;
   std::vector<int> offsets_, grid_;
 };
 
-// NodeMetric::Composition for a one-patch problem: per face t of B, the secant map of the
-// composition B -> uv -> A on t (A's points at t's three uv corners, over t's uv triangle), as a
-// metric: J^T J of the composed map on t is then exactly that of the triangle of A's points, at
-// the current (u, v) (re-evaluated after every Newton step like the other metrics).
-MetricFn composition_metric(const PatchProblem& prob, const ExactReference& ref, double scale) {
+// vec(J) = a x for J = [Q1 x1 - Q0 x0, Q2 x2 - Q0 x0] P (jacobian_matrix with one Q per corner).
+Mat46 jacobian_matrix(const std::array<Eigen::Matrix2d, 3>& q, const Eigen::Matrix2d& p) {
+  Mat46 a = Mat46::Zero();
+  for (int r = 0; r < 2; ++r)
+    for (int b = 0; b < 2; ++b)
+      for (int c = 0; c < 2; ++c)
+        for (int d = 0; d < 2; ++d) {
+          a(2 * r + b, 2 * (d + 1) + c) += q[d + 1](r, c) * p(d, b);
+          a(2 * r + b, c) -= q[0](r, c) * p(d, b);
+        }
+  return a;
+}
+
+// NodeMetric::Composition for a one-patch problem: per face t of B, the composed map B -> uv -> A
+// on t is B's triangle onto the triangle of A's points at t's three uv corners (located exactly in
+// A's uv triangles). Its Jacobian, in an orthonormal frame R of that image triangle, linearized at
+// the current uv with each corner moving along the A face that holds it (x_k + G_k du_k):
+// J = sqrt(s) R^T [x1 - x0, x2 - x0] P, exact at the current uv and in its first derivative, so
+// that the solver's fixed points are stationary points of the composition's own energy (a metric
+// frozen at the current uv is not: its change with the position is left out of the gradient).
+// s = area_B / area_A of the patch.
+LinearizeFn composition_linearization(const PatchProblem& prob, const ExactReference& ref, double scale) {
   auto hints = std::make_shared<std::vector<int>>(3 * prob.faces.size(), -1);
-  auto centre = std::make_shared<std::vector<int>>(prob.faces.size(), -1);
-  return [&prob, &ref, scale, hints, centre](size_t t, const Vec2& q) {
+  const double root = std::sqrt(scale);
+  return [&prob, &ref, root, hints](size_t t, Mat46& a, Eigen::Vector4d& b) {
     const auto& c = prob.tri[t];
+    const Eigen::Matrix2d& p = prob.dm_inv[t];
     Vec3 x[3];
-    bool ok = true;
-    for (int k = 0; k < 3; ++k) ok = ok && ref.point(prob.uv[c[k]], (*hints)[3 * t + k], x[k]);
-    Eigen::Matrix2d d;
-    d.col(0) = prob.uv[c[1]] - prob.uv[c[0]];
-    d.col(1) = prob.uv[c[2]] - prob.uv[c[0]];
-    if (!ok || !(d.determinant() > 2 * param::kZeroUvArea))  // no composition: the face's metric there
-      return Eigen::Matrix2d(scale * ref.metric(q, (*centre)[t]));
+    Mat32 g[3];
+    for (int k = 0; k < 3; ++k)
+      if (!ref.point(prob.uv[c[k]], (*hints)[3 * t + k], x[k], g[k])) {  // no positive face at all
+        a = jacobian_matrix(root * Eigen::Matrix2d::Identity(), p);
+        b.setZero();
+        return;
+      }
     Mat32 e;
     e.col(0) = x[1] - x[0];
     e.col(1) = x[2] - x[0];
-    const Mat32 g = e * d.inverse();
-    return Eigen::Matrix2d(scale * ref.floored(g.transpose() * g));
+    // The frame: the image triangle's plane, oriented as it (else the plane of corner 0's face).
+    Vec3 n = e.col(0).cross(e.col(1));
+    Vec3 r1 = e.col(0).norm() > 0 ? Vec3(e.col(0)) : Vec3(e.col(1));
+    if (!(n.norm() > 1e-14 * e.col(0).norm() * e.col(1).norm()) || !(r1.norm() > 0)) {
+      n = g[0].col(0).cross(g[0].col(1));
+      r1 = g[0].col(0);
+    }
+    r1.normalize();
+    const Vec3 r2 = n.cross(r1).normalized();
+    Mat32 r;
+    r.col(0) = r1;
+    r.col(1) = r2;
+    std::array<Eigen::Matrix2d, 3> q;
+    for (int k = 0; k < 3; ++k) q[k] = root * r.transpose() * g[k];
+    a = jacobian_matrix(q, p);
+    const Eigen::Matrix2d j = root * r.transpose() * e * p;
+    Vec6 u;
+    u << prob.uv[c[0]], prob.uv[c[1]], prob.uv[c[2]];
+    b = Eigen::Vector4d(j(0, 0), j(0, 1), j(1, 0), j(1, 1)) - a * u;
   };
 }
 
@@ -2133,7 +2193,9 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
       };
       r = solve_problem(pr, metric, options, true);
     } else {
-      r = solve_problem(pr, composition_metric(pr, exact, scale), options, true);
+      const LinearizeFn linearize = composition_linearization(pr, exact, scale);
+      const MetricFn unused = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
+      r = solve_problem(pr, unused, options, true, Vec2(1, 1), Vec2(0, 0), &linearize);
     }
   }
   if (!r.changed) return false;

@@ -184,7 +184,8 @@ enum class NodeMetric {
   Face,
   /// The composition B -> uv -> A itself, no metric field: per face of B, A's 3D points at its
   /// three uv corners (located exactly in A's uv triangles) form the image triangle, and the
-  /// energy is the symmetric Dirichlet of B's triangle onto it (the same floor).
+  /// energy is the symmetric Dirichlet of B's triangle onto it. The solver linearizes it at the
+  /// current uv, each corner moving along the A face that holds it, so its gradient is exact.
   Composition,
 };
 
