@@ -200,11 +200,13 @@ int main(int argc, char** argv) {
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;
-    if (refine_before_split)
-      opt.refine_before_split = qs::maprefine::node_refiner(
-          refine_opt, before_split_metric == "face"          ? qs::maprefine::NodeMetric::Face
-                      : before_split_metric == "composition" ? qs::maprefine::NodeMetric::Composition
-                                                             : qs::maprefine::NodeMetric::Vertex);
+    if (refine_before_split) {
+      qs::maprefine::NodeRefineOptions node;
+      node.metric = before_split_metric == "face"          ? qs::maprefine::NodeMetric::Face
+                    : before_split_metric == "composition" ? qs::maprefine::NodeMetric::Composition
+                                                           : qs::maprefine::NodeMetric::Vertex;
+      opt.refine_before_split = qs::maprefine::node_refiner(refine_opt, node);
+    }
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());

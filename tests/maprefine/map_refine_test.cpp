@@ -743,6 +743,12 @@ TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothin
 // whichever way the refinement sees the reference (NodeMetric).
 class RefineBeforeSplit : public ::testing::TestWithParam<mr::NodeMetric> {};
 
+mr::NodeRefineOptions node_options(mr::NodeMetric metric) {
+  mr::NodeRefineOptions o;
+  o.metric = metric;
+  return o;
+}
+
 INSTANTIATE_TEST_SUITE_P(Metrics, RefineBeforeSplit,
                          ::testing::Values(mr::NodeMetric::Vertex, mr::NodeMetric::Face, mr::NodeMetric::Composition),
                          [](const auto& info) {
@@ -760,7 +766,7 @@ TEST_P(RefineBeforeSplit, KeepsEveryLeafBijectiveAndFeaturesAndSeedsExact) {
   const auto fam = qs::family::generate_family(o);
   const auto plain = dissect_pair(fam);
   qs::dissect::DissectOptions opt;
-  opt.refine_before_split = mr::node_refiner({}, GetParam());
+  opt.refine_before_split = mr::node_refiner({}, node_options(GetParam()));
   const auto set = dissect_pair(fam, opt);
   ASSERT_EQ(set.size(), 2u);
   ASSERT_EQ(set[0].chart.patches.size(), set[1].chart.patches.size());
@@ -869,12 +875,12 @@ TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   // vertex-averaged metric comes close.
   {
     auto free = moved;
-    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, GetParam()));
+    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, node_options(GetParam())));
     EXPECT_LT(err(free), (GetParam() == mr::NodeMetric::Vertex ? 0.1 : 1e-4) * before)
         << "mean uv distance to the reference's map: " << before << " -> " << err(free);
   }
   // One interior vertex held away from it.
-  ASSERT_TRUE(mr::refine_patch(pm, uv, pm, moved, held, {}, GetParam()));
+  ASSERT_TRUE(mr::refine_patch(pm, uv, pm, moved, held, {}, node_options(GetParam())));
   EXPECT_LT(err(moved), 0.5 * before)
       << "mean uv distance to the reference's map: " << before << " -> " << err(moved);
   for (int v : pm.boundary) EXPECT_EQ(moved[v], start[v]);
@@ -884,8 +890,17 @@ TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
     EXPECT_GT(0.5 * (a.x() * b.y() - a.y() * b.x()), qs::param::kZeroUvArea);
   }
   std::vector<char> short_held(uv.size() - 1, 0);
-  EXPECT_THROW(mr::refine_patch(pm, uv, pm, moved, short_held, {}, GetParam()), qs::InvalidInput);
+  EXPECT_THROW(mr::refine_patch(pm, uv, pm, moved, short_held, {}, node_options(GetParam())), qs::InvalidInput);
   qs::param::PatchMesh bad_ref = pm;
   bad_ref.faces[0][1] = static_cast<int>(pm.positions.size());
-  EXPECT_THROW(mr::refine_patch(bad_ref, uv, pm, moved, held, {}, GetParam()), qs::InvalidInput);
+  EXPECT_THROW(mr::refine_patch(bad_ref, uv, pm, moved, held, {}, node_options(GetParam())), qs::InvalidInput);
+  // The composition leaves a node alone when its start is more distorted than the limit (here
+  // about 1.4, 1 = isometric); the metrics do not look at it.
+  mr::NodeRefineOptions capped = node_options(GetParam());
+  capped.max_start_distortion = 1.01;
+  auto again = start;
+  EXPECT_EQ(mr::refine_patch(pm, uv, pm, again, held, {}, capped), GetParam() != mr::NodeMetric::Composition);
+  if (GetParam() == mr::NodeMetric::Composition) EXPECT_EQ(again, start);
+  capped.max_start_distortion = -1;
+  EXPECT_THROW(mr::refine_patch(pm, uv, pm, again, held, {}, capped), qs::InvalidInput);
 }

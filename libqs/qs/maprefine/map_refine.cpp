@@ -2112,7 +2112,7 @@ LinearizeFn composition_linearization(const PatchProblem& prob, const ExactRefer
 
 bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
                   std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options,
-                  NodeMetric node_metric) {
+                  const NodeRefineOptions& node) {
   if (ref_uv.size() != ref.positions.size() || uv.size() != patch.positions.size() ||
       held.size() != patch.positions.size())
     throw InvalidInput("refine_patch: the reference patch has " + std::to_string(ref.positions.size()) +
@@ -2122,6 +2122,9 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   if (options.iterations < 0 || !(options.tolerance >= 0))
     throw InvalidInput("refine_patch: iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
                        std::to_string(options.tolerance) + ") must be >= 0");
+  if (!(node.max_start_distortion >= 0))
+    throw InvalidInput("refine_patch: max_start_distortion (" + std::to_string(node.max_start_distortion) +
+                       ") must be >= 0 (0: no limit)");
   if (ref.faces.empty() || patch.faces.empty() || options.iterations == 0) return false;
   for (const auto& t : ref.faces)
     for (int v : t)
@@ -2167,7 +2170,7 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   }
   if (pr.unknowns == 0) return false;
   PatchResult r;
-  if (node_metric == NodeMetric::Vertex) {
+  if (node.metric == NodeMetric::Vertex) {
     // The reference as a one-patch chart (refine_maps's metric and location grid).
     dissect::Chart chart;
     chart.mesh.positions = ref.positions;
@@ -2186,7 +2189,7 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   } else {
     const ExactReference exact(ref, ref_uv);
     const double scale = exact.area() > 0 ? pr.total_area / exact.area() : 1.0;
-    if (node_metric == NodeMetric::Face) {
+    if (node.metric == NodeMetric::Face) {
       auto hints = std::make_shared<std::vector<int>>(pr.faces.size(), -1);
       const MetricFn metric = [&exact, scale, hints](size_t t, const Vec2& q) {
         return Eigen::Matrix2d(scale * exact.metric(q, (*hints)[t]));
@@ -2195,6 +2198,10 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
     } else {
       const LinearizeFn linearize = composition_linearization(pr, exact, scale);
       const MetricFn unused = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
+      if (node.max_start_distortion > 0) {
+        const PatchResult start = solve_problem(pr, unused, options, false, Vec2(1, 1), Vec2(0, 0), &linearize);
+        if (!(start.area > 0) || start.energy_before / start.area / 4 > node.max_start_distortion) return false;
+      }
       r = solve_problem(pr, unused, options, true, Vec2(1, 1), Vec2(0, 0), &linearize);
     }
   }
@@ -2203,10 +2210,10 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   return true;
 }
 
-dissect::NodeMapRefiner node_refiner(const RefineOptions& options, NodeMetric node_metric) {
-  return [options, node_metric](const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv,
-                                const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held) {
-    return refine_patch(ref, ref_uv, patch, uv, held, options, node_metric);
+dissect::NodeMapRefiner node_refiner(const RefineOptions& options, const NodeRefineOptions& node) {
+  return [options, node](const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
+                         std::vector<Vec2>& uv, const std::vector<char>& held) {
+    return refine_patch(ref, ref_uv, patch, uv, held, options, node);
   };
 }
 
