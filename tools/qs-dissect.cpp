@@ -317,6 +317,9 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
+      if (refine_before_split && i > 0)
+        text << "  refine before split (experiment): every split node's map refined against mesh 0's first, seen as "
+             << before_split_metric << "\n";
       if (i < refine_report.meshes.size()) {
         const auto& r = refine_report.meshes[i];
         if (r.identity)
