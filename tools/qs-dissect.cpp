@@ -154,6 +154,18 @@ int main(int argc, char** argv) {
                  "(z^(4/k)); see README")
       ->capture_default_str()
       ->check(CLI::IsMember({"sector", "power"}));
+  bool refine_before_split = false;
+  auto* before_split_flag = app.add_flag("--refine-before-split", refine_before_split,
+               "Experiment (issue 17): before a patch is split, refine every mesh's map of it against the first "
+               "mesh's, so that the split points (equal (u,v) in every mesh) correspond better (off by default; "
+               "see README, \"Map refinement\")");
+  std::string before_split_metric = "vertex";
+  app.add_option("--refine-before-split-metric", before_split_metric,
+                 "How --refine-before-split sees the first mesh's map: vertex (refine-maps's clamped, vertex-averaged "
+                 "metric), face (its face's metric, unclamped) or composition (the composed map itself); see README")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"vertex", "face", "composition"}))
+      ->needs(before_split_flag);
   app.add_option("--min-split-area", opt.min_split_area,
                  "Do not split a patch over tau (bijective) that holds less than this fraction of its mesh's area; "
                  "the leaf repair takes it (0: off; fewer slivers along limbs)")
@@ -188,6 +200,13 @@ int main(int argc, char** argv) {
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;
+    if (refine_before_split) {
+      qs::maprefine::NodeRefineOptions node;
+      node.metric = before_split_metric == "face"          ? qs::maprefine::NodeMetric::Face
+                    : before_split_metric == "composition" ? qs::maprefine::NodeMetric::Composition
+                                                           : qs::maprefine::NodeMetric::Vertex;
+      opt.refine_before_split = qs::maprefine::node_refiner(refine_opt, node);
+    }
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());
@@ -298,6 +317,9 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
+      if (refine_before_split && i > 0)
+        text << "  refine before split (experiment): every split node's map refined against mesh 0's first, seen as "
+             << before_split_metric << "\n";
       if (i < refine_report.meshes.size()) {
         const auto& r = refine_report.meshes[i];
         if (r.identity)

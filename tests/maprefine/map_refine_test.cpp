@@ -737,3 +737,170 @@ TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothin
   o.corner_sweeps = -1;
   EXPECT_THROW(mr::refine_maps(zero, o), qs::InvalidInput);
 }
+
+// DissectOptions::refine_before_split (issue 17 experiment): every mesh's map of a node is refined
+// against mesh 0's before the node is split. The dissection must stay as valid as without it,
+// whichever way the refinement sees the reference (NodeMetric).
+class RefineBeforeSplit : public ::testing::TestWithParam<mr::NodeMetric> {};
+
+mr::NodeRefineOptions node_options(mr::NodeMetric metric) {
+  mr::NodeRefineOptions o;
+  o.metric = metric;
+  return o;
+}
+
+INSTANTIATE_TEST_SUITE_P(Metrics, RefineBeforeSplit,
+                         ::testing::Values(mr::NodeMetric::Vertex, mr::NodeMetric::Face, mr::NodeMetric::Composition),
+                         [](const auto& info) {
+                           return std::string(info.param == mr::NodeMetric::Vertex ? "Vertex"
+                                              : info.param == mr::NodeMetric::Face ? "Face"
+                                                                                   : "Composition");
+                         });
+
+TEST_P(RefineBeforeSplit, KeepsEveryLeafBijectiveAndFeaturesAndSeedsExact) {
+  qs::family::FamilyOptions o;
+  o.shapes = 2;
+  o.seed = 2;
+  o.faces = 2000;
+  o.limbs = 4;
+  const auto fam = qs::family::generate_family(o);
+  const auto plain = dissect_pair(fam);
+  qs::dissect::DissectOptions opt;
+  opt.refine_before_split = mr::node_refiner({}, node_options(GetParam()));
+  const auto set = dissect_pair(fam, opt);
+  ASSERT_EQ(set.size(), 2u);
+  ASSERT_EQ(set[0].chart.patches.size(), set[1].chart.patches.size());
+  EXPECT_GT(set[0].chart.patches.size(), 2u) << "the pair must be split for the option to act";
+  for (size_t p = 0; p < set[0].chart.patches.size(); ++p)
+    EXPECT_EQ(set[0].chart.patches[p].name, set[1].chart.patches[p].name);
+  bool corners_moved = false;
+  for (size_t i = 0; i < set.size(); ++i) {
+    const auto& d = set[i];
+    // Every leaf bijective (counted from the wedges, and as the dissection reports it).
+    EXPECT_EQ(folded_faces(d.chart), 0) << "mesh " << i;
+    for (const auto& p : d.chart.patches) {
+      EXPECT_EQ(p.flipped_faces + p.zero_area_faces, 0) << "mesh " << i << " patch " << p.name;
+      EXPECT_NEAR(p.uv_area_sum, 1.0, 1e-9) << "mesh " << i << " patch " << p.name;
+    }
+    // Seeds: the same points of the surface as without the option, and corners of patches.
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(d.chart.mesh.positions[d.seeds[k]], plain[i].chart.mesh.positions[plain[i].seeds[k]]);
+      bool corner = false;
+      for (const auto& p : d.chart.patches)
+        corner = corner || std::find(p.corners.begin(), p.corners.end(), d.seeds[k]) != p.corners.end();
+      EXPECT_TRUE(corner) << "seed " << k << " of mesh " << i;
+    }
+    // Features: the same points of the surface, at the same (u, v) of the same patch in every mesh.
+    ASSERT_EQ(d.features.size(), plain[i].features.size());
+    ASSERT_FALSE(d.features.empty());
+    for (size_t k = 0; k < d.features.size(); ++k) {
+      const auto& f = d.features[k];
+      EXPECT_EQ(d.chart.mesh.positions[f.vertex], plain[i].chart.mesh.positions[plain[i].features[k].vertex]);
+      EXPECT_EQ(f.patch, set[0].features[k].patch) << f.name;
+      EXPECT_EQ(f.uv, set[0].features[k].uv) << f.name;
+      for (int t = 0; t < d.chart.mesh.num_faces(); ++t)
+        for (int c = 0; c < 3; ++c)
+          if (d.chart.mesh.faces[t][c] == f.vertex) {
+            EXPECT_EQ(d.chart.face_patch[t], f.patch) << f.name << " must not lie on a patch border";
+            EXPECT_EQ(d.chart.face_uv[t][c], f.uv) << f.name;
+          }
+    }
+    // The split points moved: patch corners of mesh 1 lie elsewhere on the surface than without.
+    if (i == 1 && d.chart.patches.size() == plain[1].chart.patches.size())
+      for (size_t p = 0; p < d.chart.patches.size(); ++p)
+        for (int c = 0; c < 4; ++c)
+          corners_moved = corners_moved || d.chart.mesh.positions[d.chart.patches[p].corners[c]] !=
+                                               plain[1].chart.mesh.positions[plain[1].chart.patches[p].corners[c]];
+  }
+  EXPECT_TRUE(corners_moved || set[1].chart.patches.size() != plain[1].chart.patches.size())
+      << "the option changed nothing";
+  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set[1].chart));
+  // Deterministic: the same input and options give the same charts.
+  const auto again = dissect_pair(fam, opt);
+  for (size_t i = 0; i < set.size(); ++i) {
+    EXPECT_EQ(again[i].chart.mesh.positions, set[i].chart.mesh.positions);
+    EXPECT_EQ(again[i].chart.mesh.faces, set[i].chart.mesh.faces);
+    EXPECT_EQ(again[i].chart.face_uv, set[i].chart.face_uv);
+  }
+}
+
+// refine_patch on one patch: a distorted map of the reference's own patch moves back towards it;
+// the boundary loop and held vertices stay, every face stays positive; bad sizes are named.
+TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
+  const auto fam = same_shape_pair();
+  const auto set = dissect_pair(fam);
+  // The largest patch of mesh 0 as a PatchMesh with its chart map.
+  const auto& c = set[0].chart;
+  std::vector<int> count(c.patches.size(), 0);
+  for (int p : c.face_patch) ++count[p];
+  const int patch = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+  qs::param::PatchMesh pm;
+  std::vector<Vec2> uv;
+  std::vector<int> local(c.mesh.num_vertices(), -1);
+  for (int f = 0; f < c.mesh.num_faces(); ++f) {
+    if (c.face_patch[f] != patch) continue;
+    qs::Tri t{};
+    for (int k = 0; k < 3; ++k) {
+      int& l = local[c.mesh.faces[f][k]];
+      if (l < 0) {
+        l = static_cast<int>(pm.positions.size());
+        pm.positions.push_back(c.mesh.positions[c.mesh.faces[f][k]]);
+        uv.push_back(c.face_uv[f][k]);
+      }
+      t[k] = l;
+    }
+    pm.faces.push_back(t);
+  }
+  // Boundary loop: vertices on the square's border (the chart's patch border).
+  for (size_t v = 0; v < uv.size(); ++v)
+    if (uv[v].x() == 0 || uv[v].x() == 1 || uv[v].y() == 0 || uv[v].y() == 1) pm.boundary.push_back(static_cast<int>(v));
+  // A smooth bijection of the square that fixes its border, and one interior vertex held.
+  std::vector<Vec2> moved = uv;
+  for (auto& q : moved) q.x() += 0.22 * std::sin(M_PI * q.x()) * std::sin(M_PI * q.y());
+  std::vector<char> held(uv.size(), 0);
+  int held_vertex = -1;
+  for (size_t v = 0; v < uv.size() && held_vertex < 0; ++v)
+    if (uv[v].x() > 0.3 && uv[v].x() < 0.7 && uv[v].y() > 0.3 && uv[v].y() < 0.7) held_vertex = static_cast<int>(v);
+  ASSERT_GE(held_vertex, 0);
+  held[held_vertex] = 1;
+  auto err = [&](const std::vector<Vec2>& a) {
+    double s = 0;
+    for (size_t v = 0; v < a.size(); ++v) s += (a[v] - uv[v]).norm();
+    return s / static_cast<double>(a.size());
+  };
+  const std::vector<Vec2> start = moved;
+  const double before = err(moved);
+  // Nothing held inside: the reference's own map is the only isometric one. The face metric and
+  // the composition see the reference exactly and find it (to the solver's tolerance); the clamped
+  // vertex-averaged metric comes close.
+  {
+    auto free = moved;
+    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, node_options(GetParam())));
+    EXPECT_LT(err(free), (GetParam() == mr::NodeMetric::Vertex ? 0.1 : 1e-4) * before)
+        << "mean uv distance to the reference's map: " << before << " -> " << err(free);
+  }
+  // One interior vertex held away from it.
+  ASSERT_TRUE(mr::refine_patch(pm, uv, pm, moved, held, {}, node_options(GetParam())));
+  EXPECT_LT(err(moved), 0.5 * before)
+      << "mean uv distance to the reference's map: " << before << " -> " << err(moved);
+  for (int v : pm.boundary) EXPECT_EQ(moved[v], start[v]);
+  EXPECT_EQ(moved[held_vertex], start[held_vertex]);
+  for (const auto& t : pm.faces) {
+    const Vec2 a = moved[t[1]] - moved[t[0]], b = moved[t[2]] - moved[t[0]];
+    EXPECT_GT(0.5 * (a.x() * b.y() - a.y() * b.x()), qs::param::kZeroUvArea);
+  }
+  std::vector<char> short_held(uv.size() - 1, 0);
+  EXPECT_THROW(mr::refine_patch(pm, uv, pm, moved, short_held, {}, node_options(GetParam())), qs::InvalidInput);
+  qs::param::PatchMesh bad_ref = pm;
+  bad_ref.faces[0][1] = static_cast<int>(pm.positions.size());
+  EXPECT_THROW(mr::refine_patch(bad_ref, uv, pm, moved, held, {}, node_options(GetParam())), qs::InvalidInput);
+  // The composition leaves a node alone when its start is more distorted than the limit (here
+  // about 1.4, 1 = isometric); the metrics do not look at it.
+  mr::NodeRefineOptions capped = node_options(GetParam());
+  capped.max_start_distortion = 1.01;
+  auto again = start;
+  EXPECT_EQ(mr::refine_patch(pm, uv, pm, again, held, {}, capped), GetParam() != mr::NodeMetric::Composition);
+  if (GetParam() == mr::NodeMetric::Composition) EXPECT_EQ(again, start);
+  capped.max_start_distortion = -1;
+  EXPECT_THROW(mr::refine_patch(pm, uv, pm, again, held, {}, capped), qs::InvalidInput);
+}

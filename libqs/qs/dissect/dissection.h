@@ -5,6 +5,7 @@
 // named feature points aligned in every patch by a foldover-free warp before it is split.
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,8 +13,17 @@
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/landmarks/landmarks.h"
+#include "qs/param/square_param.h"
 
 namespace qs::dissect {
+
+/// Moves the (u, v) of one mesh's patch towards the reference mesh's map of the same patch
+/// (DissectOptions::refine_before_split): `ref` and `ref_uv` are the reference's patch and map,
+/// `patch` and `uv` the other mesh's; vertices with held[v] != 0 (and the boundary loop) stay.
+/// Returns whether uv changed; a changed uv must stay bijective (every face positive).
+using NodeMapRefiner = std::function<bool(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv,
+                                          const param::PatchMesh& patch, std::vector<Vec2>& uv,
+                                          const std::vector<char>& held)>;
 
 struct DissectOptions {
   /// A patch whose normalized L2 stretch (1 = isometric up to scale) exceeds tau is split.
@@ -92,6 +102,13 @@ struct DissectOptions {
   /// deeper. Default 4 (issue 13, item 3, see the README): polygirl_20k 35% -> 7% of its area in
   /// leaves over tau; horse_40k level-5 remesh error 0.0023% -> 0.0017%.
   int area_extra_depth = 4;
+  /// Experiment of issue 17 (`qs-dissect --refine-before-split`): before a node is split, the
+  /// node's map of every mesh but mesh 0 is refined against mesh 0's map of the node by this
+  /// function (qs::maprefine::node_refiner(); the dissect module does not depend on maprefine),
+  /// so that the split points, taken at equal (u, v) in every mesh, correspond better. The
+  /// border, corners and features stay; a refined map stays bijective. Empty (the default): off.
+  /// See the README ("Map refinement") for what it measured.
+  NodeMapRefiner refine_before_split;
 };
 
 /// Why a patch over tau was left as it is.

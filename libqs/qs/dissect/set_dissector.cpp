@@ -277,6 +277,29 @@ DissectionSet SetDissector::run() {
     } else if (any_over && node.depth < depth_limit && biggest_over >= opt_.min_faces_to_split) {
       const size_t first_new_label = meshes_[0].labels();
       const auto [peak, w] = choose_split(node, ps, tn, over);
+      // Experiment (DissectOptions::refine_before_split): the split points are taken at equal
+      // (u, v) in every mesh, so each mesh's map of the node is refined against mesh 0's before
+      // the cuts (border, corners and features held). The split (peak, w) and the children's
+      // parent stretch stay those of the dissection's own maps, so only where the cuts run on
+      // each surface changes. A refined map is bijective (the refiner keeps only positive uv
+      // faces, checked again here).
+      if (opt_.refine_before_split && nm > 1) {
+        size_t faces = 0;
+        for (const auto& p : ps) faces += p.ex.faces.size();
+        parallel_for(nm - 1, [&](size_t k) {
+          Param& p = ps[k + 1];
+          if (!p.sp.bijective() || !ps[0].sp.bijective()) return;
+          std::vector<char> held(p.sp.uv.size(), 0);
+          for (const auto& [f, local] : p.features) held[local] = 1;
+          std::vector<Vec2> uv = p.sp.uv;
+          if (!opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, p.ex.pm, uv, held)) return;
+          param::SquareParam sp = p.sp;
+          sp.uv = std::move(uv);
+          param::count_uv_faces(p.ex.pm.faces, sp);
+          if (!sp.bijective()) return;
+          p.sp = std::move(sp);
+        }, faces >= kParallelFaces);
+      }
       std::vector<std::array<Node, 5>> kids(meshes_.size());
       size_t node_faces = 0;
       for (const auto& p : ps) node_faces += p.ex.faces.size();

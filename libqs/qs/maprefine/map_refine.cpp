@@ -301,6 +301,11 @@ namespace {
 // The reference's metric seen by one face of a problem: (local face, uv point) -> 2x2 metric.
 using MetricFn = std::function<Eigen::Matrix2d(size_t, const Vec2&)>;
 
+// Instead of a metric: the Jacobian of local face t's map to the reference, linearized at the
+// current uv, vec(J_t) = a x + b (x: the face's corner uv, as jacobian_matrix); refine_patch's
+// NodeMetric::Composition.
+using LinearizeFn = std::function<void(size_t, Mat46&, Eigen::Vector4d&)>;
+
 // The metric of a problem whose faces lie in their own patches' unit squares: per patch, the
 // reference patch and area_B(patch) / area_A(patch); one location hint per face.
 MetricFn patch_metric(const PatchProblem& prob, const std::vector<ReferencePatch>& refs,
@@ -314,13 +319,20 @@ MetricFn patch_metric(const PatchProblem& prob, const std::vector<ReferencePatch
 
 class PatchSolver {
  public:
-  // `metric`: the reference's (scaled) metric for local face t at uv point q of the problem.
-  PatchSolver(PatchProblem& prob, const MetricFn& metric) : prob_(prob), metric_(metric) {
+  // `metric`: the reference's (scaled) metric for local face t at uv point q of the problem;
+  // `linearize`, when given, replaces it (the per-face Jacobian's affine model at the current uv).
+  PatchSolver(PatchProblem& prob, const MetricFn& metric, const LinearizeFn* linearize = nullptr)
+      : prob_(prob), metric_(metric), linearize_(linearize) {
     a_.resize(prob.faces.size());
+    b_.assign(prob.faces.size(), Eigen::Vector4d::Zero());
   }
 
   // Re-evaluates the reference metric at the faces' uv centroids and the per-face Jacobian maps.
   void update_metric() {
+    if (linearize_) {
+      for (size_t t = 0; t < prob_.faces.size(); ++t) (*linearize_)(t, a_[t], b_[t]);
+      return;
+    }
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       const Vec2 centroid = (prob_.uv[c[0]] + prob_.uv[c[1]] + prob_.uv[c[2]]) / 3.0;
@@ -346,7 +358,7 @@ class PatchSolver {
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const auto& c = prob_.tri[t];
       if (tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) <= 2 * param::kZeroUvArea) return kInf;
-      const Eigen::Vector4d j = a_[t] * corner_uv(t, uv);
+      const Eigen::Vector4d j = a_[t] * corner_uv(t, uv) + b_[t];
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
       const double f = sym_dirichlet(jm);
@@ -364,7 +376,7 @@ class PatchSolver {
     std::vector<Eigen::Triplet<double>> trip;
     trip.reserve(prob_.faces.size() * 36);
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
-      const Eigen::Vector4d j = a_[t] * corner_uv(t, prob_.uv);
+      const Eigen::Vector4d j = a_[t] * corner_uv(t, prob_.uv) + b_[t];
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
       Eigen::Vector4d gj;
@@ -452,7 +464,9 @@ class PatchSolver {
  private:
   PatchProblem& prob_;
   const MetricFn& metric_;
+  const LinearizeFn* linearize_;
   std::vector<Mat46> a_;
+  std::vector<Eigen::Vector4d> b_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analyzed_ = false;
 };
@@ -654,12 +668,13 @@ PatchProblem build_side_problem(const dissect::Dissection& d) {
 
 // Refines a problem's free (u, v) (all inside [0, hi.x] x [0, hi.y]) under `metric`.
 PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const RefineOptions& options, bool optimize,
-                          const Vec2& hi = Vec2(1, 1), const Vec2& lo = Vec2(0, 0)) {
+                          const Vec2& hi = Vec2(1, 1), const Vec2& lo = Vec2(0, 0),
+                          const LinearizeFn* linearize = nullptr) {
   PatchResult res;
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
   if (pr.faces.empty()) return res;
-  PatchSolver solver(pr, metric);
+  PatchSolver solver(pr, metric, linearize);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
@@ -1902,6 +1917,304 @@ double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient, Eigen:
     }
   }
   return s * (1 + id2);
+}
+
+namespace {
+
+// The reference patch of refine_patch as it is, for NodeMetric::Face and ::Composition: its uv
+// triangles located exactly (a uniform grid over the unit square, about one cell per face), the
+// metric of each face unclamped but for a floor of 1e-12 x the patch's mean that keeps it positive
+// definite (a face with a zero-area 3D triangle), and the 3D point at any uv.
+class ExactReference {
+ public:
+  ExactReference(const param::PatchMesh& ref, const std::vector<Vec2>& uv) : ref_(ref), uv_(uv) {
+    const size_t nf = ref.faces.size();
+    metric_.assign(nf, Eigen::Matrix2d::Identity());
+    jacobian_.assign(nf, Mat32::Zero());
+    std::vector<char> positive(nf, 0);
+    double total_uv = 0;
+    for (size_t f = 0; f < nf; ++f) {
+      const auto& t = ref.faces[f];
+      Mat32 e;
+      e.col(0) = ref.positions[t[1]] - ref.positions[t[0]];
+      e.col(1) = ref.positions[t[2]] - ref.positions[t[0]];
+      Eigen::Matrix2d ds;
+      ds.col(0) = uv[t[1]] - uv[t[0]];
+      ds.col(1) = uv[t[2]] - uv[t[0]];
+      area_ += 0.5 * e.col(0).cross(e.col(1)).norm();
+      const double auv = 0.5 * ds.determinant();
+      if (!(auv > param::kZeroUvArea)) continue;
+      const Mat32 g = e * ds.inverse();
+      metric_[f] = g.transpose() * g;
+      jacobian_[f] = g;
+      positive[f] = 1;
+      total_uv += auv;
+    }
+    mean_ = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
+    for (size_t f = 0; f < nf; ++f) metric_[f] = positive[f] ? floored(metric_[f]) : mean_ * Eigen::Matrix2d::Identity();
+    size_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(nf)))), 1, 1024);
+    offsets_.assign(static_cast<size_t>(size_) * size_ + 1, 0);
+    auto cells = [&](size_t f, auto&& visit) {
+      const auto& t = ref.faces[f];
+      const Vec2 lo = uv[t[0]].cwiseMin(uv[t[1]]).cwiseMin(uv[t[2]]);
+      const Vec2 hi = uv[t[0]].cwiseMax(uv[t[1]]).cwiseMax(uv[t[2]]);
+      for (int y = cell(lo.y()); y <= cell(hi.y()); ++y)
+        for (int x = cell(lo.x()); x <= cell(hi.x()); ++x) visit(y * size_ + x);
+    };
+    for (size_t f = 0; f < nf; ++f)
+      if (positive[f]) cells(f, [&](int c) { ++offsets_[c + 1]; });
+    for (size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
+    grid_.resize(offsets_.back());
+    std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
+    for (size_t f = 0; f < nf; ++f)
+      if (positive[f]) cells(f, [&](int c) { grid_[fill[c]++] = static_cast<int>(f); });
+    positive_ = std::move(positive);
+  }
+
+  double area() const { return area_; }
+
+  // Eigenvalues floored at 1e-12 x the patch's mean (no upper clamp).
+  Eigen::Matrix2d floored(const Eigen::Matrix2d& m) const { return clamp_metric(m, 1e-12 * mean_, kInf); }
+
+  // The face holding q (clamped to the square; the face where q is least outside when it lies in
+  // none, e.g. by rounding on an edge) and q's barycentric coordinates in it, clamped to the
+  // face; -1 when the patch has no positive uv face. `hint`: a face to try first, updated.
+  int locate(const Vec2& q_in, int& hint, Vec3& bary) const {
+    const Vec2 q = q_in.cwiseMax(0.0).cwiseMin(1.0);
+    double score = -kInf;
+    int best = -1;
+    if (hint >= 0) try_face(hint, q, best, bary, score);
+    if (score < 0) {
+      const int c = cell(q.y()) * size_ + cell(q.x());
+      for (int k = offsets_[c]; k < offsets_[c + 1] && score < 0; ++k) try_face(grid_[k], q, best, bary, score);
+    }
+    if (score < 0)
+      for (size_t f = 0; f < ref_.faces.size() && score < 0; ++f)
+        if (positive_[f]) try_face(static_cast<int>(f), q, best, bary, score);
+    if (best < 0) return -1;
+    hint = best;
+    bary = bary.cwiseMax(0.0);
+    bary /= bary.sum();
+    return best;
+  }
+
+  // The reference's metric at q: that of the face holding q (piecewise constant).
+  Eigen::Matrix2d metric(const Vec2& q, int& hint) const {
+    Vec3 b;
+    const int f = locate(q, hint, b);
+    return f < 0 ? Eigen::Matrix2d(mean_ * Eigen::Matrix2d::Identity()) : metric_[f];
+  }
+
+  // The reference's 3D point at q (linear in the face holding q); false when there is none.
+  bool point(const Vec2& q, int& hint, Vec3& x) const {
+    Vec3 b;
+    const int f = locate(q, hint, b);
+    if (f < 0) return false;
+    const auto& t = ref_.faces[f];
+    x = b[0] * ref_.positions[t[0]] + b[1] * ref_.positions[t[1]] + b[2] * ref_.positions[t[2]];
+    return true;
+  }
+
+  // point(), and d point / d uv there (the Jacobian of the face holding q).
+  bool point(const Vec2& q, int& hint, Vec3& x, Mat32& jacobian) const {
+    if (!point(q, hint, x)) return false;
+    jacobian = jacobian_[hint];
+    return true;
+  }
+
+ private:
+  int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
+  void try_face(int f, const Vec2& q, int& best, Vec3& bary, double& score) const {
+    const auto& t = ref_.faces[f];
+    const Vec2 &a = uv_[t[0]], &b = uv_[t[1]], &c = uv_[t[2]];
+    const double area = cross2(b - a, c - a);
+    if (!(area > 0)) return;
+    const Vec3 w(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
+    const double s = w.minCoeff();
+    if (s > score) {
+      score = s;
+      bary = w;
+      best = f;
+    }
+  }
+
+  const param::PatchMesh& ref_;
+  const std::vector<Vec2>& uv_;
+  std::vector<Eigen::Matrix2d> metric_;
+  std::vector<Mat32> jacobian_;
+  std::vector<char> positive_;
+  double area_ = 0, mean_ = 1;
+  int size_ = 1;
+  std::vector<int> offsets_, grid_;
+};
+
+// vec(J) = a x for J = [Q1 x1 - Q0 x0, Q2 x2 - Q0 x0] P (jacobian_matrix with one Q per corner).
+Mat46 jacobian_matrix(const std::array<Eigen::Matrix2d, 3>& q, const Eigen::Matrix2d& p) {
+  Mat46 a = Mat46::Zero();
+  for (int r = 0; r < 2; ++r)
+    for (int b = 0; b < 2; ++b)
+      for (int c = 0; c < 2; ++c)
+        for (int d = 0; d < 2; ++d) {
+          a(2 * r + b, 2 * (d + 1) + c) += q[d + 1](r, c) * p(d, b);
+          a(2 * r + b, c) -= q[0](r, c) * p(d, b);
+        }
+  return a;
+}
+
+// NodeMetric::Composition for a one-patch problem: per face t of B, the composed map B -> uv -> A
+// on t is B's triangle onto the triangle of A's points at t's three uv corners (located exactly in
+// A's uv triangles). Its Jacobian, in an orthonormal frame R of that image triangle, linearized at
+// the current uv with each corner moving along the A face that holds it (x_k + G_k du_k):
+// J = sqrt(s) R^T [x1 - x0, x2 - x0] P, exact at the current uv and in its first derivative, so
+// that the solver's fixed points are stationary points of the composition's own energy (a metric
+// frozen at the current uv is not: its change with the position is left out of the gradient).
+// s = area_B / area_A of the patch.
+LinearizeFn composition_linearization(const PatchProblem& prob, const ExactReference& ref, double scale) {
+  auto hints = std::make_shared<std::vector<int>>(3 * prob.faces.size(), -1);
+  const double root = std::sqrt(scale);
+  return [&prob, &ref, root, hints](size_t t, Mat46& a, Eigen::Vector4d& b) {
+    const auto& c = prob.tri[t];
+    const Eigen::Matrix2d& p = prob.dm_inv[t];
+    Vec3 x[3];
+    Mat32 g[3];
+    for (int k = 0; k < 3; ++k)
+      if (!ref.point(prob.uv[c[k]], (*hints)[3 * t + k], x[k], g[k])) {  // no positive face at all
+        a = jacobian_matrix(root * Eigen::Matrix2d::Identity(), p);
+        b.setZero();
+        return;
+      }
+    Mat32 e;
+    e.col(0) = x[1] - x[0];
+    e.col(1) = x[2] - x[0];
+    // The frame: the image triangle's plane, oriented as it (else the plane of corner 0's face).
+    Vec3 n = e.col(0).cross(e.col(1));
+    Vec3 r1 = e.col(0).norm() > 0 ? Vec3(e.col(0)) : Vec3(e.col(1));
+    if (!(n.norm() > 1e-14 * e.col(0).norm() * e.col(1).norm()) || !(r1.norm() > 0)) {
+      n = g[0].col(0).cross(g[0].col(1));
+      r1 = g[0].col(0);
+    }
+    r1.normalize();
+    const Vec3 r2 = n.cross(r1).normalized();
+    Mat32 r;
+    r.col(0) = r1;
+    r.col(1) = r2;
+    std::array<Eigen::Matrix2d, 3> q;
+    for (int k = 0; k < 3; ++k) q[k] = root * r.transpose() * g[k];
+    a = jacobian_matrix(q, p);
+    const Eigen::Matrix2d j = root * r.transpose() * e * p;
+    Vec6 u;
+    u << prob.uv[c[0]], prob.uv[c[1]], prob.uv[c[2]];
+    b = Eigen::Vector4d(j(0, 0), j(0, 1), j(1, 0), j(1, 1)) - a * u;
+  };
+}
+
+}  // namespace
+
+bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
+                  std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options,
+                  const NodeRefineOptions& node) {
+  if (ref_uv.size() != ref.positions.size() || uv.size() != patch.positions.size() ||
+      held.size() != patch.positions.size())
+    throw InvalidInput("refine_patch: the reference patch has " + std::to_string(ref.positions.size()) +
+                       " vertices and " + std::to_string(ref_uv.size()) + " uv, the patch " +
+                       std::to_string(patch.positions.size()) + " vertices, " + std::to_string(uv.size()) +
+                       " uv and " + std::to_string(held.size()) + " held flags; expected equal counts");
+  if (options.iterations < 0 || !(options.tolerance >= 0))
+    throw InvalidInput("refine_patch: iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
+                       std::to_string(options.tolerance) + ") must be >= 0");
+  if (!(node.max_start_distortion >= 0))
+    throw InvalidInput("refine_patch: max_start_distortion (" + std::to_string(node.max_start_distortion) +
+                       ") must be >= 0 (0: no limit)");
+  if (ref.faces.empty() || patch.faces.empty() || options.iterations == 0) return false;
+  for (const auto& t : ref.faces)
+    for (int v : t)
+      if (v < 0 || v >= static_cast<int>(ref.positions.size()))
+        throw InvalidInput("refine_patch: a face of the reference uses vertex " + std::to_string(v) +
+                           ", expected 0.." + std::to_string(ref.positions.size() - 1));
+  // The patch as a problem: every vertex its own wedge; boundary loop, held and unused ones fixed.
+  const size_t nv = patch.positions.size();
+  std::vector<char> fixed(nv, 1);
+  for (const auto& t : patch.faces)
+    for (int v : t)
+      if (v < 0 || v >= static_cast<int>(nv))
+        throw InvalidInput("refine_patch: a face uses vertex " + std::to_string(v) + ", expected 0.." +
+                           std::to_string(nv - 1));
+      else
+        fixed[v] = held[v] != 0;
+  for (int v : patch.boundary)
+    if (v >= 0 && v < static_cast<int>(nv)) fixed[v] = 1;
+  PatchProblem pr;
+  pr.vertices.resize(nv);
+  pr.uv = uv;
+  pr.var.assign(nv, -1);
+  pr.dims.assign(nv, 0);
+  pr.basis.assign(nv, Vec2::Zero());
+  for (size_t v = 0; v < nv; ++v) {
+    pr.vertices[v] = static_cast<int>(v);
+    if (!fixed[v]) {
+      pr.var[v] = pr.unknowns;
+      pr.dims[v] = 2;
+      pr.unknowns += 2;
+    }
+  }
+  for (size_t f = 0; f < patch.faces.size(); ++f) {
+    const auto& t = patch.faces[f];
+    pr.faces.push_back(static_cast<int>(f));
+    pr.face_patch.push_back(0);
+    pr.tri.push_back({t[0], t[1], t[2]});
+    double area = 0;
+    const Eigen::Matrix2d dm = local_edges(patch.positions[t[0]], patch.positions[t[1]], patch.positions[t[2]], area);
+    pr.dm_inv.push_back(dm.inverse());
+    pr.area.push_back(area);
+    pr.total_area += area;
+  }
+  if (pr.unknowns == 0) return false;
+  PatchResult r;
+  if (node.metric == NodeMetric::Vertex) {
+    // The reference as a one-patch chart (refine_maps's metric and location grid).
+    dissect::Chart chart;
+    chart.mesh.positions = ref.positions;
+    chart.mesh.faces = ref.faces;
+    chart.face_patch.assign(ref.faces.size(), 0);
+    chart.face_uv.resize(ref.faces.size());
+    std::vector<int> ref_faces(ref.faces.size());
+    for (size_t f = 0; f < ref.faces.size(); ++f) {
+      for (int k = 0; k < 3; ++k) chart.face_uv[f][k] = ref_uv[ref.faces[f][k]];
+      ref_faces[f] = static_cast<int>(f);
+    }
+    std::vector<ReferencePatch> refs;
+    refs.emplace_back(chart, std::move(ref_faces));
+    const std::vector<double> scale{refs[0].area() > 0 ? pr.total_area / refs[0].area() : 1.0};
+    r = solve_problem(pr, patch_metric(pr, refs, scale), options, true);
+  } else {
+    const ExactReference exact(ref, ref_uv);
+    const double scale = exact.area() > 0 ? pr.total_area / exact.area() : 1.0;
+    if (node.metric == NodeMetric::Face) {
+      auto hints = std::make_shared<std::vector<int>>(pr.faces.size(), -1);
+      const MetricFn metric = [&exact, scale, hints](size_t t, const Vec2& q) {
+        return Eigen::Matrix2d(scale * exact.metric(q, (*hints)[t]));
+      };
+      r = solve_problem(pr, metric, options, true);
+    } else {
+      const LinearizeFn linearize = composition_linearization(pr, exact, scale);
+      const MetricFn unused = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
+      if (node.max_start_distortion > 0) {
+        const PatchResult start = solve_problem(pr, unused, options, false, Vec2(1, 1), Vec2(0, 0), &linearize);
+        if (!(start.area > 0) || start.energy_before / start.area / 4 > node.max_start_distortion) return false;
+      }
+      r = solve_problem(pr, unused, options, true, Vec2(1, 1), Vec2(0, 0), &linearize);
+    }
+  }
+  if (!r.changed) return false;
+  uv = pr.uv;
+  return true;
+}
+
+dissect::NodeMapRefiner node_refiner(const RefineOptions& options, const NodeRefineOptions& node) {
+  return [options, node](const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
+                         std::vector<Vec2>& uv, const std::vector<char>& held) {
+    return refine_patch(ref, ref_uv, patch, uv, held, options, node);
+  };
 }
 
 double map_energy(const dissect::Dissection& a, const dissect::Dissection& b) {

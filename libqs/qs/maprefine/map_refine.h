@@ -172,6 +172,51 @@ struct RefineReport {
 RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options = {},
                          const Context& context = {});
 
+/// How refine_patch sees the reference's map (issue 17: is the metric's fidelity why refining the
+/// parents before their split failed on the bodies, whose seed and limb nodes have L2 stretch
+/// 160-38000?). Measured in the README ("Map refinement", --refine-before-split).
+enum class NodeMetric {
+  /// refine_maps's metric: per reference face, eigenvalues clamped to [1e-6, 1e6] x the patch's
+  /// mean, averaged at the vertices by uv area, interpolated linearly at B's uv centroids.
+  Vertex,
+  /// The metric of the reference face that holds B's face's uv centroid (located exactly),
+  /// piecewise constant, eigenvalues only floored at 1e-12 x the patch's mean.
+  Face,
+  /// The composition B -> uv -> A itself, no metric field: per face of B, A's 3D points at its
+  /// three uv corners (located exactly in A's uv triangles) form the image triangle, and the
+  /// energy is the symmetric Dirichlet of B's triangle onto it. The solver linearizes it at the
+  /// current uv, each corner moving along the A face that holds it, so its gradient is exact.
+  Composition,
+};
+
+/// How refine_patch refines one node (the experiment of `qs-dissect --refine-before-split`).
+struct NodeRefineOptions {
+  NodeMetric metric = NodeMetric::Vertex;  ///< how the reference is seen
+  /// With NodeMetric::Composition: a node whose composed map starts with a normalized distortion
+  /// (area-weighted symmetric Dirichlet / 4; 1 = isometric) above this is left as it is. On the
+  /// bodies' seed and limb nodes (10^4..10^9) the refinement lowers that energy by orders of
+  /// magnitude without moving the map's points closer to the reference's (README, "Map
+  /// refinement"), and those nodes took most of its time. 0: no limit. \pre >= 0
+  double max_start_distortion = 10;
+};
+
+/// Refines one patch of one mesh against the same patch of the reference, as refine_maps refines a
+/// patch's interior (the same energy, solver and safety rules; the reference seen as
+/// `node.metric` says, by default refine_maps's metric): `patch`'s (u, v) in `uv` move, its
+/// boundary loop and the vertices with held[v] != 0 stay. Keeps the result only if every uv face
+/// stays positive, inside the square, and the energy went down. Returns whether uv changed.
+/// \pre ref_uv.size() == ref.positions.size(), uv.size() == held.size() == patch.positions.size(),
+/// node.max_start_distortion >= 0. \throws InvalidInput naming the sizes or the bad value.
+/// Deterministic, single-threaded.
+bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
+                  std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options = {},
+                  const NodeRefineOptions& node = {});
+
+/// refine_patch with `options` and `node` as a dissect::NodeMapRefiner: the value to put in
+/// DissectOptions::refine_before_split (`qs-dissect --refine-before-split
+/// [--refine-before-split-metric vertex|face|composition]`).
+dissect::NodeMapRefiner node_refiner(const RefineOptions& options = {}, const NodeRefineOptions& node = {});
+
 /// The normalized distortion energy of mesh `b`'s map to mesh `a` (as MeshRefineReport::
 /// energy_after): for tests and reports. \pre as refine_maps.
 double map_energy(const dissect::Dissection& a, const dissect::Dissection& b);
