@@ -413,6 +413,33 @@ double sin_min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+// The quality of a vertex's ring over the set: the worst sin(smallest angle) of its triangles and
+// their sum, each capped at `cap`. at(m): the vertex's point in mesh m; ends(r): the ring
+// triangle r's two other corners.
+struct RingQuality {
+  double worst = 1, sum = 0;
+  // A move is kept when the ring's worst angle rises, or when the sum rises and the worst keeps
+  // at least kSmoothWorstSlack of its sine.
+  bool better_than(const RingQuality& before) const {
+    if (worst < 0) return false;
+    return worst > before.worst || (worst >= kSmoothWorstSlack * before.worst && sum > before.sum);
+  }
+};
+
+template <class At, class Ends>
+RingQuality ring_quality(const std::vector<std::vector<Vec3>>& positions, int b, int e, double cap, At&& at,
+                         Ends&& ends) {
+  RingQuality q;
+  for (size_t m = 0; m < positions.size(); ++m)
+    for (int r = b; r < e; ++r) {
+      const auto [w1, w2] = ends(r);
+      const double x = sin_min_angle(at(m), positions[m][w1], positions[m][w2]);
+      q.worst = std::min(q.worst, x);
+      q.sum += std::min(x, cap);
+    }
+  return q;
+}
+
 // A 3-triangle template cell (A, M, B, C, D counter-clockwise, M the hanging vertex between A and
 // B), emitted as (A, M, D), (M, B, C), (M, C, D): re-cut as the fan from C, (C, D, A), (C, A, M),
 // (C, M, B), or from D, (D, A, M), (D, M, B), (D, B, C), when that raises the smallest angle over
@@ -492,23 +519,10 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       // The ring's worst smallest angle over the set, with v at x[m] in mesh m.
       // Also the sum over the set of the ring's angles' sines up to the bound.
       auto worst = [&](auto&& at) {
-        double q = 1, sum = 0;
-        for (size_t m = 0; m < meshes; ++m)
-          for (int r = b; r < e; ++r) {
-            const double x = sin_min_angle(at(m), positions[m][ring[r][0]], positions[m][ring[r][1]]);
-            q = std::min(q, x);
-            sum += std::min(x, threshold);
-          }
-        return std::make_pair(q, sum);
+        return ring_quality(positions, b, e, threshold, at, [&](int r) { return std::make_pair(ring[r][0], ring[r][1]); });
       };
-      const auto before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
-      if (before.first >= threshold) continue;
-      // A move is kept when the ring's worst angle rises, or when the sum rises and the worst
-      // keeps at least kSmoothWorstSlack of its sine.
-      auto better = [&](const std::pair<double, double>& q) {
-        if (q.first < 0) return false;
-        return q.first > before.first || (q.first >= kSmoothWorstSlack * before.first && q.second > before.second);
-      };
+      const RingQuality before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
+      if (before.worst >= threshold) continue;
       // Per mesh: the 3D target (area-weighted centroid of the ring's triangles), mapped back to uv
       // through the least-squares affine map of the ring's edges; the set moves by the mean step.
       const Vec2 uv = c.vertex_uv[v];
@@ -546,11 +560,11 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       // under 5% of its uv area; `moved` then holds the 3D points.
       auto trial = [&](const Vec2& d) {
         const Vec2 nuv = uv + d;
-        if (!(nuv.x() > 0 && nuv.x() < 1 && nuv.y() > 0 && nuv.y() < 1)) return std::make_pair(-1.0, 0.0);
+        if (!(nuv.x() > 0 && nuv.x() < 1 && nuv.y() > 0 && nuv.y() < 1)) return RingQuality{-1, 0};
         for (int r = b; r < e; ++r) {
           const Vec2 a1 = nb_uv(r, 0), a2 = nb_uv(r, 1);
           const double before_uv = cross2(a1 - uv, a2 - uv), after_uv = cross2(a1 - nuv, a2 - nuv);
-          if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv)) return std::make_pair(-1.0, 0.0);
+          if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv)) return RingQuality{-1, 0};
         }
         for (size_t m = 0; m < meshes; ++m) moved[m] = samplers[m].point(c.vertex_patch[v], nuv, hints[m]);
         return worst([&](size_t m) -> const Vec3& { return moved[m]; });
@@ -566,7 +580,7 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       if (used == 0) continue;
       step /= used;
       for (int tries = 0; tries < 3; ++tries, step *= 0.5)
-        if (better(trial(step))) {
+        if (trial(step).better_than(before)) {
           take(step);
           break;
         }
@@ -661,21 +675,10 @@ int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivi
       if (!ok[v] || (active && !(*active)[v])) continue;
       const int b = offset[v], e = offset[v + 1];
       auto worst = [&](auto&& at) {
-        double qmin = 1, sum = 0;
-        for (size_t m = 0; m < meshes; ++m)
-          for (int r = b; r < e; ++r) {
-            const double x = sin_min_angle(at(m), positions[m][ring[r].w1], positions[m][ring[r].w2]);
-            qmin = std::min(qmin, x);
-            sum += std::min(x, threshold);
-          }
-        return std::make_pair(qmin, sum);
+        return ring_quality(positions, b, e, threshold, at, [&](int r) { return std::make_pair(ring[r].w1, ring[r].w2); });
       };
-      const auto before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
-      if (before.first >= threshold) continue;
-      auto better = [&](const std::pair<double, double>& qq) {
-        if (qq.first < 0) return false;
-        return qq.first > before.first || (qq.first >= kSmoothWorstSlack * before.first && qq.second > before.second);
-      };
+      const RingQuality before = worst([&](size_t m) -> const Vec3& { return positions[m][v]; });
+      if (before.worst >= threshold) continue;
       const int p = c.vertex_patch[v];
       const Vec2 uv = c.vertex_uv[v];
       const int s = side_of(uv);
@@ -728,7 +731,7 @@ int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivi
       step = std::clamp(step / used, -0.5 * room, 0.5 * room);
       auto trial = [&](double ds) {
         const double f = f0 + ds;
-        if (!(f > lo && f < hi)) return std::make_pair(-1.0, 0.0);
+        if (!(f > lo && f < hi)) return RingQuality{-1, 0};
         const Vec2 nuv = side_point(s, f);
         for (int r = b; r < e; ++r) {
           const int patch = ring[r].patch;
@@ -736,13 +739,13 @@ int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivi
           const Vec2 &a1 = ring_uv[r - b][1], &a2 = ring_uv[r - b][2], &vo = ring_uv[r - b][0];
           const double before_uv = cross2(a1 - vo, a2 - vo), after_uv = cross2(a1 - vn, a2 - vn);
           if (!(after_uv * before_uv > 0) || std::abs(after_uv) < 0.05 * std::abs(before_uv))
-            return std::make_pair(-1.0, 0.0);
+            return RingQuality{-1, 0};
         }
         for (size_t m = 0; m < meshes; ++m) moved[m] = samplers[m].point(p, nuv, hints[m]);
         return worst([&](size_t m) -> const Vec3& { return moved[m]; });
       };
       for (int tries = 0; tries < 3; ++tries, step *= 0.5)
-        if (better(trial(step))) {
+        if (trial(step).better_than(before)) {
           c.vertex_uv[v] = side_point(s, f0 + step);
           for (size_t m = 0; m < meshes; ++m) positions[m][v] = moved[m];
           ++moves;
