@@ -35,6 +35,21 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+// Point location by the best barycentric score: when the uv triangle (a, b, c) is positive and
+// q's smallest barycentric coordinate in it beats `score`, takes it (best = id, bary, score).
+void try_triangle(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& q, int id, int& best, Vec3& bary,
+                  double& score) {
+  const double area = cross2(b - a, c - a);
+  if (!(area > 0)) return;
+  const Vec3 w(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
+  const double s = w.minCoeff();
+  if (s > score) {
+    score = s;
+    bary = w;
+    best = id;
+  }
+}
+
 // Eigenvalues of a symmetric 2x2 matrix clamped into [lo, hi] (closed form).
 Eigen::Matrix2d clamp_metric(const Eigen::Matrix2d& m, double lo, double hi) {
   const double a = m(0, 0), b = 0.5 * (m(0, 1) + m(1, 0)), c = m(1, 1);
@@ -143,16 +158,7 @@ class ReferencePatch {
   int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
   void try_face(int i, const Vec2& q, int& best, Vec3& bary, double& score) const {
     const auto& uv = chart_.face_uv[faces_[i]];
-    const double area = cross2(uv[1] - uv[0], uv[2] - uv[0]);
-    if (!(area > 0)) return;
-    const Vec3 b(cross2(uv[1] - q, uv[2] - q) / area, cross2(uv[2] - q, uv[0] - q) / area,
-                 cross2(uv[0] - q, uv[1] - q) / area);
-    const double s = b.minCoeff();
-    if (s > score) {
-      score = s;
-      bary = b;
-      best = i;
-    }
+    try_triangle(uv[0], uv[1], uv[2], q, i, best, bary, score);
   }
 
   const dissect::Chart& chart_;
@@ -2026,16 +2032,7 @@ class ExactReference {
   int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
   void try_face(int f, const Vec2& q, int& best, Vec3& bary, double& score) const {
     const auto& t = ref_.faces[f];
-    const Vec2 &a = uv_[t[0]], &b = uv_[t[1]], &c = uv_[t[2]];
-    const double area = cross2(b - a, c - a);
-    if (!(area > 0)) return;
-    const Vec3 w(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
-    const double s = w.minCoeff();
-    if (s > score) {
-      score = s;
-      bary = w;
-      best = f;
-    }
+    try_triangle(uv_[t[0]], uv_[t[1]], uv_[t[2]], q, f, best, bary, score);
   }
 
   const param::PatchMesh& ref_;
