@@ -31,7 +31,10 @@ struct DissectOptions {
   /// into a point of the square: a tail, a leg) is split so that the raw stretch peak (before the
   /// peak_margin clamp) lies inside the centre child, 0.05 inside its square: the centre moves
   /// from the clamped peak as little as needed, w unchanged, the centre's square kept 0.1 off
-  /// the parent's sides (when that cannot hold the peak, the rule's centre stays). With the
+  /// the parent's sides (when that cannot hold the peak, the rule's centre stays; a node holding
+  /// features keeps it too, its split placed by the feature nudge: measured on the example set,
+  /// where moving one such centre by 0.0004 took its cat's remesh from 2.67% to 2.77% of faces
+  /// under 10 degrees). With the
   /// clamp alone, a peak near a side leaves the protrusion in an outer child, which keeps two
   /// corners of its parent: split after split around the same two corners (lion_sumner_10k:
   /// base vertices of valence 9 and 12), whose children end as strips (3D corner angles 0, 0,
