@@ -53,6 +53,12 @@ qs::dissect::DissectOptions predict() {
   return o;
 }
 
+qs::dissect::DissectOptions protrusion(double s) {
+  qs::dissect::DissectOptions o;
+  o.protrusion_stretch = s;
+  return o;
+}
+
 qs::dissect::DissectOptions cotan() {
   qs::dissect::DissectOptions o;
   o.intrinsic_cotan = true;
@@ -86,6 +92,9 @@ std::vector<Candidate> candidates() {
       {"cotan_relax90", cotan(), 0.9},
       // Splits chosen by the children's stretch predicted from the parent's map.
       {"predict", predict()},
+      // Squeezed protrusions split with the w rule (DissectOptions::protrusion_stretch 0: the
+      // defaults before it).
+      {"protrusion0", protrusion(0)},
   };
 }
 

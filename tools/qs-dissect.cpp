@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -181,6 +182,13 @@ int main(int argc, char** argv) {
                  "many levels past --max-depth (0: off)")
       ->capture_default_str()
       ->check(CLI::Range(0, 12));
+  app.add_option("--protrusion-stretch", opt.protrusion_stretch,
+                 "Split a patch whose stretch exceeds this (a squeezed protrusion) with its stretch peak inside the "
+                 "centre child, so that the protrusion is not left in an outer child among strips (0: off; see README)")
+      ->capture_default_str()
+      ->check([](const std::string& v) {
+        return std::strtod(v.c_str(), nullptr) < 0 ? "must be at least 0 (0: off), got " + v : std::string();
+      });
   app.add_option("-o,--output", outdir, "Output folder (default: <stem>.dissection, or <stem1>_<stem2>....dissection)");
   app.add_option("--report", report_file, "Also write the text report (with timings) to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
@@ -191,6 +199,8 @@ int main(int argc, char** argv) {
                            std::to_string(meshes.size()) + " meshes; give one per mesh, in the same order");
     if (std::isnan(opt.tau) || std::isnan(opt.max_patch_area))
       throw qs::UsageError(std::string(std::isnan(opt.tau) ? "--tau" : "--max-area") + " must be a number, not nan");
+    if (std::isnan(opt.protrusion_stretch))
+      throw qs::UsageError("--protrusion-stretch must be a number, not nan");
     if (std::isnan(opt.min_split_area) || std::isnan(opt.force_split_area))
       throw qs::UsageError(std::string(std::isnan(opt.min_split_area) ? "--min-split-area" : "--force-split-area") +
                            " must be a number, not nan");

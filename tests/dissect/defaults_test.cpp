@@ -31,6 +31,7 @@ TEST(DissectDefaults, AreTheDocumentedOnes) {
   EXPECT_EQ(o.min_split_area, 0.01);    // README, qs-dissect, "Bodies and long limbs"
   EXPECT_EQ(o.force_split_area, 0.03);
   EXPECT_EQ(o.area_extra_depth, 4);     // README, "Even sampling of bodies" (issue 13, item 3)
+  EXPECT_EQ(o.protrusion_stretch, 1000);  // README, "Default options", squeezed protrusions
   EXPECT_TRUE(o.geodesic_seed_curves);  // issue 13/17: the tessellation-independent maps
   EXPECT_TRUE(o.intrinsic_cotan);
 }

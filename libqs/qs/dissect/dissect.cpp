@@ -64,6 +64,9 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   if (options.area_extra_depth < 0 || options.area_extra_depth > 12)
     throw InvalidInput("area_extra_depth is " + std::to_string(options.area_extra_depth) +
                        "; expected 0 (off) to 12 levels past max_depth");
+  if (!(options.protrusion_stretch >= 0))
+    throw InvalidInput("protrusion_stretch is " + std::to_string(options.protrusion_stretch) +
+                       "; expected a stretch >= 0 (0: off)");
   if (meshes.empty()) throw InvalidInput("no mesh to dissect");
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");

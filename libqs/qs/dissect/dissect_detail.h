@@ -241,6 +241,15 @@ double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, do
 /// The children's stretch predicted from the parent's map for a split at (peak, w) (split_choice.cpp).
 double predicted_children_stretch(const Param& p, const Vec2& peak, double w);
 
+/// A squeezed protrusion's peak lies at least this far inside the centre child's square (u,v)...
+constexpr double kProtrusionMargin = 0.05;
+/// ... which stays at least this far from the parent's sides, so that no outer child is a sliver.
+constexpr double kProtrusionSideMargin = 0.1;
+/// The centre nearest `peak` whose inner square (w) holds `raw` kProtrusionMargin inside and stays
+/// kProtrusionSideMargin off the sides; `peak` when there is none (raw too near a side)
+/// (split_choice.cpp, DissectOptions::protrusion_stretch).
+Vec2 centre_holding(const Vec2& raw, const Vec2& peak, double w);
+
 // Walks the union quinary tree over every mesh of the set at once (set_dissector.cpp; the
 // alignment in feature_alignment.cpp, the choice of the split in split_choice.cpp).
 class SetDissector {

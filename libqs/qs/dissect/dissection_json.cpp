@@ -37,7 +37,8 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"split_stretch_rounds", options.split_stretch_rounds},
                     {"min_split_area", options.min_split_area},
                     {"force_split_area", options.force_split_area},
-                    {"area_extra_depth", options.area_extra_depth}};
+                    {"area_extra_depth", options.area_extra_depth},
+                    {"protrusion_stretch", options.protrusion_stretch}};
   if (meshes.empty()) return json_strict::dump(doc, 2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();
