@@ -64,13 +64,73 @@ Eigen::Matrix2d clamp_metric(const Eigen::Matrix2d& m, double lo, double hi) {
   return c1 * e1 * e1.transpose() + c2 * (Eigen::Matrix2d::Identity() - e1 * e1.transpose());
 }
 
+// Point location among a patch's uv triangles: a uniform grid over the unit square (about one cell
+// per triangle) holding the triangles marked positive; locate() tries the hint, then q's cell,
+// then (when q lies in none of those: `scan_when_outside`, else only when the cell is empty) every
+// positive triangle, and takes the one where q is least outside.
+class UvLocator {
+ public:
+  UvLocator(std::vector<std::array<Vec2, 3>> tris, const std::vector<char>& positive, bool scan_when_outside)
+      : tris_(std::move(tris)), positive_(positive), scan_when_outside_(scan_when_outside) {
+    const size_t n = tris_.size();
+    size_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n)))), 1, 1024);
+    offsets_.assign(static_cast<size_t>(size_) * size_ + 1, 0);
+    auto cells = [&](size_t i, auto&& visit) {
+      const auto& uv = tris_[i];
+      const Vec2 lo = uv[0].cwiseMin(uv[1]).cwiseMin(uv[2]), hi = uv[0].cwiseMax(uv[1]).cwiseMax(uv[2]);
+      for (int y = cell(lo.y()); y <= cell(hi.y()); ++y)
+        for (int x = cell(lo.x()); x <= cell(hi.x()); ++x) visit(y * size_ + x);
+    };
+    for (size_t i = 0; i < n; ++i)
+      if (positive_[i]) cells(i, [&](int c) { ++offsets_[c + 1]; });
+    for (size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
+    grid_.resize(offsets_.back());
+    std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
+    for (size_t i = 0; i < n; ++i)
+      if (positive_[i]) cells(i, [&](int c) { grid_[fill[c]++] = static_cast<int>(i); });
+  }
+
+  // The triangle holding q (or where q is least outside, e.g. by rounding on an edge) and q's
+  // barycentric coordinates in it, clamped to it; -1 when there is no positive triangle.
+  // `hint`: a triangle to try first, updated.
+  int locate(const Vec2& q, int& hint, Vec3& bary) const {
+    double score = -kInf;
+    int best = -1;
+    if (hint >= 0) try_tri(hint, q, best, bary, score);
+    if (score < 0) {
+      const int c = cell(q.y()) * size_ + cell(q.x());
+      for (int k = offsets_[c]; k < offsets_[c + 1] && score < 0; ++k) try_tri(grid_[k], q, best, bary, score);
+    }
+    if (scan_when_outside_ ? score < 0 : best < 0)
+      for (size_t i = 0; i < tris_.size() && score < 0; ++i)
+        if (positive_[i]) try_tri(static_cast<int>(i), q, best, bary, score);
+    if (best < 0) return -1;
+    hint = best;
+    bary = bary.cwiseMax(0.0);
+    bary /= bary.sum();
+    return best;
+  }
+
+ private:
+  int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
+  void try_tri(int i, const Vec2& q, int& best, Vec3& bary, double& score) const {
+    try_triangle(tris_[i][0], tris_[i][1], tris_[i][2], q, i, best, bary, score);
+  }
+
+  std::vector<std::array<Vec2, 3>> tris_;
+  std::vector<char> positive_;
+  bool scan_when_outside_ = true;
+  int size_ = 1;
+  std::vector<int> offsets_, grid_;
+};
+
 // One patch of the reference mesh: its surface's metric in (u, v) per face corner (the uv-area
 // weighted mean of the metrics of the patch's faces around the vertex, each with its eigenvalues
 // clamped to [1e-6, 1e6] times the patch's mean, so that uv slivers do not dominate), and a
 // uniform grid over the unit square for point location (about one cell per face).
 class ReferencePatch {
  public:
-  ReferencePatch(const dissect::Chart& chart, std::vector<int> faces) : chart_(chart), faces_(std::move(faces)) {
+  ReferencePatch(const dissect::Chart& chart, std::vector<int> faces) : faces_(std::move(faces)) {
     const size_t nf = faces_.size();
     wedge_.resize(nf);
     std::vector<Eigen::Matrix2d> metric(nf, Eigen::Matrix2d::Zero());
@@ -114,23 +174,15 @@ class ReferencePatch {
         wedge_[i][k] = it != acc.end() && it->second.second > 0 ? Eigen::Matrix2d(it->second.first / it->second.second)
                                                                  : Eigen::Matrix2d(mean * Eigen::Matrix2d::Identity());
       }
-    // Location grid (faces with a positive uv area only).
-    size_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(nf)))), 1, 1024);
-    offsets_.assign(static_cast<size_t>(size_) * size_ + 1, 0);
-    auto cells = [&](size_t i, auto&& visit) {
-      const auto& uv = chart.face_uv[faces_[i]];
-      const Vec2 lo = uv[0].cwiseMin(uv[1]).cwiseMin(uv[2]), hi = uv[0].cwiseMax(uv[1]).cwiseMax(uv[2]);
-      const int x0 = cell(lo.x()), x1 = cell(hi.x()), y0 = cell(lo.y()), y1 = cell(hi.y());
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) visit(y * size_ + x);
-    };
-    for (size_t i = 0; i < nf; ++i)
-      if (uv_area[i] > 0) cells(i, [&](int c) { ++offsets_[c + 1]; });
-    for (size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
-    grid_.resize(offsets_.back());
-    std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
-    for (size_t i = 0; i < nf; ++i)
-      if (uv_area[i] > 0) cells(i, [&](int c) { grid_[fill[c]++] = static_cast<int>(i); });
+    // Location (faces with a positive uv area only; a point outside every face of its cell takes
+    // the least outside of them).
+    std::vector<std::array<Vec2, 3>> tris(nf);
+    std::vector<char> positive(nf, 0);
+    for (size_t i = 0; i < nf; ++i) {
+      tris[i] = chart.face_uv[faces_[i]];
+      positive[i] = uv_area[i] > 0;
+    }
+    locator_.emplace(std::move(tris), positive, false);
   }
 
   double area() const { return area_; }
@@ -138,35 +190,16 @@ class ReferencePatch {
   // The metric at uv (clamped to the square); `hint`: a local face to try first, updated.
   Eigen::Matrix2d metric(const Vec2& q, int& hint) const {
     Vec3 bary;
-    double score = -kInf;
-    int best = -1;
-    if (hint >= 0) try_face(hint, q, best, bary, score);
-    if (score < 0) {
-      const int c = cell(q.y()) * size_ + cell(q.x());
-      for (int k = offsets_[c]; k < offsets_[c + 1] && score < 0; ++k) try_face(grid_[k], q, best, bary, score);
-    }
-    if (best < 0)  // in no face of its cell (rounding): the nearest of the patch
-      for (size_t i = 0; i < faces_.size() && score < 0; ++i) try_face(static_cast<int>(i), q, best, bary, score);
+    const int best = locator_->locate(q, hint, bary);
     if (best < 0) return Eigen::Matrix2d::Identity() * (area_ > 0 ? area_ : 1.0);
-    hint = best;
-    bary = bary.cwiseMax(0.0);
-    bary /= bary.sum();
     return bary[0] * wedge_[best][0] + bary[1] * wedge_[best][1] + bary[2] * wedge_[best][2];
   }
 
  private:
-  int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
-  void try_face(int i, const Vec2& q, int& best, Vec3& bary, double& score) const {
-    const auto& uv = chart_.face_uv[faces_[i]];
-    try_triangle(uv[0], uv[1], uv[2], q, i, best, bary, score);
-  }
-
-  const dissect::Chart& chart_;
   std::vector<int> faces_;
   std::vector<std::array<Eigen::Matrix2d, 3>> wedge_;
   double area_ = 0;
-  int size_ = 1;
-  std::vector<int> offsets_, grid_;
+  std::optional<UvLocator> locator_;
 };
 
 // One patch of a mesh being refined, in local numbering.
@@ -1933,7 +1966,7 @@ namespace {
 // definite (a face with a zero-area 3D triangle), and the 3D point at any uv.
 class ExactReference {
  public:
-  ExactReference(const param::PatchMesh& ref, const std::vector<Vec2>& uv) : ref_(ref), uv_(uv) {
+  ExactReference(const param::PatchMesh& ref, const std::vector<Vec2>& uv) : ref_(ref) {
     const size_t nf = ref.faces.size();
     metric_.assign(nf, Eigen::Matrix2d::Identity());
     jacobian_.assign(nf, Mat32::Zero());
@@ -1958,23 +1991,9 @@ class ExactReference {
     }
     mean_ = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
     for (size_t f = 0; f < nf; ++f) metric_[f] = positive[f] ? floored(metric_[f]) : mean_ * Eigen::Matrix2d::Identity();
-    size_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(nf)))), 1, 1024);
-    offsets_.assign(static_cast<size_t>(size_) * size_ + 1, 0);
-    auto cells = [&](size_t f, auto&& visit) {
-      const auto& t = ref.faces[f];
-      const Vec2 lo = uv[t[0]].cwiseMin(uv[t[1]]).cwiseMin(uv[t[2]]);
-      const Vec2 hi = uv[t[0]].cwiseMax(uv[t[1]]).cwiseMax(uv[t[2]]);
-      for (int y = cell(lo.y()); y <= cell(hi.y()); ++y)
-        for (int x = cell(lo.x()); x <= cell(hi.x()); ++x) visit(y * size_ + x);
-    };
-    for (size_t f = 0; f < nf; ++f)
-      if (positive[f]) cells(f, [&](int c) { ++offsets_[c + 1]; });
-    for (size_t c = 1; c < offsets_.size(); ++c) offsets_[c] += offsets_[c - 1];
-    grid_.resize(offsets_.back());
-    std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
-    for (size_t f = 0; f < nf; ++f)
-      if (positive[f]) cells(f, [&](int c) { grid_[fill[c]++] = static_cast<int>(f); });
-    positive_ = std::move(positive);
+    std::vector<std::array<Vec2, 3>> tris(nf);
+    for (size_t f = 0; f < nf; ++f) tris[f] = {uv[ref.faces[f][0]], uv[ref.faces[f][1]], uv[ref.faces[f][2]]};
+    locator_.emplace(std::move(tris), positive, true);
   }
 
   double area() const { return area_; }
@@ -1986,22 +2005,7 @@ class ExactReference {
   // none, e.g. by rounding on an edge) and q's barycentric coordinates in it, clamped to the
   // face; -1 when the patch has no positive uv face. `hint`: a face to try first, updated.
   int locate(const Vec2& q_in, int& hint, Vec3& bary) const {
-    const Vec2 q = q_in.cwiseMax(0.0).cwiseMin(1.0);
-    double score = -kInf;
-    int best = -1;
-    if (hint >= 0) try_face(hint, q, best, bary, score);
-    if (score < 0) {
-      const int c = cell(q.y()) * size_ + cell(q.x());
-      for (int k = offsets_[c]; k < offsets_[c + 1] && score < 0; ++k) try_face(grid_[k], q, best, bary, score);
-    }
-    if (score < 0)
-      for (size_t f = 0; f < ref_.faces.size() && score < 0; ++f)
-        if (positive_[f]) try_face(static_cast<int>(f), q, best, bary, score);
-    if (best < 0) return -1;
-    hint = best;
-    bary = bary.cwiseMax(0.0);
-    bary /= bary.sum();
-    return best;
+    return locator_->locate(q_in.cwiseMax(0.0).cwiseMin(1.0), hint, bary);
   }
 
   // The reference's metric at q: that of the face holding q (piecewise constant).
@@ -2029,20 +2033,11 @@ class ExactReference {
   }
 
  private:
-  int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
-  void try_face(int f, const Vec2& q, int& best, Vec3& bary, double& score) const {
-    const auto& t = ref_.faces[f];
-    try_triangle(uv_[t[0]], uv_[t[1]], uv_[t[2]], q, f, best, bary, score);
-  }
-
   const param::PatchMesh& ref_;
-  const std::vector<Vec2>& uv_;
   std::vector<Eigen::Matrix2d> metric_;
   std::vector<Mat32> jacobian_;
-  std::vector<char> positive_;
   double area_ = 0, mean_ = 1;
-  int size_ = 1;
-  std::vector<int> offsets_, grid_;
+  std::optional<UvLocator> locator_;
 };
 
 // vec(J) = a x for J = [Q1 x1 - Q0 x0, Q2 x2 - Q0 x0] P (jacobian_matrix with one Q per corner).

@@ -413,6 +413,12 @@ double sin_min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+// A remesh vertex strictly inside its patch's square (not a base vertex, not on a side).
+bool patch_interior(const SemiRegularConnectivity& c, int v) {
+  const Vec2& uv = c.vertex_uv[v];
+  return v >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
+}
+
 // The quality of a vertex's ring over the set: the worst sin(smallest angle) of its triangles and
 // their sum, each capped at `cap`. at(m): the vertex's point in mesh m; ends(r): the ring
 // triangle r's two other corners.
@@ -476,10 +482,7 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
   if (iterations <= 0) return 0;
   const BaseTopology& t = samplers[0].topology();
   const int nv = c.num_vertices();
-  auto interior = [&](int v) {
-    const Vec2& uv = c.vertex_uv[v];
-    return v >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
-  };
+  auto interior = [&](int x) { return patch_interior(c, x); };
   // Incident faces of every interior vertex, as the two other corners in CCW order.
   std::vector<int> offset(nv + 1, 0);
   for (const Tri& f : c.faces)
@@ -629,10 +632,7 @@ int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivi
   if (iterations <= 0) return 0;
   const BaseTopology& t = samplers[0].topology();
   const int nv = c.num_vertices();
-  auto interior = [&](int w) {
-    const Vec2& uv = c.vertex_uv[w];
-    return w >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
-  };
+  auto interior = [&](int x) { return patch_interior(c, x); };
   auto slidable_side = [&](int v) { return v >= c.num_base_vertices ? side_of(c.vertex_uv[v]) : -1; };
   // Ring faces of every side vertex: the two other corners (CCW) and the face's patch.
   struct RingFace {
@@ -776,10 +776,7 @@ int flip_for_angles(const std::vector<ChartSampler>& samplers, SemiRegularConnec
                     const std::vector<std::vector<Vec3>>& positions, double below_degrees,
                     std::vector<char>& touched) {
   const BaseTopology& t = samplers[0].topology();
-  auto interior = [&](int v) {
-    const Vec2& uv = c.vertex_uv[v];
-    return v >= c.num_base_vertices && uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1;
-  };
+  auto interior = [&](int x) { return patch_interior(c, x); };
   auto& faces = c.faces;
   const int nf = c.num_faces();
   auto from = [&](int he) { return faces[he / 3][he % 3]; };
@@ -959,11 +956,8 @@ AnisotropicRemesh remesh_anisotropic(const std::vector<const dissect::Chart*>& c
     auto ccw_in_one_patch = [&](const Tri* f, int n) {
       const int patch = conn.vertex_patch[f[0][0]];
       for (int i = 0; i < n; ++i) {
-        for (int v : f[i]) {
-          const Vec2& uv = conn.vertex_uv[v];
-          if (v < conn.num_base_vertices || conn.vertex_patch[v] != patch || !(uv.x() > 0 && uv.x() < 1 && uv.y() > 0 && uv.y() < 1))
-            return false;
-        }
+        for (int v : f[i])
+          if (conn.vertex_patch[v] != patch || !patch_interior(conn, v)) return false;
         const Vec2 &a = conn.vertex_uv[f[i][0]], &b = conn.vertex_uv[f[i][1]], &c = conn.vertex_uv[f[i][2]];
         if (!(cross2(b - a, c - a) > 0)) return false;
       }
