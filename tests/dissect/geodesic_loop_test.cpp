@@ -75,7 +75,9 @@ void expect_valid_loop(const TriMesh& m, const SeedLoop& loop) {
     EXPECT_EQ(p.back(), loop.seeds[(i + 1) % 4]);
     for (size_t k = 0; k < p.size(); ++k) {
       ++uses[p[k]];
-      if (k + 1 < p.size()) EXPECT_TRUE(edges.count({std::min(p[k], p[k + 1]), std::max(p[k], p[k + 1])}));
+      if (k + 1 < p.size()) {
+        EXPECT_TRUE(edges.count({std::min(p[k], p[k + 1]), std::max(p[k], p[k + 1])}));
+      }
     }
   }
   const std::set<int> seeds(loop.seeds.begin(), loop.seeds.end());

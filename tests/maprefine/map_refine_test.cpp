@@ -900,7 +900,9 @@ TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   capped.max_start_distortion = 1.01;
   auto again = start;
   EXPECT_EQ(mr::refine_patch(pm, uv, pm, again, held, {}, capped), GetParam() != mr::NodeMetric::Composition);
-  if (GetParam() == mr::NodeMetric::Composition) EXPECT_EQ(again, start);
+  if (GetParam() == mr::NodeMetric::Composition) {
+    EXPECT_EQ(again, start);
+  }
   capped.max_start_distortion = -1;
   EXPECT_THROW(mr::refine_patch(pm, uv, pm, again, held, {}, capped), qs::InvalidInput);
 }

@@ -57,7 +57,9 @@ void expect_clean_failure(const RunResult& r, int code, const std::string& part)
   EXPECT_EQ(r.exit, code) << r.out;
   EXPECT_THAT(r.out, Not(HasSubstr("internal error")));
   EXPECT_LT(r.out.size(), 4000u) << r.out.substr(0, 400);
-  if (!part.empty()) EXPECT_THAT(r.out, HasSubstr(part));
+  if (!part.empty()) {
+    EXPECT_THAT(r.out, HasSubstr(part));
+  }
 }
 
 qs::TriMesh scaled(qs::TriMesh m, double s) {
@@ -169,7 +171,7 @@ TEST_F(RobustTool, NonUtf8BytesNeverMakeAnInternalError) {
   fs::copy_file(ball, odd);
   const RunResult j = run_tool("qs-inspect", "--json '" + odd.string() + "'");
   EXPECT_EQ(j.exit, 0) << j.out;
-  EXPECT_NO_THROW((void)nlohmann::json::parse(j.out));
+  EXPECT_NO_THROW({ const auto parsed = nlohmann::json::parse(j.out); (void)parsed; });
   // A PLY element name that is not UTF-8, under --json.
   const std::string ply = text("weird.ply",
                                "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
@@ -178,7 +180,7 @@ TEST_F(RobustTool, NonUtf8BytesNeverMakeAnInternalError) {
                                "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n5\n");
   const RunResult p = run_tool("qs-inspect", "--json " + ply);
   EXPECT_EQ(p.exit, 0) << p.out;
-  EXPECT_NO_THROW((void)nlohmann::json::parse(p.out));
+  EXPECT_NO_THROW({ const auto parsed = nlohmann::json::parse(p.out); (void)parsed; });
   // A landmark file whose parse error quotes a non-UTF-8 byte.
   expect_clean_failure(
       run_tool("qs-inspect", "--json " + ball + " --landmarks " + text("bad.json", "{\"features\": \xff}")), 2, "");
