@@ -48,10 +48,13 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
     }
     // Gauss-Seidel converges slowly on a region of many rings (the rings around a feature deep in a
     // squeezed protrusion): up to kUntangleBatches batches of 10 sweeps, until no fold is left.
+    // The sweeps visit only the region's free vertices (in vertex order), not the whole patch.
+    std::vector<int> moving;
+    for (int v = 0; v < nv; ++v)
+      if (mark[v] && !pinned[v] && !nb[v].empty()) moving.push_back(v);
     for (int batch = 0; batch < kUntangleBatches; ++batch) {
       for (int sweep = 0; sweep < 10; ++sweep)
-        for (int v = 0; v < nv; ++v) {
-          if (!mark[v] || pinned[v] || nb[v].empty()) continue;
+        for (int v : moving) {
           Vec2 c = Vec2::Zero();
           for (int w : nb[v]) c += cur.uv[w];
           cur.uv[v] = c / static_cast<double>(nb[v].size());
