@@ -283,9 +283,9 @@ DissectionSet SetDissector::run() {
       // parent stretch stay those of the dissection's own maps, so only where the cuts run on
       // each surface changes. A refined map is bijective (the refiner keeps only positive uv
       // faces, checked again here).
+      size_t node_faces = 0;
+      for (const auto& p : ps) node_faces += p.ex.faces.size();
       if (opt_.refine_before_split && nm > 1) {
-        size_t faces = 0;
-        for (const auto& p : ps) faces += p.ex.faces.size();
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
           if (!p.sp.bijective() || !ps[0].sp.bijective()) return;
@@ -298,11 +298,9 @@ DissectionSet SetDissector::run() {
           param::count_uv_faces(p.ex.pm.faces, sp);
           if (!sp.bijective()) return;
           p.sp = std::move(sp);
-        }, faces >= kParallelFaces);
+        }, node_faces >= kParallelFaces);
       }
       std::vector<std::array<Node, 5>> kids(meshes_.size());
-      size_t node_faces = 0;
-      for (const auto& p : ps) node_faces += p.ex.faces.size();
       try {
         parallel_for(meshes_.size(), [&](size_t i) {
           try {

@@ -473,6 +473,22 @@ void recut_template_best_angle(Tri* f, const std::array<int, 5>& amcbd, const st
 
 // Tangential smoothing of the patch-interior vertices (see the header): Gauss-Seidel in vertex
 // order, one uv per vertex for the whole set. Returns the number of accepted moves.
+// The area-weighted centroid of a vertex's ring triangles in one mesh (x: its points, xv: the
+// vertex's, ends(r): ring triangle r's two other corners) and their total area.
+template <class Ends>
+std::pair<Vec3, double> ring_centroid(const std::vector<Vec3>& x, const Vec3& xv, int b, int e, Ends&& ends) {
+  Vec3 target(0, 0, 0);
+  double area = 0;
+  for (int r = b; r < e; ++r) {
+    const auto [w1, w2] = ends(r);
+    const Vec3 &x1 = x[w1], &x2 = x[w2];
+    const double a = 0.5 * (x1 - xv).cross(x2 - xv).norm();
+    target += a * (xv + x1 + x2) / 3;
+    area += a;
+  }
+  return {target, area};
+}
+
 // With `active` (#V flags), only the flagged vertices and, sweep after sweep, the neighbours of
 // the moved ones are tried (the flipped rings after a round of flips: the others are where the
 // previous smoothing left them).
@@ -534,22 +550,16 @@ int smooth_interior(const std::vector<ChartSampler>& samplers, SemiRegularConnec
       for (size_t m = 0; m < meshes; ++m) {
         const auto& x = positions[m];
         const Vec3 xv = x[v];
-        Vec3 target(0, 0, 0);
-        double area = 0;
+        const auto [target, area] = ring_centroid(x, xv, b, e, [&](int r) { return std::make_pair(ring[r][0], ring[r][1]); });
         Eigen::Matrix2d dd = Eigen::Matrix2d::Zero();
         Eigen::Matrix<double, 3, 2> ed = Eigen::Matrix<double, 3, 2>::Zero();
-        for (int r = b; r < e; ++r) {
-          const Vec3 &x1 = x[ring[r][0]], &x2 = x[ring[r][1]];
-          const double a = 0.5 * (x1 - xv).cross(x2 - xv).norm();
-          target += a * (xv + x1 + x2) / 3;
-          area += a;
+        for (int r = b; r < e; ++r)
           for (int k = 0; k < 2; ++k) {
             const Vec2 d = nb_uv(r, k) - uv;
             const Vec3 ex = x[ring[r][k]] - xv;
             dd += d * d.transpose();
             ed += ex * d.transpose();
           }
-        }
         if (!(area > 0) || std::abs(dd.determinant()) <= 0) continue;
         const Eigen::Matrix<double, 3, 2> jac = ed * dd.inverse();
         const Eigen::Matrix2d jtj = jac.transpose() * jac;
@@ -711,14 +721,7 @@ int slide_sides(const std::vector<ChartSampler>& samplers, SemiRegularConnectivi
       for (size_t m = 0; m < meshes; ++m) {
         const auto& x = positions[m];
         const Vec3 xv = x[v];
-        Vec3 target(0, 0, 0);
-        double area = 0;
-        for (int r = b; r < e; ++r) {
-          const Vec3 &x1 = x[ring[r].w1], &x2 = x[ring[r].w2];
-          const double a = 0.5 * (x1 - xv).cross(x2 - xv).norm();
-          target += a * (xv + x1 + x2) / 3;
-          area += a;
-        }
+        const auto [target, area] = ring_centroid(x, xv, b, e, [&](int r) { return std::make_pair(ring[r].w1, ring[r].w2); });
         const Vec3 tangent = (samplers[m].point(p, side_point(s, f0 + h)) - samplers[m].point(p, side_point(s, f0 - h))) / (2 * h);
         const double tt = tangent.squaredNorm();
         if (!(area > 0) || !(tt > 0)) continue;
