@@ -194,6 +194,13 @@ int main(int argc, char** argv) {
   const double bound = argc > 4 ? std::atof(argv[4]) : 10.0;
   std::vector<int> patches;
   for (int a = 5; a < argc; ++a) patches.push_back(std::atoi(argv[a]));
+  if (!fs::is_directory(dir)) {
+    std::fprintf(stderr,
+                 "qs-bench-slivers: %s is not a folder of meshes or a dissection folder\n"
+                 "usage: qs-bench-slivers [MESH_DIR | DISSECTION_DIR] [MESH_FILTER] [LEVEL] [BOUND_DEG] [PATCH...]\n",
+                 dir.string().c_str());
+    return 3;
+  }
   if (fs::exists(dir / "dissection.json")) {  // a dissection folder: its set, remeshed together
     const auto in = qs::dissect::read_dissection(dir);
     std::vector<const qs::dissect::Chart*> charts;

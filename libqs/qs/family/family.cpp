@@ -19,6 +19,8 @@ namespace qs::family {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+/// Samplings of a shape's parameters tried before giving up (see make_mesh).
+constexpr int kSamplingAttempts = 8;
 
 /// splitmix64: our own generator, so that the numbers do not depend on the standard library.
 struct Rng {
@@ -349,29 +351,43 @@ FamilyShape make_mesh(const FamilyOptions& o, const Base& base, const ShapeParam
   std::snprintf(name, sizeof name, "shape%02d", index);
   shape.name = name;
   const int vertices = o.faces / 2 + 2;
-  shape.parameters = sample_parameters(s, vertices, mix(o.seed, 5000 + static_cast<std::uint64_t>(index)));
-  std::vector<Tri> faces = detail::sphere_hull(shape.parameters);
-  shape.mesh.positions.resize(vertices);
-  for (int v = 0; v < vertices; ++v) shape.mesh.positions[v] = surface_point(s, shape.parameters[v]);
-  delaunay_flips(faces, shape.parameters, shape.mesh.positions);
-  shape.mesh.faces = faces;
+  std::vector<Tri> faces;
+  // A sampling too coarse for a sharp spot of the smooth surface (a thin, strongly bent limb tip at
+  // a high variation) can leave a face folded against it; the parameters are then sampled again
+  // with the next seed of the shape (deterministic: attempt 0 is the shape's own seed).
+  std::string problem;
+  for (int attempt = 0; attempt < kSamplingAttempts; ++attempt) {
+    problem.clear();
+    shape.parameters = sample_parameters(
+        s, vertices, mix(o.seed, 5000 + static_cast<std::uint64_t>(index) + 100000 * static_cast<std::uint64_t>(attempt)));
+    faces = detail::sphere_hull(shape.parameters);
+    shape.mesh.positions.resize(vertices);
+    for (int v = 0; v < vertices; ++v) shape.mesh.positions[v] = surface_point(s, shape.parameters[v]);
+    delaunay_flips(faces, shape.parameters, shape.mesh.positions);
+    shape.mesh.faces = faces;
 
-  // Own checks: an accepted mesh that faces outward, and no face folded against the smooth
-  // surface (the face normal agrees with the surface normal at the face's parameter centroid).
-  const mesh::ValidationResult valid = mesh::validate(shape.mesh);
-  if (!valid.report.accepted || valid.report.orientation_flipped || mesh::find_problem(valid.report, "zero_area_faces"))
-    throw InternalError("family: generated " + shape.name + " (seed " + std::to_string(o.seed) +
-                        ") fails validation:\n" + mesh::format_report(shape.name, valid.report));
-  int folded = 0;
-  for (const Tri& t : shape.mesh.faces) {
-    const Vec3& a = shape.mesh.positions[t[0]];
-    const Vec3 n = (shape.mesh.positions[t[1]] - a).cross(shape.mesh.positions[t[2]] - a);
-    const Vec3 c = (shape.parameters[t[0]] + shape.parameters[t[1]] + shape.parameters[t[2]]).normalized();
-    if (n.dot(surface_normal(s, c)) <= 0) ++folded;
+    // Own checks: an accepted mesh that faces outward, and no face folded against the smooth
+    // surface (the face normal agrees with the surface normal at the face's parameter centroid).
+    const mesh::ValidationResult valid = mesh::validate(shape.mesh);
+    if (!valid.report.accepted || valid.report.orientation_flipped || mesh::find_problem(valid.report, "zero_area_faces")) {
+      problem = "fails validation:\n" + mesh::format_report(shape.name, valid.report);
+      continue;
+    }
+    int folded = 0;
+    for (const Tri& t : shape.mesh.faces) {
+      const Vec3& a = shape.mesh.positions[t[0]];
+      const Vec3 n = (shape.mesh.positions[t[1]] - a).cross(shape.mesh.positions[t[2]] - a);
+      const Vec3 c = (shape.parameters[t[0]] + shape.parameters[t[1]] + shape.parameters[t[2]]).normalized();
+      if (n.dot(surface_normal(s, c)) <= 0) ++folded;
+    }
+    if (folded == 0) break;
+    problem = "has " + std::to_string(folded) + " faces folded against its smooth surface";
   }
-  if (folded > 0)
-    throw InternalError("family: generated " + shape.name + " (seed " + std::to_string(o.seed) + ") has " +
-                        std::to_string(folded) + " faces folded against its smooth surface");
+  if (!problem.empty())
+    throw InvalidInput("family: generated " + shape.name + " (seed " + std::to_string(o.seed) + ", variation " +
+                       std::to_string(o.variation) + ", " + std::to_string(o.faces) + " faces) " + problem + " in " +
+                       std::to_string(kSamplingAttempts) +
+                       " samplings: the shape is too sharp for this face count; use more faces or a lower variation");
 
   auto landmark = [&](const std::string& lname, const Vec3& d) {
     FamilyLandmark l;
