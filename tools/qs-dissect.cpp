@@ -128,9 +128,14 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000));
   app.add_flag("--refine-slide-borders", refine_opt.slide_borders,
                "With --refine-maps: let patch-side vertices slide along their sides too (slower; see README)");
-  app.add_flag("--refine-across-borders", refine_opt.across_borders,
-               "Refine maps across patch borders too: move the patch curves of every mesh but the first (implies "
-               "--refine-maps; adds chart vertices where the new curves cross edges; see README)");
+  bool across_flag = false, no_across = false;
+  app.add_flag("--refine-across-borders", across_flag,
+               "Refine maps across patch borders too (the default since issue 13; implies --refine-maps): move the "
+               "patch curves of every mesh but the first (adds chart vertices where the new curves cross edges; see "
+               "README)");
+  app.add_flag("--no-refine-across-borders", no_across,
+               "Refine the maps inside the patches only: the patch curves on the surface stay as dissected");
+  app.get_option("--no-refine-across-borders")->excludes("--refine-across-borders");
   app.add_option("--refine-border-sweeps", refine_opt.border_sweeps,
                  "Passes over the shared patch sides of --refine-across-borders")
       ->capture_default_str()
@@ -206,7 +211,8 @@ int main(int argc, char** argv) {
                            " must be a number, not nan");
     refine_opt.corner_chart =
         corner_chart == "power" ? qs::maprefine::CornerChart::Power : qs::maprefine::CornerChart::Sector;
-    const bool refine_maps = !no_refine || refine_opt.across_borders || refine_opt.move_corners;  // implied
+    refine_opt.across_borders = !no_across;
+    const bool refine_maps = !no_refine || across_flag || refine_opt.move_corners;  // implied
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;

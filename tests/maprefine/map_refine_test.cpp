@@ -90,6 +90,13 @@ int folded_faces(const qs::dissect::Chart& chart) {
 
 // Refines `set` with options at 1 and at 4 threads: the two results must be bit-identical, unfolded
 // and sampleable. Returns the 1-thread report and leaves the 1-thread result in `set`.
+// The refinement inside the patches only (across_borders is on by default since issue 13).
+mr::RefineOptions inside_only() {
+  mr::RefineOptions o;
+  o.across_borders = false;
+  return o;
+}
+
 mr::RefineReport expect_thread_independent(std::vector<qs::dissect::Dissection>& set, mr::RefineOptions o) {
   auto set4 = set;
   o.threads = 1;
@@ -228,7 +235,7 @@ TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeature
   const double e_distorted = mr::map_energy(set[0], set[1]);
 
   const auto before = set;
-  mr::RefineOptions with_sliding;
+  mr::RefineOptions with_sliding = inside_only();
   with_sliding.slide_borders = true;
   const auto report = mr::refine_maps(set, with_sliding);
   ASSERT_EQ(report.meshes.size(), 2u);
@@ -289,7 +296,7 @@ TEST(RefineMaps, WithoutSlidingTheBordersStayExactly) {
   auto set = dissect_pair(fam);
   distort(set[1]);
   const auto before = set;
-  const auto r = mr::refine_maps(set);  // slide_borders is off by default
+  const auto r = mr::refine_maps(set, inside_only());  // slide_borders is off by default
   EXPECT_LT(r.meshes[1].energy_after, r.meshes[1].energy_before);
   const auto held = held_vertices(before[1]);
   int changed = 0;
@@ -480,10 +487,10 @@ TEST(RefineAcrossBorders, MovesThePatchCurvesBijectivelyAndLowersTheErrorOfARete
   old_maps.intrinsic_cotan = false;
   const auto dissected = dissect_pair(fam, old_maps);
   auto inside = dissected;
-  mr::refine_maps(inside);  // patch interiors only
+  mr::refine_maps(inside, inside_only());  // patch interiors only
   auto across = dissected;
   mr::RefineOptions o;
-  o.across_borders = true;
+  ASSERT_TRUE(o.across_borders);  // the default since issue 13
   const auto report = mr::refine_maps(across, o);
   const auto& r = report.meshes[1];
   EXPECT_GT(r.sides_refined, 0);
@@ -552,7 +559,7 @@ TEST(RefineAcrossBorders, ZeroSweepsIsTheInteriorRefinement) {
   const auto fam = same_shape_pair();
   auto a = dissect_pair(fam);
   auto b = a;
-  mr::RefineOptions o;
+  mr::RefineOptions o = inside_only();
   mr::refine_maps(a, o);
   o.across_borders = true;
   o.border_sweeps = 0;
@@ -629,7 +636,7 @@ TEST(MoveCorners, MovesCornersBijectivelyKeepingSeedsFeaturesAndTheBaseDomain) {
   old_maps.intrinsic_cotan = false;
   const auto dissected = dissect_pair(fam, old_maps);
   auto moved = dissected;
-  mr::RefineOptions o;
+  mr::RefineOptions o = inside_only();  // the corners alone
   o.move_corners = true;
   const auto report = mr::refine_maps(moved, o);
   const auto& r = report.meshes[1];
@@ -641,7 +648,7 @@ TEST(MoveCorners, MovesCornersBijectivelyKeepingSeedsFeaturesAndTheBaseDomain) {
   EXPECT_LT(r.energy_after, r.energy_before);
   // Lower than refining the interiors alone.
   auto inside = dissected;
-  mr::refine_maps(inside);
+  mr::refine_maps(inside, inside_only());
   EXPECT_LT(mr::map_energy(moved[0], moved[1]), mr::map_energy(inside[0], inside[1]));
 
   // The reference untouched; the surface unchanged (new vertices lie on B's faces).

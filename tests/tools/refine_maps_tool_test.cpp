@@ -42,7 +42,8 @@ class RefineMapsTool : public ::testing::Test {
     EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));  // implies --refine-maps
     EXPECT_THAT(r.out, HasSubstr(report_line));
     EXPECT_THAT(r.out, HasSubstr(" 0 flipped or zero-area uv faces\n"));
-    EXPECT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/plain").exit, 0);
+    // "plain": the refinement inside the patches only.
+    EXPECT_EQ(run_tool("qs-dissect", pair() + " --no-refine-across-borders --quiet -o " + d() + "/plain").exit, 0);
     const fs::path out = dir_ / name;
     EXPECT_EQ(bytes(out / "shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
     // The cuts add vertices and faces to the refined mesh's chart.
@@ -64,7 +65,8 @@ class RefineMapsTool : public ::testing::Test {
 }  // namespace
 
 TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
-  RunResult r = run_tool("qs-dissect", pair() + " --refine-maps -o " + d() + "/ref");
+  // Inside the patches only (--no-refine-across-borders): the chart keeps its vertices and faces.
+  RunResult r = run_tool("qs-dissect", pair() + " --refine-maps --no-refine-across-borders -o " + d() + "/ref");
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("refine maps: reference (not moved)"));
   EXPECT_THAT(r.out, HasSubstr("refine maps: distortion to mesh 0 "));
@@ -76,13 +78,20 @@ TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
   EXPECT_NE(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "plain/shape01.chart.ply"));
   EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
   // Same input, same bytes.
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-maps --quiet -o " + d() + "/ref2").exit, 0);
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-maps --no-refine-across-borders --quiet -o " + d() + "/ref2").exit,
+            0);
   EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "ref2/shape01.chart.ply"));
   EXPECT_EQ(bytes(dir_ / "ref/dissection.json"), bytes(dir_ / "ref2/dissection.json"));
-  // The refinement is the default for a set (issue 13/17): no flag, the same bytes.
-  ASSERT_EQ(run_tool("qs-dissect", pair() + " --quiet -o " + d() + "/default").exit, 0);
-  EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "default/shape01.chart.ply"));
-  EXPECT_EQ(bytes(dir_ / "ref/dissection.json"), bytes(dir_ / "default/dissection.json"));
+  // The refinement across the patch borders too is the default for a set (issue 13): no flag is
+  // --refine-maps --refine-across-borders, byte for byte, and the cuts add to the chart.
+  r = run_tool("qs-dissect", pair() + " -o " + d() + "/default");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("  refine across borders: "));
+  ASSERT_EQ(run_tool("qs-dissect", pair() + " --refine-maps --refine-across-borders --quiet -o " + d() + "/both").exit, 0);
+  EXPECT_EQ(bytes(dir_ / "both/shape01.chart.ply"), bytes(dir_ / "default/shape01.chart.ply"));
+  EXPECT_EQ(bytes(dir_ / "both/dissection.json"), bytes(dir_ / "default/dissection.json"));
+  EXPECT_EQ(bytes(dir_ / "default/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
+  EXPECT_GT(bytes(dir_ / "default/shape01.chart.ply").size(), bytes(dir_ / "ref/shape01.chart.ply").size());
   // The later stages consume it unchanged.
   r = run_tool("qs-remesh", d() + "/ref --level 3 -q -o " + d() + "/remesh");
   EXPECT_EQ(r.exit, 0) << r.out;
@@ -99,6 +108,9 @@ TEST_F(RefineMapsTool, OneMeshIsLeftAsDissectedAndBadOptionsAreUsageErrors) {
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
   r = run_tool("qs-dissect", pair() + " --refine-maps --no-refine-maps -o " + d() + "/bad");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  r = run_tool("qs-dissect", pair() + " --refine-across-borders --no-refine-across-borders -o " + d() + "/bad");
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
