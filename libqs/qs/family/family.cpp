@@ -351,7 +351,6 @@ FamilyShape make_mesh(const FamilyOptions& o, const Base& base, const ShapeParam
   std::snprintf(name, sizeof name, "shape%02d", index);
   shape.name = name;
   const int vertices = o.faces / 2 + 2;
-  std::vector<Tri> faces;
   // A sampling too coarse for a sharp spot of the smooth surface (a thin, strongly bent limb tip at
   // a high variation) can leave a face folded against it; the parameters are then sampled again
   // with the next seed of the shape (deterministic: attempt 0 is the shape's own seed).
@@ -360,11 +359,10 @@ FamilyShape make_mesh(const FamilyOptions& o, const Base& base, const ShapeParam
     problem.clear();
     shape.parameters = sample_parameters(
         s, vertices, mix(o.seed, 5000 + static_cast<std::uint64_t>(index) + 100000 * static_cast<std::uint64_t>(attempt)));
-    faces = detail::sphere_hull(shape.parameters);
+    shape.mesh.faces = detail::sphere_hull(shape.parameters);
     shape.mesh.positions.resize(vertices);
     for (int v = 0; v < vertices; ++v) shape.mesh.positions[v] = surface_point(s, shape.parameters[v]);
-    delaunay_flips(faces, shape.parameters, shape.mesh.positions);
-    shape.mesh.faces = faces;
+    delaunay_flips(shape.mesh.faces, shape.parameters, shape.mesh.positions);
 
     // Own checks: an accepted mesh that faces outward, and no face folded against the smooth
     // surface (the face normal agrees with the surface normal at the face's parameter centroid).
@@ -393,7 +391,7 @@ FamilyShape make_mesh(const FamilyOptions& o, const Base& base, const ShapeParam
     FamilyLandmark l;
     l.name = lname;
     l.parameter = d.normalized();
-    l.where = locate_parameter(faces, shape.parameters, l.parameter);
+    l.where = locate_parameter(shape.mesh.faces, shape.parameters, l.parameter);
     if (l.where.face < 0) throw InternalError("family: landmark " + lname + " lies in no parameter triangle");
     return l;
   };

@@ -369,14 +369,20 @@ Mat46 metric_jacobian(const PatchProblem& prob, size_t t, const MetricFn& metric
   return jacobian_matrix(l.transpose(), prob.dm_inv[t]);
 }
 
+// Local face t's corner uv as one vector (u0, v0, u1, v1, u2, v2).
+Vec6 corner_uv(const PatchProblem& prob, size_t t, const std::vector<Vec2>& uv) {
+  const auto& c = prob.tri[t];
+  Vec6 x;
+  x << uv[c[0]], uv[c[1]], uv[c[2]];
+  return x;
+}
+
 // Local face t's area * symDirichlet(J), vec(J) = a x + b at uv; +inf when it folds.
 double face_energy(const PatchProblem& prob, size_t t, const Mat46& a, const Eigen::Vector4d& b,
                    const std::vector<Vec2>& uv) {
   const auto& c = prob.tri[t];
   if (tri_det(uv[c[0]], uv[c[1]], uv[c[2]]) <= 2 * param::kZeroUvArea) return kInf;
-  Vec6 x;
-  x << uv[c[0]], uv[c[1]], uv[c[2]];
-  const Eigen::Vector4d j = a * x + b;
+  const Eigen::Vector4d j = a * corner_uv(prob, t, uv) + b;
   Eigen::Matrix2d jm;
   jm << j[0], j[1], j[2], j[3];
   const double f = sym_dirichlet(jm);
@@ -402,13 +408,6 @@ class PatchSolver {
     for (size_t t = 0; t < prob_.faces.size(); ++t) a_[t] = metric_jacobian(prob_, t, metric_);
   }
 
-  Vec6 corner_uv(size_t t, const std::vector<Vec2>& uv) const {
-    const auto& c = prob_.tri[t];
-    Vec6 x;
-    x << uv[c[0]], uv[c[1]], uv[c[2]];
-    return x;
-  }
-
   // Energy (sum of area * symDirichlet) at uv under the current metric; +inf when a face folds.
   double energy(const std::vector<Vec2>& uv) const {
     double e = 0;
@@ -428,7 +427,7 @@ class PatchSolver {
     std::vector<Eigen::Triplet<double>> trip;
     trip.reserve(prob_.faces.size() * 36);
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
-      const Eigen::Vector4d j = a_[t] * corner_uv(t, prob_.uv) + b_[t];
+      const Eigen::Vector4d j = a_[t] * corner_uv(prob_, t, prob_.uv) + b_[t];
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
       Eigen::Vector4d gj;
