@@ -124,8 +124,8 @@ def timing(path, secs):
     m = re.search(r"dissect ([0-9.]+) s, refine maps ([0-9.]+) s", rep)
     return f"{secs} s (dissect {float(m.group(1)):.2f} + refine {float(m.group(2)):.2f})" if m else f"{secs} s"
 print()
-print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | level 4: mean / p95 / max | baseline mean | baseline p95 | baseline max | truth within (mean / max) | corners (mean / max) |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+print("| pair | dissect exit | time | patches | mean | median | p95 | max | same patch | level 4: mean / p95 / max | baseline mean | baseline p95 | baseline max | truth within (mean / max) | corners (mean / max) | distortion median: qs / truth |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for line in open(sys.argv[1]):
     name, rc, secs, path = line.rstrip("\n").split("\t")
     if path == "-":
@@ -148,7 +148,8 @@ for line in open(sys.argv[1]):
               f"{avg(Q, 'dissection', 'mean_percent'):.2f} / {avg(Q, 'dissection', 'p95_percent'):.2f} / "
               f"{avg(Q, 'dissection', 'max_percent', max):.2f}% | {b['mean']:.2f}% | {b['p95']:.2f}% | {b['max']:.2f}% | exact | "
               f"{sum(p.get('corner_distance_mean_percent', 0) for p in P) / len(P):.2f} / "
-              f"{max(p.get('corner_distance_max_percent', 0) for p in P):.2f}% |")
+              f"{max(p.get('corner_distance_max_percent', 0) for p in P):.2f}% | "
+              f"{avg(P, 'distortion', 'dissection_median'):.3f} / {avg(P, 'distortion', 'truth_median'):.3f} |")
         continue
     for p, q in rows:
         a = p["a"].rsplit("/", 1)[-1]; b = p["b"].rsplit("/", 1)[-1]
@@ -160,5 +161,6 @@ for line in open(sys.argv[1]):
               f"{d['p95_percent']:.2f}% | {d['max_percent']:.2f}% | {100*p['same_patch_share']:.1f}% | "
               f"{q['dissection']['mean_percent']:.2f} / {q['dissection']['p95_percent']:.2f} / {q['dissection']['max_percent']:.2f}% | "
               f"{bl['mean_percent']:.2f}% | {bl['p95_percent']:.2f}% | {bl['max_percent']:.2f}% | {tol} | "
-              f"{p.get('corner_distance_mean_percent', 0):.2f} / {p.get('corner_distance_max_percent', 0):.2f}% |")
+              f"{p.get('corner_distance_mean_percent', 0):.2f} / {p.get('corner_distance_max_percent', 0):.2f}% | "
+              f"{p['distortion']['dissection_median']:.3f} / {p['distortion']['truth_median']:.3f} |")
 PY

@@ -162,6 +162,17 @@ std::string stats_text(const qs::correspondence::ErrorStats& s) {
   return buf;
 }
 
+// Both maps' isometric distortion on A's faces (1: isometric up to the meshes' size).
+std::string distortion_text(const qs::correspondence::PairMeasure& pm) {
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "isometric distortion on %s's faces (symDirichlet / 4, 1 = isometric): dissection mean %.4f, "
+                "median %.4f; ground truth mean %.4f, median %.4f (degenerate or turned faces left out: %d / %d)\n",
+                pm.distortion_on_b ? "B" : "A", pm.distortion, pm.distortion_median, pm.truth_distortion,
+                pm.truth_distortion_median, pm.distortion_folded, pm.truth_distortion_folded);
+  return buf;
+}
+
 int run_correspondence(const std::string& folder_name, const std::vector<std::string>& maps, long samples,
                        std::uint64_t seed, int level, bool as_json, const std::optional<std::string>& output) {
   namespace fs = std::filesystem;
@@ -216,7 +227,7 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                   pm.corner_mean, pm.corner_max);
     text << truth.mesh(0).name << " -> " << truth.mesh(b).name << ":\n"
          << "  dissection: " << stats_text(pm.dissection) << "; same patch: " << share << " of A's area\n"
-         << "  patch corners: " << corners
+         << "  patch corners: " << corners << "  " << distortion_text(pm)
          << "  baseline (similarity on " << pm.baseline_landmarks << " landmarks + nearest point): "
          << stats_text(pm.baseline) << "\n";
     if (pm.truth_tolerance > 0) {
@@ -233,6 +244,13 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                      {"same_patch_share", pm.same_patch_share},
                      {"corner_distance_mean_percent", pm.corner_mean},
                      {"corner_distance_max_percent", pm.corner_max},
+                     {"distortion", {{"on", pm.distortion_on_b ? "b" : "a"},
+                                     {"dissection_mean", pm.distortion},
+                                     {"dissection_median", pm.distortion_median},
+                                     {"dissection_folded_faces", pm.distortion_folded},
+                                     {"truth_mean", pm.truth_distortion},
+                                     {"truth_median", pm.truth_distortion_median},
+                                     {"truth_folded_faces", pm.truth_distortion_folded}}},
                      {"baseline", stats_json(pm.baseline)},
                      {"baseline_landmarks", pm.baseline_landmarks},
                      {"truth_tolerance_percent", pm.truth_tolerance},

@@ -205,6 +205,41 @@ TEST(Measure, AMeshAgainstItselfIsExact) {
   EXPECT_LT(pm.baseline.max, 1e-6);
   EXPECT_GT(pm.same_patch_share, 0.999);
   EXPECT_GE(pm.baseline_landmarks, 4);
+  // Both maps are the identity: isometric on every face.
+  EXPECT_FALSE(pm.distortion_on_b);
+  EXPECT_NEAR(pm.distortion, 1, 1e-9);
+  EXPECT_NEAR(pm.distortion_median, 1, 1e-9);
+  EXPECT_NEAR(pm.truth_distortion, 1, 1e-9);
+  EXPECT_EQ(pm.distortion_folded, 0);
+  EXPECT_EQ(pm.truth_distortion_folded, 0);
+}
+
+TEST(Measure, TheDistortionIgnoresSizeAndSeesAStretch) {
+  const auto fam = small_family(1, 4);
+  // B: A three times as large (an isometry up to size), then A stretched 1.6 times along x.
+  for (const double sx : {3.0, 1.6}) {
+    qs::family::FamilyShape b = fam.shapes[0];
+    for (auto& p : b.mesh.positions) p = sx == 3.0 ? Vec3(3 * p) : Vec3(sx * p.x(), p.y(), p.z());
+    const auto set = dissect_shapes({&fam.shapes[0], &b});
+    const cr::GroundTruth truth({plain_truth(fam.shapes[0].mesh, "a"), plain_truth(b.mesh, "b")});
+    cr::MeasureOptions o;
+    o.samples = 2000;
+    const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+    EXPECT_EQ(pm.truth_distortion_folded, 0);
+    // symDirichlet / 4 >= 1, equality for an isometry; the median is at most the mean here (a
+    // few squeezed faces weigh on the mean only).
+    EXPECT_GE(pm.distortion, 1 - 1e-12);
+    EXPECT_GE(pm.distortion_median, 1 - 1e-12);
+    if (sx == 3.0) {
+      EXPECT_NEAR(pm.truth_distortion, 1, 1e-9);
+    } else {
+      // With the area scale s in [1 / sqrt(1.6), 1], a face's singular values lie between (s, s)
+      // (normal to x) and (1.6 s, s) (x in its plane): symDirichlet / 4 at most 1.2375 (s = 1).
+      EXPECT_GT(pm.truth_distortion, 1.01);
+      EXPECT_LT(pm.truth_distortion, 1.2375);
+      EXPECT_GT(pm.truth_distortion_median, 1.0);
+    }
+  }
 }
 
 TEST(Measure, AFamilyPairHasOrderedFiniteStatisticsIndependentOfThreads) {

@@ -50,6 +50,12 @@ TEST_F(CorrespondenceTool, MeasuresAFamilyPairAgainstItsMapFiles) {
   EXPECT_LE(p["dissection"]["p95_percent"].get<double>(), p["dissection"]["max_percent"].get<double>());
   EXPECT_GT(p["same_patch_share"].get<double>(), 0.5);
   EXPECT_LE(p["same_patch_share"].get<double>(), 1.0);
+  EXPECT_EQ(p["distortion"]["on"], "a");  // sphere maps: exact at A's vertices
+  for (const char* k : {"dissection_mean", "dissection_median", "truth_mean", "truth_median"})
+    EXPECT_GE(p["distortion"][k].get<double>(), 1.0) << k;
+  // The exact map is a bijection of the surfaces; only a few image triangles of vertices (chords)
+  // turn against a coarse surface's normals at sharp tips.
+  EXPECT_LT(p["distortion"]["truth_folded_faces"].get<int>(), 10);
   r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --level 4");
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("mapped through B's level-4 remesh"));

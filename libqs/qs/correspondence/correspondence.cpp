@@ -288,6 +288,135 @@ ErrorStats stats(std::vector<double> e) {
   return s;
 }
 
+// Where a map puts one vertex of A: the point on B and B's unit normal there.
+struct Image {
+  Vec3 point = Vec3::Zero(), normal = Vec3::Zero();
+};
+
+struct Distortion {
+  double mean = 0, median = 0;  // area-weighted
+  int folded = 0;
+};
+
+// The 2x2 coordinates of a triangle's edges u, v in an orthonormal frame of its plane (normal n).
+Eigen::Matrix2d in_plane(const Vec3& u, const Vec3& v, const Vec3& n) {
+  const Vec3 x = u.normalized(), y = n.normalized().cross(x);
+  Eigen::Matrix2d p;
+  p << u.dot(x), v.dot(x), u.dot(y), v.dot(y);
+  return p;
+}
+
+// PairMeasure::distortion of the map a -> image (one image per vertex of a), scaled by `scale`.
+Distortion distortion_of(const TriMesh& a, const std::vector<Image>& image, double scale) {
+  std::vector<std::pair<double, double>> energy;  // (symDirichlet / 4, area) per face
+  energy.reserve(a.faces.size());
+  Distortion out;
+  for (const Tri& t : a.faces) {
+    const Vec3 e1 = a.positions[t[1]] - a.positions[t[0]], e2 = a.positions[t[2]] - a.positions[t[0]];
+    const Vec3 n = e1.cross(e2);
+    if (!(n.norm() > 0)) continue;  // a zero-area face of A weighs nothing
+    const Vec3 f1 = image[t[1]].point - image[t[0]].point, f2 = image[t[2]].point - image[t[0]].point;
+    const Vec3 m = f1.cross(f2);
+    if (!(m.norm() > 0) || !(m.dot(image[t[0]].normal + image[t[1]].normal + image[t[2]].normal) > 0)) {
+      ++out.folded;
+      continue;
+    }
+    const Eigen::Matrix2d j = scale * in_plane(f1, f2, m) * in_plane(e1, e2, n).inverse();
+    const double d = j.determinant();
+    energy.emplace_back(j.squaredNorm() * (1 + 1 / (d * d)) / 4, 0.5 * n.norm());
+  }
+  double sum = 0, area = 0;
+  for (const auto& [e, w] : energy) {  // in face order: deterministic
+    sum += w * e;
+    area += w;
+  }
+  if (!(area > 0)) return out;
+  out.mean = sum / area;
+  std::sort(energy.begin(), energy.end());
+  double below = 0;
+  for (const auto& [e, w] : energy)
+    if ((below += w) >= 0.5 * area) {
+      out.median = e;
+      break;
+    }
+  return out;
+}
+
+// The unit normal of face f (zero for a degenerate face).
+Vec3 face_normal(const TriMesh& m, int f) {
+  const Tri& t = m.faces[f];
+  const Vec3 n = (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+  return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(Vec3::Zero());
+}
+
+double mesh_area(const TriMesh& m) {
+  double s = 0;
+  for (int f = 0; f < m.num_faces(); ++f) s += face_area(m, f);
+  return s;
+}
+
+// fn(i) for i in [0, n), in chunks over `threads` threads (0: all cores); fn writes its own slots.
+template <typename Fn>
+void parallel_chunks(long n, int threads, const Fn& fn) {
+  constexpr long kChunk = 1024;
+  const long chunks = (n + kChunk - 1) / kChunk;
+  std::atomic<long> next{0};
+  auto work = [&] {
+    for (long c = next++; c < chunks; c = next++)
+      for (long i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) fn(i);
+  };
+  int t = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
+  t = std::clamp<int>(t, 1, static_cast<int>(std::clamp<long>(chunks, 1, 64)));
+  std::vector<std::thread> pool;
+  for (int i = 1; i < t; ++i) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
+}
+
+struct DistortionPair {
+  Distortion dissection, truth;
+};
+
+// Both maps from mesh s (its chart cs) to mesh t (its chart's sampler), at s's vertices (the
+// chart's first vertices are the input's): the dissection's by the first wedge of each vertex,
+// the exact one by a face of s at that vertex; then distortion_of on s's faces, scaled to equal
+// areas.
+DistortionPair map_distortions(const GroundTruth& truth, const dissect::Chart& cs, int s, int t,
+                               const remesh::ChartSampler& sampler_t, int threads) {
+  const TriMesh& ms = truth.mesh(s).mesh;
+  const TriMesh& mt = truth.mesh(t).mesh;
+  const dissect::Chart& ct = sampler_t.chart();
+  const int nv = ms.num_vertices();
+  std::vector<int> wedge(nv, -1), corner(nv, -1);
+  for (int f = cs.mesh.num_faces() - 1; f >= 0; --f)
+    for (int k = 0; k < 3; ++k)
+      if (cs.mesh.faces[f][k] < nv) wedge[cs.mesh.faces[f][k]] = 3 * f + k;
+  for (int f = ms.num_faces() - 1; f >= 0; --f)
+    for (int k = 0; k < 3; ++k) corner[ms.faces[f][k]] = 3 * f + k;
+  std::vector<Image> by_dissection(nv), by_truth(nv);
+  parallel_chunks(nv, threads, [&](long i) {
+    const int v = static_cast<int>(i);
+    if (wedge[v] >= 0) {
+      const int f = wedge[v] / 3, patch = cs.face_patch[f];
+      const Vec2 st = cs.face_uv[f][wedge[v] % 3].cwiseMax(0.0).cwiseMin(1.0);
+      by_dissection[v].point = sampler_t.point(patch, st);
+      by_dissection[v].normal = face_normal(ct.mesh, sampler_t.locate(patch, st).face);
+    }
+    if (corner[v] >= 0) {
+      landmarks::SurfacePoint sp;
+      sp.face = corner[v] / 3;
+      sp.bary = {0.0, 0.0, 0.0};
+      sp.bary[corner[v] % 3] = 1.0;
+      const landmarks::SurfacePoint image = truth.map(s, t, sp);
+      by_truth[v].point = landmarks::position_of(mt, image);
+      by_truth[v].normal = face_normal(mt, image.face);
+    }
+  });
+  const double area_s = mesh_area(ms), area_t = mesh_area(mt);
+  const double scale = area_t > 0 ? std::sqrt(area_s / area_t) : 1.0;
+  return {distortion_of(ms, by_dissection, scale), distortion_of(ms, by_truth, scale)};
+}
+
 }  // namespace
 
 PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedInput>& inputs, int a, int b,
@@ -442,6 +571,20 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
         ++count;
       }
     pm.corner_mean = count > 0 ? sum / count : 0;
+  }
+  {
+    // Seen from the mesh whose vertices the truth maps exactly: A, unless A is the reference of a
+    // re-tessellated B ("surface" map: exact at B's vertices, by closest point at A's).
+    const bool from_b = !truth.mesh(a).map && truth.mesh(b).map;
+    const DistortionPair d = from_b ? map_distortions(truth, *inputs[b].chart, b, a, remesh::ChartSampler(ca), options.threads)
+                                    : map_distortions(truth, ca, a, b, sampler, options.threads);
+    pm.distortion_on_b = from_b;
+    pm.distortion = d.dissection.mean;
+    pm.distortion_median = d.dissection.median;
+    pm.distortion_folded = d.dissection.folded;
+    pm.truth_distortion = d.truth.mean;
+    pm.truth_distortion_median = d.truth.median;
+    pm.truth_distortion_folded = d.truth.folded;
   }
   pm.baseline_landmarks = src.size() >= 3 ? static_cast<int>(src.size()) : 0;
   pm.truth_tolerance = 100 * truth.tolerance() / diag;

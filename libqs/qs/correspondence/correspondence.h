@@ -109,6 +109,19 @@ struct PairMeasure {
   int baseline_landmarks = 0;     ///< landmark pairs the similarity used
   double truth_tolerance = 0;     ///< GroundTruth::tolerance() in % of the diagonal
   double truth_tolerance_mean = 0;  ///< GroundTruth::tolerance_mean() in % of the diagonal
+  /// Isometric distortion of the two maps A -> B, each seen on A's input faces (on B's, of the maps
+  /// B -> A, when B's truth is a "surface" map onto A: exact at B's vertices, not at A's): the
+  /// linear map of a face onto the triangle of its three vertices' images (the dissection's by the
+  /// charts, at level 0 whatever `level`, and the exact one), scaled to equal areas: the
+  /// area-weighted mean and median of symDirichlet / 4 (1: an isometry up to the meshes' size; the
+  /// energy the map refinement lowers, without its per-patch scale). An image triangle that is
+  /// degenerate or turned against the surface normals at its corners' images is counted in
+  /// `*_folded` and left out. A truth less distorted than the dissection's map is one that an
+  /// isometric refinement could move toward; a truth more distorted is not the least distorted
+  /// map (README, "Correspondence").
+  bool distortion_on_b = false;  ///< seen on B's faces (maps B -> A), see above
+  double distortion = 0, distortion_median = 0, truth_distortion = 0, truth_distortion_median = 0;
+  int distortion_folded = 0, truth_distortion_folded = 0;
 };
 
 /// One dissected mesh as the measure needs it: its chart (whose first vertices are the validated
