@@ -138,10 +138,22 @@ int run_retessellate(const std::string& input, const std::optional<std::string>&
   qs::io::write_mesh(out, r.mesh);
   qs::family::write_surface_map(base.string() + ".map.json", map);
   if (!landmarks_text.empty()) qs::write_file_atomically(base.string() + ".landmarks.json", landmarks_text);
-  if (!quiet)
+  if (!quiet) {
+    // The new surface is the input's only at the vertices: its faces are chords, so fine detail
+    // (fingers, say) loses area. Said, since a map between the two is then not an isometry.
+    auto area = [](const qs::TriMesh& m) {
+      double a = 0;
+      for (int f = 0; f < m.num_faces(); ++f) a += qs::face_area(m, f);
+      return a;
+    };
+    const double in_area = area(in.valid.mesh);
+    char change[64];
+    std::snprintf(change, sizeof change, "%+.2f%%", in_area > 0 ? 100 * (area(r.mesh) / in_area - 1) : 0.0);
     std::cout << output << ": " << r.mesh.num_vertices() << " vertices, " << r.mesh.num_faces()
-              << " faces; origins on " << input << " in " << base.string() << ".map.json"
-              << (landmarks_text.empty() ? "" : "; landmarks in " + base.string() + ".landmarks.json") << "\n";
+              << " faces, area " << change << " against the input; origins on " << input << " in " << base.string()
+              << ".map.json" << (landmarks_text.empty() ? "" : "; landmarks in " + base.string() + ".landmarks.json")
+              << "\n";
+  }
   return 0;
 }
 
