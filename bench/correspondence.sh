@@ -17,6 +17,7 @@
 #   self-smpl-*   smpl_man_14k / smpl_woman_14k against its own re-tessellation (ideal: the identity)
 #   human-retess  smpl_man_14k against smpl_woman_14k re-tessellated (same pose, registered)
 #   human-same    smpl_man_14k against smpl_woman_14k as shipped (identical connectivity)
+#   ... --same-pose  the same-pose pairs again with qs-dissect --same-pose
 # Seeds of the humans: middle fingers and big toes; features: nose, head top, heels
 # (bench/correspondence/smpl.landmarks.json, SMPL vertex ids).
 set -uo pipefail
@@ -95,19 +96,33 @@ g="$OUT/gen-s1"
     -o "$OUT/self-gen/shape00_r.obj" --quiet || exit 1
 run_pair "self-gen" "$OUT/self-gen/dissection" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
     "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
+BASE_EXTRA=("${EXTRA[@]}")
+EXTRA=("${BASE_EXTRA[@]}" --same-pose)
+run_pair "self-gen --same-pose" "$OUT/self-gen/dissection-posed" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
+    "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
+EXTRA=("${BASE_EXTRA[@]}")
 
 if [ -f "$MESHES/smpl_man_14k.obj" ] && [ -f "$MESHES/smpl_woman_14k.obj" ]; then
   h="$OUT/human"
   mkdir -p "$h"
   "$TOOLS/qs-family" retessellate "$MESHES/smpl_man_14k.obj" --landmarks "$LM" -o "$h/smpl_man_14k_r.obj" --quiet || exit 1
   "$TOOLS/qs-family" retessellate "$MESHES/smpl_woman_14k.obj" --landmarks "$LM" -o "$h/smpl_woman_14k_r.obj" --quiet || exit 1
-  run_pair "self-smpl-man" "$h/self-man" "$MESHES/smpl_man_14k.obj" "$h/smpl_man_14k_r.obj" -- \
-      "$LM" "$h/smpl_man_14k_r.landmarks.json" -- - "$h/smpl_man_14k_r.map.json"
-  run_pair "self-smpl-woman" "$h/self-woman" "$MESHES/smpl_woman_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
-      "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
-  run_pair "human-retess" "$h/retess" "$MESHES/smpl_man_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
-      "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
-  run_pair "human-same" "$h/same" "$MESHES/smpl_man_14k.obj" "$MESHES/smpl_woman_14k.obj" -- "$LM" "$LM" -- - -
+  # human_pairs LABEL_SUFFIX DIR_SUFFIX: the four body pairs with the current EXTRA options.
+  human_pairs() {
+    run_pair "self-smpl-man$1" "$h/self-man$2" "$MESHES/smpl_man_14k.obj" "$h/smpl_man_14k_r.obj" -- \
+        "$LM" "$h/smpl_man_14k_r.landmarks.json" -- - "$h/smpl_man_14k_r.map.json"
+    run_pair "self-smpl-woman$1" "$h/self-woman$2" "$MESHES/smpl_woman_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
+        "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
+    run_pair "human-retess$1" "$h/retess$2" "$MESHES/smpl_man_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
+        "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
+    run_pair "human-same$1" "$h/same$2" "$MESHES/smpl_man_14k.obj" "$MESHES/smpl_woman_14k.obj" -- "$LM" "$LM" -- - -
+  }
+  human_pairs "" ""
+  # The same-pose pairs again with qs-dissect --same-pose (the user says the meshes share a pose).
+  BASE_EXTRA=("${EXTRA[@]}")
+  EXTRA=("${BASE_EXTRA[@]}" --same-pose)
+  human_pairs " --same-pose" "-posed"
+  EXTRA=("${BASE_EXTRA[@]}")
 else
   echo "no smpl_man_14k / smpl_woman_14k in $MESHES: human pairs skipped"
 fi

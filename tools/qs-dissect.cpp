@@ -165,6 +165,10 @@ int main(int argc, char** argv) {
                "Experiment (issue 17): before a patch is split, refine every mesh's map of it against the first "
                "mesh's, so that the split points (equal (u,v) in every mesh) correspond better (off by default; "
                "see README, \"Map refinement\")");
+  app.add_flag("--same-pose", opt.same_pose,
+               "The meshes are in one pose (registered scans, re-tessellations of one surface): place every split's "
+               "inner corners in each mesh at its points nearest the first mesh's, after the landmarks' similarity "
+               "(see README, \"Same pose\")");
   std::string before_split_metric = "vertex";
   app.add_option("--refine-before-split-metric", before_split_metric,
                  "How --refine-before-split sees the first mesh's map: vertex (refine-maps's clamped, vertex-averaged "
@@ -292,6 +296,7 @@ int main(int argc, char** argv) {
     qs::dissect::DissectOptions used = opt;  // dissection.json records the options of the result
     used.geodesic_seed_curves = result.geodesic_seed_curves;
     used.intrinsic_cotan = result.intrinsic_cotan;
+    used.same_pose = opt.same_pose && result.same_pose_fallback.empty();
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
@@ -384,6 +389,14 @@ int main(int argc, char** argv) {
       text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
            << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events
            << " warp flip events, max stretch " << std::setprecision(4) << result.max_stretch << "\n";
+    if (opt.same_pose && inputs.size() > 1) {
+      if (result.same_pose_fallback.empty())
+        text << "same pose: " << result.same_pose_loops << " of " << inputs.size() - 1
+             << " seed loops routed by pose, " << result.same_pose_splits
+             << " splits with inner corners placed by pose, " << result.same_pose_common << " at the common (u,v)\n";
+      else
+        text << "same pose: not used (" << result.same_pose_fallback << "; the common (u,v) fold less)\n";
+    }
 
     for (const auto& dm : out) {
       qs::check_not_an_input(fs::path(outdir) / dm.chart_file, input_paths, "-o");

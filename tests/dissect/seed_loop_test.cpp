@@ -551,3 +551,43 @@ TEST(SeedLoop, HugeCoordinatesAreInvalidInput) {
 }
 
 }  // namespace
+
+TEST(GuidedLoop, FollowsItsGuidesAndCutsTheMeshInTwo) {
+  const TriMesh m = qs::mesh::validate(qs::shapes::ellipsoid(2.0, 1.0, 0.8, 4)).mesh;
+  const auto far = [&](const Vec3& d) {
+    int best = 0;
+    for (int v = 0; v < m.num_vertices(); ++v)
+      if (m.positions[v].dot(d) > m.positions[best].dot(d)) best = v;
+    return best;
+  };
+  const Seeds s{far(Vec3(1, 0, 0)), far(Vec3(0, 1, 0)), far(Vec3(-1, 0, 0)), far(Vec3(0, -1, 0))};
+  // Guides: arcs over the top (z > 0) of the ellipsoid between consecutive seeds, where no
+  // shortest path runs (the shortest ones follow the equator).
+  std::array<std::vector<Vec3>, 4> guides;
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 a = m.positions[s[i]], b = m.positions[s[(i + 1) % 4]];
+    for (int k = 0; k <= 20; ++k) {
+      const double t = k / 20.0;
+      Vec3 p = (1 - t) * a + t * b;
+      p.z() = 0.5 * std::sin(M_PI * t);
+      guides[i].push_back(p);
+    }
+  }
+  const SeedLoop loop = qs::dissect::trace_guided_loop(m, s, guides, 0.05, {});
+  EXPECT_EQ(loop.seeds, s);
+  const auto labels = qs::dissect::seed_patch_of_faces(m, loop);
+  EXPECT_EQ(labels.size(), static_cast<size_t>(m.num_faces()));
+  // Each path climbs with its guide (up to z = 0.5); the shortest paths stay near the equator.
+  const SeedLoop shortest = qs::dissect::trace_seed_loop(m, s);
+  for (int i = 0; i < 4; ++i) {
+    double high = -1, low = -1;
+    for (int v : loop.paths[i]) high = std::max(high, m.positions[v].z());
+    for (int v : shortest.paths[i]) low = std::max(low, std::abs(m.positions[v].z()));
+    EXPECT_GT(high, 0.4) << i;
+    EXPECT_LT(low, 0.3) << i;
+    EXPECT_GT(high, low + 0.15) << i;
+  }
+  EXPECT_THROW(qs::dissect::trace_guided_loop(m, s, guides, 0.0, {}), qs::InvalidInput);
+  guides[2].clear();
+  EXPECT_THROW(qs::dissect::trace_guided_loop(m, s, guides, 0.05, {}), qs::InvalidInput);
+}

@@ -85,10 +85,31 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   out.geodesic_seed_curves = options.geodesic_seed_curves;
   out.intrinsic_cotan = options.intrinsic_cotan;
   std::string where;
-  const long bad = folded(out, &where);
+  long bad = folded(out, &where);
+  DissectOptions used = options;
+  if (bad > 0 && options.same_pose && meshes.size() > 1) {
+    // The safety net of same_pose: corners placed by pose change the children, and so the tree;
+    // when that ends folded, the set again with the common corners, kept if it folds less.
+    used.same_pose = false;
+    context.info("dissection: " + std::to_string(bad) + " folded uv faces with inner corners placed by pose (" +
+                 where + "); dissecting again with the common (u,v)");
+    DissectionSet alt = detail::SetDissector(meshes, used, context).run();
+    alt.geodesic_seed_curves = used.geodesic_seed_curves;
+    alt.intrinsic_cotan = used.intrinsic_cotan;
+    std::string alt_where;
+    const long alt_bad = folded(alt, &alt_where);
+    if (alt_bad < bad) {
+      alt.same_pose_fallback = std::to_string(bad) + " folded uv faces with posed corners (" + where + ")";
+      out = std::move(alt);
+      bad = alt_bad;
+      where = alt_where;
+    } else {
+      used.same_pose = true;
+    }
+  }
   if (bad > 0 && options.fallback_maps && (options.geodesic_seed_curves || options.intrinsic_cotan)) {
     // The safety net of the new maps: the whole set again with the old ones.
-    DissectOptions old = options;
+    DissectOptions old = used;
     old.geodesic_seed_curves = false;
     old.intrinsic_cotan = false;
     context.info("dissection: " + std::to_string(bad) + " folded uv faces with " +
@@ -99,6 +120,7 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
       alt.geodesic_seed_curves = alt.intrinsic_cotan = false;
       alt.maps_fallback = std::to_string(bad) + " folded uv faces with " +
                           maps_name(options.geodesic_seed_curves, options.intrinsic_cotan) + " (" + where + ")";
+      alt.same_pose_fallback = out.same_pose_fallback;
       return alt;
     }
   }

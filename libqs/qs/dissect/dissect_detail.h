@@ -109,12 +109,24 @@ class MeshDissector {
   SeedLoop trace_loop(const std::array<int, 4>& seeds) const;
   /// The side of the loop (0 or 1) of every feature, by feature index.
   std::vector<int> feature_sides(const SeedLoop& loop) const;
-  /// Re-routes the loop so that feature k lies on side want[k] (InvalidInput when impossible).
-  SeedLoop reroute_loop(const SeedLoop& loop, const std::vector<int>& want) const;
+  /// Re-routes the loop so that feature k lies on side want[k], and every vertex of `more` on its
+  /// side (InvalidInput when impossible).
+  SeedLoop reroute_loop(const SeedLoop& loop, const std::vector<int>& want,
+                        const std::vector<SideConstraint>& more = {}) const;
+  /// The points of `seeds` (vertex ids) and then of the features (by index) on the surface.
+  std::vector<Vec3> landmark_points(const std::array<int, 4>& seeds) const;
+  const std::vector<Vec3>& positions() const { return cm_.positions(); }
+  const std::vector<int>& feature_vertices() const { return feature_vertex_; }
+  TriMesh trimesh() const { return cm_.to_trimesh(); }
   /// Labels the two seed patches of a traced loop (relaxing it first when asked).
   std::array<Node, 2> seed(SeedLoop loop);
   Param parameterize(const Node& node);
   std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
+  /// The same split with its four inner corners given (counter-clockwise from the one of corner
+  /// 0): DissectOptions::same_pose places them per mesh. \pre a convex quad whose 8 cuts cross
+  /// nowhere (inner_quad_ok).
+  std::array<Node, 5> split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner);
+
   /// Puts a node's faces back after a failed split (in any mesh of the set).
   void restore(const Node& node, size_t first_new_label);
   /// Local refinement: splits the edges inside the node's patch at their midpoints (the surface
@@ -236,6 +248,14 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
 /// A stretch-minimized, bijective map of a leaf, or an empty map when none is better (leaf_repair.cpp).
 param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& context);
 
+/// Distance from q to the segment ab (split_choice.cpp).
+double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b);
+
+/// Whether four inner corners make a quinary split: inside the unit square by at least `margin`,
+/// a convex counter-clockwise quad, and no two of the 8 cuts (outer corner i to inner corner i,
+/// inner corner i to i + 1) crossing (split_choice.cpp).
+bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin);
+
 /// Smallest distance from the features to the 8 cuts of a split at (peak, w) (split_choice.cpp).
 double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w);
 /// The children's stretch predicted from the parent's map for a split at (peak, w) (split_choice.cpp).
@@ -264,12 +284,31 @@ class SetDissector {
   void align(const std::vector<Node>& nodes, std::vector<Param>& ps, TreeNode& tn);
   std::pair<Vec2, double> choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
                                        const std::vector<bool>& over);
+  // DissectOptions::same_pose: the similarity from mesh 0 to every mesh by their landmarks.
+  void fit_poses(const std::vector<SeedLoop>& loops);
+  // DissectOptions::same_pose: mesh i's loop re-routed so that points near mesh 0's loop lie on
+  // the same side of it in mesh i (after the pose); false when that is impossible.
+  bool pose_loop(size_t i, std::vector<SeedLoop>& loops, const std::vector<int>& want) const;
+  // The inner corners of a split at (peak, w) in every mesh (mesh 0: the common ones; mesh i: its
+  // points nearest mesh 0's, see same_pose), or empty when a mesh has none that make a split.
+  std::vector<std::array<Vec2, 4>> posed_corners(const std::vector<Param>& ps, const Vec2& peak, double w) const;
 
   const std::vector<MeshToDissect>& in_;
   DissectOptions opt_;
   const Context& ctx_;
   std::vector<std::string> feature_names_;
   std::vector<MeshDissector> meshes_;
+  std::vector<Eigen::Matrix4d> pose_;  // same_pose: mesh 0 -> mesh i (landmarks' similarity)
+  std::vector<double> pose_reach_;     // same_pose: farthest a posed corner may lie from its target
 };
+
+/// same_pose: a posed corner farther than this fraction of its mesh's diagonal from the point it
+/// stands for means the meshes are not in one pose there; the split keeps its common (u, v).
+constexpr double kSamePoseReach = 0.05;
+/// same_pose: the seed loop of mesh i follows mesh 0's (moved into its pose) with edge costs
+/// length x (1 + (d / sigma)^2), sigma this fraction of mesh i's diagonal (trace_guided_loop).
+constexpr double kPoseLoopSigma = 0.005;
+/// same_pose: posed inner corners stay this far inside the square.
+constexpr double kSamePoseMargin = 0.03;
 
 }  // namespace qs::dissect::detail

@@ -125,6 +125,16 @@ struct DissectOptions {
   /// border, corners and features stay; a refined map stays bijective. Empty (the default): off.
   /// See the README ("Map refinement") for what it measured.
   NodeMapRefiner refine_before_split;
+  /// The meshes are in one pose (`qs-dissect --same-pose`): registered scans, re-tessellations
+  /// of one surface, characters posed alike. Every split's four inner corners, which are taken at
+  /// equal (u, v) in every mesh otherwise, are then placed in each mesh but the first at its
+  /// points nearest the first mesh's corners, once those are moved by the least-squares
+  /// similarity of the landmarks (seeds and features, Umeyama); the cuts run straight in each
+  /// mesh's own map between them. A split keeps the common (u, v) when a posed corner lies
+  /// farther than 5% of its mesh's diagonal from its target, the posed quad would not make a
+  /// quinary split, a feature would be nearer a cut than feature_cut_margin, or the split fails.
+  /// Wrong for meshes in different poses. Off by default.
+  bool same_pose = false;
 };
 
 /// Why a patch over tau was left as it is.
@@ -164,6 +174,9 @@ struct TreeNode {
   Vec2 peak_uv = Vec2::Zero();     ///< split nodes: the peak point used
   Vec2 raw_peak_uv = Vec2::Zero(); ///< split nodes: the smoothed stretch peak, before any clamp or nudge
   double w = 0;                    ///< split nodes: the w used
+  /// Split nodes with DissectOptions::same_pose: the inner corners of meshes 2.. were placed by
+  /// pose (false: at the common (u, v) of peak_uv and w).
+  bool posed = false;
 };
 
 /// The cut mesh with one patch label and one (u,v) per face corner.
@@ -242,6 +255,14 @@ struct DissectionSet {
   /// Empty, or why the old maps were used (DissectOptions::fallback_maps): e.g. "28 folded uv
   /// faces with geodesic+cotan (patch 1.4.3.1.3.2.4 of lion.obj)".
   std::string maps_fallback;
+  /// DissectOptions::same_pose: splits whose inner corners were placed by pose in every mesh, and
+  /// splits that kept the common (u, v) (no posed quad, or the split failed with it).
+  int same_pose_splits = 0;
+  int same_pose_common = 0;
+  int same_pose_loops = 0;  ///< meshes but the first whose seed loop follows the first's by pose
+  /// Empty, or why the set was dissected again with the common (u, v) (DissectOptions::same_pose:
+  /// the posed result ended with folded leaves, the common one folds less).
+  std::string same_pose_fallback;
 };
 
 /// "geodesic+cotan", "edge+mean-value", ...: the seed curves and patch weights of a dissection.

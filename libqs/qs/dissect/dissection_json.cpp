@@ -39,6 +39,7 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"force_split_area", options.force_split_area},
                     {"area_extra_depth", options.area_extra_depth},
                     {"protrusion_stretch", options.protrusion_stretch}};
+  if (options.same_pose) doc["options"]["same_pose"] = true;  // written only when on
   if (meshes.empty()) return json_strict::dump(doc, 2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();
@@ -48,6 +49,7 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
       j["peak_uv"] = {n.peak_uv.x(), n.peak_uv.y()};
       j["w"] = n.w;
       j["peak_mesh"] = n.split_mesh;
+      if (n.posed) j["posed"] = true;
     }
     if (n.features > 0) {
       j["features"] = n.features;

@@ -168,10 +168,19 @@ std::vector<int> MeshDissector::feature_sides(const SeedLoop& loop) const {
   return sides_of_vertices(cm_.to_trimesh(), loop, feature_vertex_);
 }
 
-SeedLoop MeshDissector::reroute_loop(const SeedLoop& loop, const std::vector<int>& want) const {
+SeedLoop MeshDissector::reroute_loop(const SeedLoop& loop, const std::vector<int>& want,
+                                     const std::vector<SideConstraint>& more) const {
   std::vector<SideConstraint> sides;
   for (size_t k = 0; k < want.size(); ++k) sides.push_back({feature_vertex_[k], want[k]});
+  sides.insert(sides.end(), more.begin(), more.end());
   return reroute_for_sides(cm_.to_trimesh(), loop, feature_vertex_, sides, ctx_);
+}
+
+std::vector<Vec3> MeshDissector::landmark_points(const std::array<int, 4>& seeds) const {
+  std::vector<Vec3> out;
+  for (int s : seeds) out.push_back(cm_.position(s));
+  for (int v : feature_vertex_) out.push_back(cm_.position(v));
+  return out;
 }
 
 std::array<Node, 2> MeshDissector::seed(SeedLoop loop) {

@@ -136,6 +136,12 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
 }
 
 std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const Vec2& peak_uv, double w) {
+  std::array<Vec2, 4> inner;
+  for (int i = 0; i < 4; ++i) inner[i] = (1 - w) * kSquare[i] + w * peak_uv;
+  return split(node, p, inner);
+}
+
+std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner) {
   const Extracted& ex = p.ex;
   const int nv = static_cast<int>(ex.verts.size());
   for (int i = 0; i < nv; ++i) {
@@ -152,7 +158,7 @@ std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const
   for (int i = 0; i < 4; ++i) {
     // With features in the patch the inner corners never snap to a vertex: the cuts must be the
     // same segments in every mesh, or a feature near one could change sides.
-    c[i + 4] = insert_point(node.label, (1 - w) * kSquare[i] + w * peak_uv, p.features.empty());
+    c[i + 4] = insert_point(node.label, inner[i], p.features.empty());
     flag_[c[i + 4]] = kCorner;
   }
   for (int i = 0; i < 4; ++i)

@@ -58,6 +58,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <queue>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -891,6 +892,72 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
                        " on the required side (found by rerouting one path at a time)");
   }
   return cur;
+}
+
+SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
+                           const std::array<std::vector<Vec3>, 4>& guides, double sigma,
+                           const std::vector<int>& avoid) {
+  check_seeds(mesh, seeds);
+  if (!(sigma > 0)) throw InvalidInput("trace_guided_loop: sigma must be > 0");
+  const Graph g = build_graph(mesh);
+  const int nv = g.num_vertices();
+  std::vector<char> blocked(nv, 0);
+  for (int v : avoid)
+    if (v >= 0 && v < nv) blocked[v] = 1;
+  for (int s : seeds) blocked[s] = 1;
+  SeedLoop loop;
+  loop.seeds = seeds;
+  std::vector<double> dist(nv);
+  std::vector<int> from(nv);
+  for (int i = 0; i < 4; ++i) {
+    const std::vector<Vec3>& guide = guides[i];
+    if (guide.empty()) throw InvalidInput("trace_guided_loop: guide " + std::to_string(i) + " is empty");
+    auto to_guide = [&](const Vec3& p) {
+      double best = kInf;
+      for (size_t k = 0; k + 1 < guide.size(); ++k) {
+        const Vec3 d = guide[k + 1] - guide[k];
+        const double t = std::clamp((p - guide[k]).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+        best = std::min(best, (guide[k] + t * d - p).squaredNorm());
+      }
+      if (guide.size() == 1) best = (guide[0] - p).squaredNorm();
+      return std::sqrt(best);
+    };
+    // Dijkstra from seeds[i] to seeds[i+1] (ties by vertex id: deterministic).
+    const int a = seeds[i], b = seeds[(i + 1) % 4];
+    std::fill(dist.begin(), dist.end(), kInf);
+    std::fill(from.begin(), from.end(), -1);
+    using Item = std::pair<double, int>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+    dist[a] = 0;
+    heap.push({0.0, a});
+    while (!heap.empty()) {
+      const auto [d, v] = heap.top();
+      heap.pop();
+      if (d > dist[v]) continue;
+      if (v == b) break;
+      for (int k = g.start[v]; k < g.start[v + 1]; ++k) {
+        const int w = g.neighbor[k];
+        if (blocked[w] && w != b) continue;
+        const double r = to_guide(0.5 * (mesh.positions[v] + mesh.positions[w])) / sigma;
+        const double nd = d + g.length[k] * (1 + r * r);
+        if (nd < dist[w]) {
+          dist[w] = nd;
+          from[w] = v;
+          heap.push({nd, w});
+        }
+      }
+    }
+    if (from[b] < 0)
+      throw InvalidInput("trace_guided_loop: no path from " + seed_name(seeds, i) + " to " +
+                         seed_name(seeds, (i + 1) % 4) + " avoids the paths already routed");
+    std::vector<int> path;
+    for (int v = b; v != -1; v = from[v]) path.push_back(v);
+    std::reverse(path.begin(), path.end());
+    for (size_t k = 1; k + 1 < path.size(); ++k) blocked[path[k]] = 1;
+    loop.paths[i] = std::move(path);
+  }
+  seed_patch_of_faces(mesh, loop);  // throws when the loop does not cut the mesh in two
+  return loop;
 }
 
 std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop) {

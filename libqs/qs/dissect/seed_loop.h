@@ -54,6 +54,16 @@ struct SideConstraint {
 SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& avoid,
                            const std::vector<SideConstraint>& sides, const Context& context = {});
 
+/// A seed loop that follows four guide curves (DissectOptions::same_pose: another mesh's loop,
+/// moved into this mesh's pose): path i runs from seeds[i] to seeds[(i+1)%4] along mesh edges,
+/// the shortest under edge costs length x (1 + (d / sigma)^2), d the distance from the edge's
+/// midpoint to guides[i] (a polyline); paths in order 0..3, each avoiding the other seeds, the
+/// vertices in `avoid` and the paths already routed. \throws InvalidInput when a path does not
+/// route or the loop does not cut the mesh into two patches. \pre sigma > 0, guides not empty.
+SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
+                           const std::array<std::vector<Vec3>, 4>& guides, double sigma,
+                           const std::vector<int>& avoid);
+
 /// The side of the loop each vertex in `vertices` lies on (0 or 1); -1 for a vertex on the loop.
 std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& vertices);
 

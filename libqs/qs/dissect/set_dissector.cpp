@@ -5,11 +5,14 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <tuple>
 #include <vector>
 #include <deque>
 #include <map>
 #include <iterator>
 #include "qs/dissect/seed_loop.h"
+#include "qs/landmarks/landmarks.h"
+#include <Eigen/Geometry>
 
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
@@ -125,6 +128,111 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   return ps;
 }
 
+void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
+  const size_t nm = meshes_.size();
+  pose_.assign(nm, Eigen::Matrix4d::Identity());
+  pose_reach_.assign(nm, 0.0);
+  const std::vector<Vec3> from = meshes_[0].landmark_points(loops[0].seeds);
+  for (size_t i = 1; i < nm; ++i) {
+    const std::vector<Vec3> to = meshes_[i].landmark_points(loops[i].seeds);
+    Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
+    for (size_t k = 0; k < from.size(); ++k) {
+      a.col(k) = from[k];
+      b.col(k) = to[k];
+    }
+    pose_[i] = Eigen::umeyama(a, b, true);
+    pose_reach_[i] = kSamePoseReach * bounding_box(in_[i].mesh->positions).diagonal();
+  }
+}
+
+bool SetDissector::pose_loop(size_t i, std::vector<SeedLoop>& loops, const std::vector<int>& want) const {
+  // Mesh 0's four curves moved into mesh i's pose guide mesh i's paths.
+  const std::vector<Vec3>& p0 = meshes_[0].positions();
+  std::array<std::vector<Vec3>, 4> guides;
+  for (int k = 0; k < 4; ++k)
+    for (int v : loops[0].paths[k]) guides[k].push_back((pose_[i] * p0[v].homogeneous()).head<3>());
+  const TriMesh mi = meshes_[i].trimesh();
+  try {
+    SeedLoop guided = trace_guided_loop(mi, loops[i].seeds, guides,
+                                        kPoseLoopSigma * bounding_box(mi.positions).diagonal(),
+                                        meshes_[i].feature_vertices());
+    if (meshes_[i].feature_sides(guided) != want) return false;
+    loops[i] = std::move(guided);
+    return true;
+  } catch (const InvalidInput&) {
+    return false;
+  }
+}
+
+std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<Param>& ps, const Vec2& peak,
+                                                            double w) const {
+  const size_t nm = ps.size();
+  std::array<Vec2, 4> common;
+  for (int c = 0; c < 4; ++c) common[c] = (1 - w) * kSquare[c] + w * peak;
+  std::vector<std::array<Vec2, 4>> out(nm, common);
+  // Mesh 0's inner corners on its surface: the point of its node at that (u, v).
+  const param::PatchMesh& pm0 = ps[0].ex.pm;
+  const std::vector<Vec2>& uv0 = ps[0].sp.uv;
+  std::array<Vec3, 4> x0;
+  for (int c = 0; c < 4; ++c) {
+    double best = -INFINITY;
+    for (const Tri& t : pm0.faces) {
+      const Vec2 &a = uv0[t[0]], &b = uv0[t[1]], &d = uv0[t[2]];
+      const double area = cross2(b - a, d - a);
+      if (!(area > 0)) continue;
+      const Vec2& q = common[c];
+      const Vec3 bary(cross2(b - q, d - q) / area, cross2(d - q, a - q) / area, cross2(a - q, b - q) / area);
+      if (bary.minCoeff() > best) {
+        best = bary.minCoeff();
+        const Vec3 l = bary.cwiseMax(0.0) / bary.cwiseMax(0.0).sum();
+        x0[c] = l[0] * pm0.positions[t[0]] + l[1] * pm0.positions[t[1]] + l[2] * pm0.positions[t[2]];
+      }
+    }
+    if (best == -INFINITY) return out;
+  }
+  for (size_t i = 1; i < nm; ++i) {
+    // Mesh i's point nearest to mesh 0's corner moved by the landmarks' similarity, within its
+    // node; its (u, v) by mesh i's map.
+    const param::PatchMesh& pm = ps[i].ex.pm;
+    const std::vector<Vec2>& uv = ps[i].sp.uv;
+    if (!ps[i].sp.bijective()) continue;
+    std::array<Vec2, 4> posed;
+    bool near = true;
+    for (int c = 0; c < 4 && near; ++c) {
+      const Vec3 target = (pose_[i] * x0[c].homogeneous()).head<3>();
+      double best = INFINITY;
+      for (const Tri& t : pm.faces) {
+        const auto l = landmarks::closest_on_triangle(target, pm.positions[t[0]], pm.positions[t[1]], pm.positions[t[2]]);
+        const Vec3 x = l[0] * pm.positions[t[0]] + l[1] * pm.positions[t[1]] + l[2] * pm.positions[t[2]];
+        const double d = (x - target).squaredNorm();
+        if (d < best) {
+          best = d;
+          posed[c] = l[0] * uv[t[0]] + l[1] * uv[t[1]] + l[2] * uv[t[2]];
+        }
+      }
+      near = std::sqrt(best) <= pose_reach_[i];
+    }
+    if (!near) continue;
+    // As far toward the posed corners as still makes a split (a posed corner on the node's
+    // border, where the nodes of the two meshes differ, or a quad folded by a squeezed map).
+    for (const double t : {1.0, 0.75, 0.5, 0.25}) {
+      std::array<Vec2, 4> q;
+      for (int c = 0; c < 4; ++c) q[c] = (1 - t) * common[c] + t * posed[c];
+      if (!inner_quad_ok(q, kSamePoseMargin)) continue;
+      // Features stay clear of the cuts, as the common split keeps them (feature_cut_margin).
+      bool clear = true;
+      for (const auto& [k, local] : ps[i].features)
+        for (int c = 0; c < 4; ++c)
+          clear = clear && segment_distance(uv[local], kSquare[c], q[c]) >= opt_.feature_cut_margin &&
+                  segment_distance(uv[local], q[c], q[(c + 1) % 4]) >= opt_.feature_cut_margin;
+      if (!clear) continue;
+      out[i] = q;
+      break;
+    }
+  }
+  return out;
+}
+
 DissectionSet SetDissector::run() {
   ctx_.report("seed loops", 0.0);
   const size_t nm = meshes_.size();
@@ -164,13 +272,20 @@ DissectionSet SetDissector::run() {
       }
     }, true);
   }
+  DissectionSet out;
+  if (opt_.same_pose && nm > 1) {
+    fit_poses(loops);
+    std::vector<int> want = nm > 0 ? meshes_[0].feature_sides(loops[0]) : std::vector<int>{};
+    std::vector<char> posed(nm, 0);
+    parallel_for(nm - 1, [&](size_t k) { posed[k + 1] = pose_loop(k + 1, loops, want); }, true);
+    for (size_t i = 1; i < nm; ++i) out.same_pose_loops += posed[i];
+  }
   std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
   for (size_t i = 0; i < nm; ++i) {
     const auto r = meshes_[i].seed(std::move(loops[i]));
     for (int k = 0; k < 2; ++k) roots[k].push_back(r[k]);
     ctx_.report("seed loops", static_cast<double>(i + 1) / static_cast<double>(nm));
   }
-  DissectionSet out;
   std::map<std::string, std::vector<int>> refined_faces;  // node name -> faces added per mesh
   std::vector<size_t> refined_total(nm, 0);                // faces added per mesh
   std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
@@ -301,10 +416,25 @@ DissectionSet SetDissector::run() {
         }, node_faces >= kParallelFaces);
       }
       std::vector<std::array<Node, 5>> kids(meshes_.size());
-      try {
+      // DissectOptions::same_pose: every mesh's inner corners where mesh 0's lie on its surface;
+      // when that fails (no such quad, or the split fails with it), the common (u, v) after all.
+      std::vector<std::array<Vec2, 4>> posed;
+      if (opt_.same_pose && nm > 1) {
+        posed = posed_corners(ps, peak, w);
+        bool moved = false;
+        for (size_t i = 1; i < nm; ++i) moved = moved || posed[i] != posed[0];
+        if (!moved) {
+          posed.clear();
+          ++out.same_pose_common;
+        }
+      }
+      Vec2 common_peak = peak;
+      double common_w = w;
+      auto split_all = [&](bool use_posed) {
         parallel_for(meshes_.size(), [&](size_t i) {
           try {
-            kids[i] = meshes_[i].split(nodes[i], ps[i], peak, w);
+            kids[i] = use_posed ? meshes_[i].split(nodes[i], ps[i], posed[i])
+                                : meshes_[i].split(nodes[i], ps[i], common_peak, common_w);
           } catch (const SplitFailure& e) {
             throw SplitFailure(meshes_.size() > 1 ? meshes_[i].name() + ": " + e.what() : std::string(e.what()));
           }
@@ -315,6 +445,28 @@ DissectionSet SetDissector::run() {
           for (size_t i = 1; i < meshes_.size(); ++i)
             if (meshes_[i].feature_label(k) != meshes_[0].feature_label(k))
               throw SplitFailure("feature '" + feature_names_[k] + "' would land in different children (a folded map)");
+      };
+      try {
+        bool done = false;
+        if (!posed.empty()) {
+          try {
+            split_all(true);
+            done = true;
+            tn.posed = true;
+            ++out.same_pose_splits;
+          } catch (const SplitFailure&) {
+            // The attempt cut the meshes (new vertices): the node is parameterized and its split
+            // chosen again before the common split, as after any failed split.
+            for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
+            ++out.same_pose_common;
+            tn = TreeNode{};
+            tn.name = node.name;
+            tn.depth = node.depth;
+            ps = evaluate(nodes, tn);
+            std::tie(common_peak, common_w) = choose_split(node, ps, tn, over);
+          }
+        }
+        if (!done) split_all(false);
       } catch (const SplitFailure& e) {
         for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
         tn = TreeNode{};

@@ -47,6 +47,58 @@ double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b) {
   return (a + t * d - q).norm();
 }
 
+namespace {
+
+// Whether the closed segments ab and cd cross or touch (collinear overlaps included).
+bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const double d1 = cross2(b - a, c - a), d2 = cross2(b - a, d - a);
+  const double d3 = cross2(d - c, a - c), d4 = cross2(d - c, b - c);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  auto on = [](const Vec2& p, const Vec2& q, const Vec2& r, double cr) {  // r on segment pq?
+    return cr == 0 && std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) &&
+           std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
+  };
+  return on(a, b, c, d1) || on(a, b, d, d2) || on(c, d, a, d3) || on(c, d, b, d4);
+}
+
+}  // namespace
+
+bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin) {
+  for (const Vec2& q : inner)
+    if (!(q.x() >= margin && q.x() <= 1 - margin && q.y() >= margin && q.y() <= 1 - margin)) return false;
+  for (int i = 0; i < 4; ++i)
+    if (!(cross2(inner[(i + 1) % 4] - inner[i], inner[(i + 2) % 4] - inner[(i + 1) % 4]) > 1e-12)) return false;
+  // The 8 cuts: outer i -> inner i (index i), inner i -> inner i+1 (index 4 + i). Cuts that share
+  // an end meet there only; any other meeting is a crossing.
+  std::array<std::array<Vec2, 2>, 8> cut;
+  std::array<std::array<int, 2>, 8> ends;  // end ids: outer corners 0..3, inner corners 4..7
+  for (int i = 0; i < 4; ++i) {
+    cut[i] = {kSquare[i], inner[i]};
+    ends[i] = {i, 4 + i};
+    cut[4 + i] = {inner[i], inner[(i + 1) % 4]};
+    ends[4 + i] = {4 + i, 4 + (i + 1) % 4};
+  }
+  for (int a = 0; a < 8; ++a)
+    for (int b = 0; b < a; ++b) {
+      const bool share = ends[a][0] == ends[b][0] || ends[a][0] == ends[b][1] || ends[a][1] == ends[b][0] ||
+                         ends[a][1] == ends[b][1];
+      if (share) {
+        // Sharing an end, two cuts must not run along each other: their directions differ.
+        const Vec2 da = cut[a][1] - cut[a][0], db = cut[b][1] - cut[b][0];
+        if (std::abs(cross2(da, db)) <= 1e-12 * da.norm() * db.norm()) return false;
+        continue;
+      }
+      if (segments_meet(cut[a][0], cut[a][1], cut[b][0], cut[b][1])) return false;
+    }
+  // Each outer cut must leave the inner quad: outer corner i outside it (a convex quad, CCW).
+  for (int i = 0; i < 4; ++i) {
+    bool inside = true;
+    for (int k = 0; k < 4; ++k) inside = inside && cross2(inner[(k + 1) % 4] - inner[k], kSquare[i] - inner[k]) > 0;
+    if (inside) return false;
+  }
+  return true;
+}
+
 // The smallest distance from the features to the 8 cuts (and their ends) of a split at (peak, w).
 double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w) {
   std::array<Vec2, 8> c;
