@@ -141,14 +141,9 @@ int run_retessellate(const std::string& input, const std::optional<std::string>&
   if (!quiet) {
     // The new surface is the input's only at the vertices: its faces are chords, so fine detail
     // (fingers, say) loses area. Said, since a map between the two is then not an isometry.
-    auto area = [](const qs::TriMesh& m) {
-      double a = 0;
-      for (int f = 0; f < m.num_faces(); ++f) a += qs::face_area(m, f);
-      return a;
-    };
-    const double in_area = area(in.valid.mesh);
+    const double in_area = qs::surface_area(in.valid.mesh);
     char change[64];
-    std::snprintf(change, sizeof change, "%+.2f%%", in_area > 0 ? 100 * (area(r.mesh) / in_area - 1) : 0.0);
+    std::snprintf(change, sizeof change, "%+.2f%%", in_area > 0 ? 100 * (qs::surface_area(r.mesh) / in_area - 1) : 0.0);
     std::cout << output << ": " << r.mesh.num_vertices() << " vertices, " << r.mesh.num_faces()
               << " faces, area " << change << " against the input; origins on " << input << " in " << base.string()
               << ".map.json" << (landmarks_text.empty() ? "" : "; landmarks in " + base.string() + ".landmarks.json")

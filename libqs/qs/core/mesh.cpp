@@ -19,4 +19,10 @@ double face_area(const TriMesh& mesh, int f) {
   return 0.5 * (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).norm();
 }
 
+double surface_area(const TriMesh& mesh) {
+  double s = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) s += face_area(mesh, f);
+  return s;
+}
+
 }  // namespace qs

@@ -33,5 +33,7 @@ Box3 bounding_box(const std::vector<Vec3>& positions);
 
 /// The area of face f (always >= 0).
 double face_area(const TriMesh& mesh, int f);
+/// The sum of the face areas (in face order: deterministic).
+double surface_area(const TriMesh& mesh);
 
 }  // namespace qs

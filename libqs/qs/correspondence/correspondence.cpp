@@ -349,12 +349,6 @@ Vec3 face_normal(const TriMesh& m, int f) {
   return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(Vec3::Zero());
 }
 
-double mesh_area(const TriMesh& m) {
-  double s = 0;
-  for (int f = 0; f < m.num_faces(); ++f) s += face_area(m, f);
-  return s;
-}
-
 // fn(i) for i in [0, n), in chunks over `threads` threads (0: all cores); fn writes its own slots.
 template <typename Fn>
 void parallel_chunks(long n, int threads, const Fn& fn) {
@@ -412,7 +406,7 @@ DistortionPair map_distortions(const GroundTruth& truth, const dissect::Chart& c
       by_truth[v].normal = face_normal(mt, image.face);
     }
   });
-  const double area_s = mesh_area(ms), area_t = mesh_area(mt);
+  const double area_s = surface_area(ms), area_t = surface_area(mt);
   const double scale = area_t > 0 ? std::sqrt(area_s / area_t) : 1.0;
   return {distortion_of(ms, by_dissection, scale), distortion_of(ms, by_truth, scale)};
 }

@@ -81,48 +81,45 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
       }
     return n;
   };
-  DissectionSet out = detail::SetDissector(meshes, options, context).run();
-  out.geodesic_seed_curves = options.geodesic_seed_curves;
-  out.intrinsic_cotan = options.intrinsic_cotan;
+  auto run = [&](const DissectOptions& o) {
+    DissectionSet r = detail::SetDissector(meshes, o, context).run();
+    r.geodesic_seed_curves = o.geodesic_seed_curves;
+    r.intrinsic_cotan = o.intrinsic_cotan;
+    return r;
+  };
+  DissectionSet out = run(options);
   std::string where;
   long bad = folded(out, &where);
+  // The safety nets: a folded result is dissected again with safer options, and the result that
+  // folds less is kept. First same_pose (posed corners change the children, and so the tree)
+  // off, then the new maps off (edge paths and mean-value weights).
   DissectOptions used = options;
-  if (bad > 0 && options.same_pose && meshes.size() > 1) {
-    // The safety net of same_pose: corners placed by pose change the children, and so the tree;
-    // when that ends folded, the set again with the common corners, kept if it folds less.
-    used.same_pose = false;
-    context.info("dissection: " + std::to_string(bad) + " folded uv faces with inner corners placed by pose (" +
-                 where + "); dissecting again with the common (u,v)");
-    DissectionSet alt = detail::SetDissector(meshes, used, context).run();
-    alt.geodesic_seed_curves = used.geodesic_seed_curves;
-    alt.intrinsic_cotan = used.intrinsic_cotan;
+  auto try_again = [&](DissectOptions o, const std::string& how, std::string DissectionSet::*why,
+                       const std::string& what) {
+    context.info("dissection: " + std::to_string(bad) + " folded uv faces with " + what + " (" + where +
+                 "); dissecting again with " + how);
+    DissectionSet alt = run(o);
     std::string alt_where;
     const long alt_bad = folded(alt, &alt_where);
-    if (alt_bad < bad) {
-      alt.same_pose_fallback = std::to_string(bad) + " folded uv faces with posed corners (" + where + ")";
-      out = std::move(alt);
-      bad = alt_bad;
-      where = alt_where;
-    } else {
-      used.same_pose = true;
-    }
+    if (alt_bad >= bad) return;
+    alt.same_pose_fallback = out.same_pose_fallback;
+    alt.*why = std::to_string(bad) + " folded uv faces with " + what + " (" + where + ")";
+    out = std::move(alt);
+    bad = alt_bad;
+    where = alt_where;
+    used = o;
+  };
+  if (bad > 0 && options.same_pose && meshes.size() > 1) {
+    DissectOptions o = used;
+    o.same_pose = false;
+    try_again(o, "the common (u,v)", &DissectionSet::same_pose_fallback, "posed corners");
   }
   if (bad > 0 && options.fallback_maps && (options.geodesic_seed_curves || options.intrinsic_cotan)) {
-    // The safety net of the new maps: the whole set again with the old ones.
-    DissectOptions old = used;
-    old.geodesic_seed_curves = false;
-    old.intrinsic_cotan = false;
-    context.info("dissection: " + std::to_string(bad) + " folded uv faces with " +
-                 maps_name(options.geodesic_seed_curves, options.intrinsic_cotan) + " (" + where +
-                 "); dissecting again with edge+mean-value");
-    DissectionSet alt = detail::SetDissector(meshes, old, context).run();
-    if (folded(alt, nullptr) < bad) {
-      alt.geodesic_seed_curves = alt.intrinsic_cotan = false;
-      alt.maps_fallback = std::to_string(bad) + " folded uv faces with " +
-                          maps_name(options.geodesic_seed_curves, options.intrinsic_cotan) + " (" + where + ")";
-      alt.same_pose_fallback = out.same_pose_fallback;
-      return alt;
-    }
+    DissectOptions o = used;
+    o.geodesic_seed_curves = false;
+    o.intrinsic_cotan = false;
+    try_again(o, "edge+mean-value", &DissectionSet::maps_fallback,
+              maps_name(options.geodesic_seed_curves, options.intrinsic_cotan));
   }
   return out;
 }

@@ -37,6 +37,29 @@ inline std::uint64_t edge_key(int a, int b) {
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 inline double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) { return 0.5 * cross2(b - a, c - a); }
 
+/// Among n triangles with uv corners uv_of(i) (a std::array<Vec2, 3>), the positive one that holds
+/// q best (largest smallest barycentric weight: q's own triangle, else the one it is least outside
+/// of) and q's weights in it; (-1, 0) when none is positive.
+template <typename UvOf>
+std::pair<int, Vec3> best_uv_face(const Vec2& q, size_t n, UvOf&& uv_of) {
+  int best = -1;
+  Vec3 best_bary(0, 0, 0);
+  double best_min = -std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < n; ++i) {
+    const std::array<Vec2, 3> t = uv_of(i);
+    const Vec2 &a = t[0], &b = t[1], &c = t[2];
+    const double area = cross2(b - a, c - a);
+    if (!(area > 0)) continue;
+    const Vec3 bary(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
+    if (bary.minCoeff() > best_min) {
+      best_min = bary.minCoeff();
+      best_bary = bary;
+      best = static_cast<int>(i);
+    }
+  }
+  return {best, best_bary};
+}
+
 inline const std::array<Vec2, 4> kSquare = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
 
 struct Node {
@@ -299,7 +322,7 @@ class SetDissector {
   std::vector<std::string> feature_names_;
   std::vector<MeshDissector> meshes_;
   std::vector<Eigen::Matrix4d> pose_;  // same_pose: mesh 0 -> mesh i (landmarks' similarity)
-  std::vector<double> pose_reach_;     // same_pose: farthest a posed corner may lie from its target
+  std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
 };
 
 /// same_pose: a posed corner farther than this fraction of its mesh's diagonal from the point it

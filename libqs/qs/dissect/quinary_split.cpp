@@ -15,22 +15,13 @@
 namespace qs::dissect::detail {
 
 int MeshDissector::insert_point(int label, const Vec2& q, bool snap) {
-  int best_f = -1;
-  Vec3 best_b(0, 0, 0);
-  double best_min = -std::numeric_limits<double>::infinity();
-  for (int f : patch_faces_[label]) {
-    const Tri& t = cm_.face(f);
-    const Vec2 &a = uv_of_[t[0]], &b = uv_of_[t[1]], &c = uv_of_[t[2]];
-    const double area = cross2(b - a, c - a);
-    if (!(area > 0)) continue;
-    const Vec3 bary(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
-    if (bary.minCoeff() > best_min) {
-      best_min = bary.minCoeff();
-      best_b = bary;
-      best_f = f;
-    }
-  }
-  if (best_f < 0) throw SplitFailure("no face contains an inner corner");
+  const std::vector<int>& faces = patch_faces_[label];
+  const auto [i, best_b] = best_uv_face(q, faces.size(), [&](size_t k) {
+    const Tri& t = cm_.face(faces[k]);
+    return std::array<Vec2, 3>{uv_of_[t[0]], uv_of_[t[1]], uv_of_[t[2]]};
+  });
+  if (i < 0) throw SplitFailure("no face contains an inner corner");
+  const int best_f = faces[i];
   const Tri t = cm_.face(best_f);
   int kmax, kmin;
   best_b.maxCoeff(&kmax);

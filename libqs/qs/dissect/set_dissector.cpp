@@ -131,7 +131,7 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
 void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
   const size_t nm = meshes_.size();
   pose_.assign(nm, Eigen::Matrix4d::Identity());
-  pose_reach_.assign(nm, 0.0);
+  pose_diagonal_.assign(nm, 0.0);
   const std::vector<Vec3> from = meshes_[0].landmark_points(loops[0].seeds);
   for (size_t i = 1; i < nm; ++i) {
     const std::vector<Vec3> to = meshes_[i].landmark_points(loops[i].seeds);
@@ -141,7 +141,7 @@ void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
       b.col(k) = to[k];
     }
     pose_[i] = Eigen::umeyama(a, b, true);
-    pose_reach_[i] = kSamePoseReach * bounding_box(in_[i].mesh->positions).diagonal();
+    pose_diagonal_[i] = bounding_box(in_[i].mesh->positions).diagonal();
   }
 }
 
@@ -153,10 +153,9 @@ bool SetDissector::pose_loop(size_t i, std::vector<SeedLoop>& loops, const std::
     for (int v : loops[0].paths[k]) guides[k].push_back((pose_[i] * p0[v].homogeneous()).head<3>());
   const TriMesh mi = meshes_[i].trimesh();
   try {
-    SeedLoop guided = trace_guided_loop(mi, loops[i].seeds, guides,
-                                        kPoseLoopSigma * bounding_box(mi.positions).diagonal(),
+    SeedLoop guided = trace_guided_loop(mi, loops[i].seeds, guides, kPoseLoopSigma * pose_diagonal_[i],
                                         meshes_[i].feature_vertices());
-    if (meshes_[i].feature_sides(guided) != want) return false;
+    if (sides_of_vertices(mi, guided, meshes_[i].feature_vertices()) != want) return false;
     loops[i] = std::move(guided);
     return true;
   } catch (const InvalidInput&) {
@@ -175,20 +174,14 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
   const std::vector<Vec2>& uv0 = ps[0].sp.uv;
   std::array<Vec3, 4> x0;
   for (int c = 0; c < 4; ++c) {
-    double best = -INFINITY;
-    for (const Tri& t : pm0.faces) {
-      const Vec2 &a = uv0[t[0]], &b = uv0[t[1]], &d = uv0[t[2]];
-      const double area = cross2(b - a, d - a);
-      if (!(area > 0)) continue;
-      const Vec2& q = common[c];
-      const Vec3 bary(cross2(b - q, d - q) / area, cross2(d - q, a - q) / area, cross2(a - q, b - q) / area);
-      if (bary.minCoeff() > best) {
-        best = bary.minCoeff();
-        const Vec3 l = bary.cwiseMax(0.0) / bary.cwiseMax(0.0).sum();
-        x0[c] = l[0] * pm0.positions[t[0]] + l[1] * pm0.positions[t[1]] + l[2] * pm0.positions[t[2]];
-      }
-    }
-    if (best == -INFINITY) return out;
+    const auto [f, bary] = best_uv_face(common[c], pm0.faces.size(), [&](size_t k) {
+      const Tri& t = pm0.faces[k];
+      return std::array<Vec2, 3>{uv0[t[0]], uv0[t[1]], uv0[t[2]]};
+    });
+    if (f < 0) return out;
+    const Tri& t = pm0.faces[f];
+    const Vec3 l = bary.cwiseMax(0.0) / bary.cwiseMax(0.0).sum();
+    x0[c] = l[0] * pm0.positions[t[0]] + l[1] * pm0.positions[t[1]] + l[2] * pm0.positions[t[2]];
   }
   for (size_t i = 1; i < nm; ++i) {
     // Mesh i's point nearest to mesh 0's corner moved by the landmarks' similarity, within its
@@ -210,7 +203,7 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
           posed[c] = l[0] * uv[t[0]] + l[1] * uv[t[1]] + l[2] * uv[t[2]];
         }
       }
-      near = std::sqrt(best) <= pose_reach_[i];
+      near = std::sqrt(best) <= kSamePoseReach * pose_diagonal_[i];
     }
     if (!near) continue;
     // As far toward the posed corners as still makes a split (a posed corner on the node's
@@ -275,7 +268,7 @@ DissectionSet SetDissector::run() {
   DissectionSet out;
   if (opt_.same_pose && nm > 1) {
     fit_poses(loops);
-    std::vector<int> want = nm > 0 ? meshes_[0].feature_sides(loops[0]) : std::vector<int>{};
+    const std::vector<int> want = meshes_[0].feature_sides(loops[0]);
     std::vector<char> posed(nm, 0);
     parallel_for(nm - 1, [&](size_t k) { posed[k + 1] = pose_loop(k + 1, loops, want); }, true);
     for (size_t i = 1; i < nm; ++i) out.same_pose_loops += posed[i];
@@ -294,8 +287,7 @@ DissectionSet SetDissector::run() {
   std::vector<double> max_area;   // per mesh: opt_.max_patch_area times its surface area
   std::vector<double> mesh_area;  // per mesh: its surface area
   for (const auto& m : in_) {
-    double area = 0;
-    for (int f = 0; f < m.mesh->num_faces(); ++f) area += face_area(*m.mesh, f);
+    const double area = surface_area(*m.mesh);
     total_area += area;
     max_area.push_back(opt_.max_patch_area > 0 ? opt_.max_patch_area * area : INFINITY);
     mesh_area.push_back(area);
