@@ -17,7 +17,8 @@
 #   self-smpl-*   smpl_man_14k / smpl_woman_14k against its own re-tessellation (ideal: the identity)
 #   human-retess  smpl_man_14k against smpl_woman_14k re-tessellated (same pose, registered)
 #   human-same    smpl_man_14k against smpl_woman_14k as shipped (identical connectivity)
-#   ... --same-pose  the same-pose pairs again with qs-dissect --same-pose
+#   ... --no-same-pose  the same-pose pairs again with qs-dissect --no-same-pose (qs-dissect finds
+#                 that they share a pose and treats them so by default; this row is without it)
 # Seeds of the humans: middle fingers and big toes; features: nose, head top, heels
 # (bench/correspondence/smpl.landmarks.json, SMPL vertex ids).
 set -uo pipefail
@@ -97,8 +98,8 @@ g="$OUT/gen-s1"
 run_pair "self-gen" "$OUT/self-gen/dissection" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
     "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
 BASE_EXTRA=("${EXTRA[@]}")
-EXTRA=("${BASE_EXTRA[@]}" --same-pose)
-run_pair "self-gen --same-pose" "$OUT/self-gen/dissection-posed" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
+EXTRA=("${BASE_EXTRA[@]}" --no-same-pose)
+run_pair "self-gen --no-same-pose" "$OUT/self-gen/dissection-unposed" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
     "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
 EXTRA=("${BASE_EXTRA[@]}")
 
@@ -118,10 +119,10 @@ if [ -f "$MESHES/smpl_man_14k.obj" ] && [ -f "$MESHES/smpl_woman_14k.obj" ]; the
     run_pair "human-same$1" "$h/same$2" "$MESHES/smpl_man_14k.obj" "$MESHES/smpl_woman_14k.obj" -- "$LM" "$LM" -- - -
   }
   human_pairs "" ""
-  # The same-pose pairs again with qs-dissect --same-pose (the user says the meshes share a pose).
+  # The same-pose pairs again with qs-dissect --no-same-pose (found to share a pose by default).
   BASE_EXTRA=("${EXTRA[@]}")
-  EXTRA=("${BASE_EXTRA[@]}" --same-pose)
-  human_pairs " --same-pose" "-posed"
+  EXTRA=("${BASE_EXTRA[@]}" --no-same-pose)
+  human_pairs " --no-same-pose" "-unposed"
   EXTRA=("${BASE_EXTRA[@]}")
 else
   echo "no smpl_man_14k / smpl_woman_14k in $MESHES: human pairs skipped"

@@ -27,6 +27,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The pull of the map refinement toward nearest points for meshes in one pose
+// (RefineOptions::pose_pull) when --refine-pose-pull is not given.
+constexpr double kDefaultPosePull = 10.0;
+
 // Seeds as surface points: qs-dissect inserts a seed that is not on a vertex into the mesh, so that
 // it is exactly a corner of the two seed patches.
 std::array<qs::landmarks::SurfacePoint, 4> seeds_from_landmarks(const qs::landmarks::Landmarks& lm) {
@@ -167,8 +171,17 @@ int main(int argc, char** argv) {
                "see README, \"Map refinement\")");
   app.add_flag("--same-pose", opt.same_pose,
                "The meshes are in one pose (registered scans, re-tessellations of one surface): place every split's "
-               "inner corners in each mesh at its points nearest the first mesh's, after the landmarks' similarity "
-               "(see README, \"Same pose\")");
+               "inner corners in each mesh at its points nearest the first mesh's, after the landmarks' similarity, "
+               "and pull the refined maps toward nearest points. Found by itself when the surfaces lie within 1% of "
+               "the diagonal of each other after that similarity (see README, \"Same pose\")");
+  bool no_same_pose = false;
+  app.add_flag("--no-same-pose", no_same_pose, "Never treat the meshes as one pose (no detection)");
+  app.get_option("--no-same-pose")->excludes("--same-pose");
+  double pose_pull = -1;
+  app.add_option("--refine-pose-pull", pose_pull,
+                 "For meshes in one pose: weight of the refinement's pull of every vertex toward the first mesh's "
+                 "point nearest to it (default 10; 0: off; see README, \"Same pose\")")
+      ->check(CLI::NonNegativeNumber);
   std::string before_split_metric = "vertex";
   app.add_option("--refine-before-split-metric", before_split_metric,
                  "How --refine-before-split sees the first mesh's map: vertex (refine-maps's clamped, vertex-averaged "
@@ -216,6 +229,7 @@ int main(int argc, char** argv) {
     refine_opt.corner_chart =
         corner_chart == "power" ? qs::maprefine::CornerChart::Power : qs::maprefine::CornerChart::Sector;
     refine_opt.across_borders = !no_across;
+    opt.same_pose_detect = no_same_pose ? 0.0 : qs::dissect::kSamePoseDetect;
     const bool refine_maps = !no_refine || across_flag || refine_opt.move_corners;  // implied
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
@@ -296,7 +310,10 @@ int main(int argc, char** argv) {
     qs::dissect::DissectOptions used = opt;  // dissection.json records the options of the result
     used.geodesic_seed_curves = result.geodesic_seed_curves;
     used.intrinsic_cotan = result.intrinsic_cotan;
-    used.same_pose = opt.same_pose && result.same_pose_fallback.empty();
+    // One pose (told or found): posed splits (unless they fell back) and the refinement's pull.
+    const bool one_pose = opt.same_pose || result.same_pose_detected;
+    used.same_pose = one_pose && result.same_pose_fallback.empty();
+    refine_opt.pose_pull = !one_pose ? 0 : pose_pull >= 0 ? pose_pull : kDefaultPosePull;
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;
@@ -354,6 +371,9 @@ int main(int argc, char** argv) {
                << " patches refined, " << r.patches_skipped << " left as they were, " << r.free_vertices
                << " vertices moved freely, " << r.newton_steps << " Newton steps, "
                << r.flipped_faces + r.zero_area_faces << " flipped or zero-area uv faces\n";
+        if (!r.reference && !r.identity && refine_opt.pose_pull > 0)
+          text << "  refine maps: pulled toward mesh " << refine_opt.reference
+               << "'s nearest points (one pose), weight " << refine_opt.pose_pull << "\n";
         if (!r.reference && refine_opt.across_borders)
           text << "  refine across borders: " << r.sides_refined << " side refinements kept, " << r.sides_skipped
                << " sides left as they were, " << r.cut_vertices << " chart vertices added by the cuts\n";
@@ -389,7 +409,17 @@ int main(int argc, char** argv) {
       text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size()
            << " common patches, " << result.tree.size() << " tree nodes, " << result.warp_events
            << " warp flip events, max stretch " << std::setprecision(4) << result.max_stretch << "\n";
-    if (opt.same_pose && inputs.size() > 1) {
+    if (result.pose_distance >= 0) {
+      const bool near = result.pose_distance <= qs::dissect::kSamePoseDetect;
+      text << "pose: the surfaces lie " << std::setprecision(3) << 100 * result.pose_distance
+           << "% of the diagonal apart after the landmarks' similarity (mean), " << (near ? "at most " : "over ")
+           << 100 * qs::dissect::kSamePoseDetect << "%: "
+           << (result.same_pose_detected ? "one pose (as --same-pose)"
+               : near                    ? "one mesh given again (its map is the identity)"
+                                         : "not one pose")
+           << "\n";
+    }
+    if (one_pose && inputs.size() > 1) {
       if (result.same_pose_fallback.empty())
         text << "same pose: " << result.same_pose_loops << " of " << inputs.size() - 1
              << " seed loops routed by pose, " << result.same_pose_splits

@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "qs/core/error.h"
@@ -586,6 +588,89 @@ TEST(RefineAcrossBorders, ZeroSweepsIsTheInteriorRefinement) {
   EXPECT_EQ(a[1].chart.mesh.faces, b[1].chart.mesh.faces);
   o.border_sweeps = -1;
   EXPECT_THROW(mr::refine_maps(b, o), qs::InvalidInput);
+}
+
+// Meshes in one pose (RefineOptions::pose_pull): one surface tessellated twice, whose true map is
+// the identity. The pull toward nearest points brings the map closer to it than the distortion
+// alone, stays bijective, keeps corners, seeds and features, and does not depend on the threads.
+TEST(PosePull, BringsOneSurfaceTessellatedTwiceCloserToTheIdentity) {
+  const auto fam = same_shape_pair();
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  const auto dissected = dissect_pair(fam);
+  auto plain = dissected;
+  const auto r0 = mr::refine_maps(plain);
+  auto pulled = dissected;
+  mr::RefineOptions o;
+  o.pose_pull = 10;
+  const auto r = expect_thread_independent(pulled, o);
+  EXPECT_EQ(r.meshes[1].flipped_faces + r.meshes[1].zero_area_faces, 0);
+  // Reported energies are the distortion alone, comparable with the plain refinement's.
+  EXPECT_EQ(r.meshes[1].energy_before, r0.meshes[1].energy_before);
+  EXPECT_EQ(pulled[1].seeds, dissected[1].seeds);
+  for (size_t p = 0; p < pulled[1].chart.patches.size(); ++p)
+    EXPECT_EQ(pulled[1].chart.patches[p].corners, dissected[1].chart.patches[p].corners);
+  for (size_t k = 0; k < pulled[1].features.size(); ++k) EXPECT_EQ(pulled[1].features[k].uv, dissected[1].features[k].uv);
+  const auto e_plain = measure(truth, plain);
+  const auto e_pulled = measure(truth, pulled);
+  EXPECT_LT(e_pulled.mean, 0.8 * e_plain.mean) << e_plain.mean << " -> " << e_pulled.mean;
+  // Zero is the plain refinement; a negative or infinite weight is refused.
+  auto zero = dissected;
+  o.pose_pull = 0;
+  mr::refine_maps(zero, o);
+  expect_same_chart(zero[1].chart, plain[1].chart);
+  for (double bad : {-1.0, std::numeric_limits<double>::infinity()}) {
+    o.pose_pull = bad;
+    EXPECT_THROW(mr::refine_maps(zero, o), qs::InvalidInput);
+  }
+}
+
+// pose_distance: 0 for a mesh and a copy moved by a similarity, small for one surface
+// tessellated twice, large for two shapes of a family; nothing without seeds.
+TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
+  const auto same = same_shape_pair();
+  std::vector<qs::dissect::MeshToDissect> in = {cr::dissect_input(same.shapes[0]), cr::dissect_input(same.shapes[1])};
+  const auto d_same = qs::dissect::pose_distance(in);
+  ASSERT_TRUE(d_same.has_value());
+  EXPECT_LT(*d_same, qs::dissect::kSamePoseDetect);
+
+  qs::TriMesh moved = same.shapes[0].mesh;
+  const Eigen::Matrix3d rot = Eigen::AngleAxisd(0.7, qs::Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  for (auto& x : moved.positions) x = 2.5 * rot * x + qs::Vec3(1, -4, 0.5);
+  auto copy = in[0];
+  copy.mesh = &moved;
+  const auto d_copy = qs::dissect::pose_distance({in[0], copy});
+  ASSERT_TRUE(d_copy.has_value());
+  EXPECT_LT(*d_copy, 1e-9);
+
+  qs::family::FamilyOptions fo;
+  fo.shapes = 3;
+  fo.seed = 2;
+  fo.faces = 2000;
+  const auto fam = qs::family::generate_family(fo);
+  std::vector<qs::dissect::MeshToDissect> fin;
+  for (const auto& sh : fam.shapes) fin.push_back(cr::dissect_input(sh));
+  const auto d_fam = qs::dissect::pose_distance(fin);
+  ASSERT_TRUE(d_fam.has_value());
+  EXPECT_GT(*d_fam, qs::dissect::kSamePoseDetect);
+
+  // dissect_set turns same_pose on by itself only for the first set, and says so.
+  qs::dissect::DissectOptions o;
+  o.same_pose_detect = qs::dissect::kSamePoseDetect;
+  const auto found = qs::dissect::dissect_set(in, o);
+  EXPECT_TRUE(found.same_pose_detected);
+  EXPECT_EQ(found.pose_distance, *d_same);
+  EXPECT_GT(found.same_pose_splits, 0);
+  const auto not_found = qs::dissect::dissect_set(fin, o);
+  EXPECT_FALSE(not_found.same_pose_detected);
+  EXPECT_EQ(not_found.same_pose_splits, 0);
+  // Off by default in the library; one mesh given twice is not posed (its map is the identity).
+  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, -1);
+  EXPECT_FALSE(qs::dissect::dissect_set({in[0], in[0]}, o).same_pose_detected);
+
+  in[1].seeds.reset();
+  in[1].seed_points.reset();
+  EXPECT_FALSE(qs::dissect::pose_distance(in).has_value());
+  EXPECT_FALSE(qs::dissect::pose_distance({in[0]}).has_value());
 }
 
 TEST(ConeGlue, TheSquareGluedAndBackIsTheIdentityAndTheAxesGoOntoTheRays) {

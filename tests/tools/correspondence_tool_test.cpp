@@ -13,6 +13,7 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 namespace {
 
@@ -99,9 +100,11 @@ TEST_F(CorrespondenceTool, BadInputsGiveTheDocumentedExitCodes) {
 }
 
 TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
-  // A shape and its own re-tessellation are in one pose: --same-pose routes the second seed loop
-  // along the first's and places the split corners at the first mesh's, and the map gets closer
-  // to the identity (measured: 0.18% -> 0.13% mean at 8000 faces, corners 0.19% -> 0.08%).
+  // A shape and its own re-tessellation are in one pose, and qs-dissect finds it by itself: the
+  // second seed loop is routed along the first's, the split corners are placed at the first
+  // mesh's, the refinement pulls toward nearest points, and the map gets closer to the identity
+  // (measured at 8000 faces: 0.18% -> 0.06% mean, corners 0.19% -> 0.08%). --no-same-pose is
+  // the common (u, v); --same-pose says what the detection found.
   ASSERT_EQ(run_tool("qs-family", "retessellate " + mesh(0) + " -o " + d() + "/r.obj --quiet").exit, 0);
   const std::string pair = mesh(0) + " " + d() + "/r.obj --landmarks " + d() + "/shape00.landmarks.json " + d() +
                            "/r.landmarks.json --quiet";
@@ -114,22 +117,30 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
     std::ifstream in(d() + "/" + out + ".json");
     return nlohmann::json::parse(in)["pairs"][0];
   };
-  const auto common = measure("", "common");
-  const auto posed = measure(" --same-pose", "posed");
-  EXPECT_LT(posed["dissection"]["mean_percent"].get<double>(), common["dissection"]["mean_percent"].get<double>());
-  EXPECT_LT(posed["corner_distance_mean_percent"].get<double>(), common["corner_distance_mean_percent"].get<double>());
-  std::ifstream rep(d() + "/posed.txt");
-  std::stringstream text;
-  text << rep.rdbuf();
-  EXPECT_THAT(text.str(), HasSubstr("same pose: 1 of 1 seed loops routed by pose, "));
-  EXPECT_THAT(text.str(), HasSubstr("bijective: yes"));
-  std::ifstream js(d() + "/posed/dissection.json");
-  const auto doc = nlohmann::json::parse(js);
+  auto read = [](const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  const auto common = measure(" --no-same-pose", "common");
+  const auto found = measure("", "found");
+  const auto told = measure(" --same-pose", "told");
+  EXPECT_LT(found["dissection"]["mean_percent"].get<double>(), common["dissection"]["mean_percent"].get<double>());
+  EXPECT_LT(found["corner_distance_mean_percent"].get<double>(), common["corner_distance_mean_percent"].get<double>());
+  EXPECT_EQ(found["dissection"]["mean_percent"].get<double>(), told["dissection"]["mean_percent"].get<double>());
+  const std::string text = read(d() + "/found.txt");
+  EXPECT_THAT(text, HasSubstr("after the landmarks' similarity (mean), at most 1%: one pose (as --same-pose)"));
+  EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose, "));
+  EXPECT_THAT(text, HasSubstr("'s nearest points (one pose), weight 10"));
+  EXPECT_THAT(text, HasSubstr("bijective: yes"));
+  EXPECT_THAT(read(d() + "/common.txt"), Not(HasSubstr("pose: ")));
+  EXPECT_EQ(read(d() + "/found/dissection.json"), read(d() + "/told/dissection.json"));
+  const auto doc = nlohmann::json::parse(read(d() + "/found/dissection.json"));
   EXPECT_EQ(doc["options"]["same_pose"], true);
   int posed_splits = 0;
   for (const auto& n : doc["tree"]) posed_splits += n.value("posed", false) ? 1 : 0;
   EXPECT_GT(posed_splits, 0);
-  // Without the option the file does not mention it.
-  std::ifstream jc(d() + "/common/dissection.json");
-  EXPECT_FALSE(nlohmann::json::parse(jc)["options"].contains("same_pose"));
+  // Without it the file does not mention it.
+  EXPECT_FALSE(nlohmann::json::parse(read(d() + "/common/dissection.json"))["options"].contains("same_pose"));
 }

@@ -9,12 +9,16 @@
 // and every patch side stays shared by exactly two patches: the base domain is conforming by
 // construction, and checked anyway.
 
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
 #include "qs/dissect/dissection.h"
+#include "qs/metro/metro.h"
 
 namespace qs::dissect {
 
@@ -52,24 +56,49 @@ BaseDomain build_base_domain(const std::vector<PatchInfo>& patches) {
   return bd;
 }
 
-DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
-                          const Context& context) {
-  if (!(options.tau >= 1.0)) throw InvalidInput("--tau must be at least 1 (the stretch of an isometry)");
-  if (!(options.min_split_area >= 0 && options.min_split_area <= 1))
-    throw InvalidInput("min_split_area is " + std::to_string(options.min_split_area) +
-                       "; expected a fraction of the surface in [0, 1] (0: off)");
-  if (!(options.force_split_area >= 0 && options.force_split_area <= 1))
-    throw InvalidInput("force_split_area is " + std::to_string(options.force_split_area) +
-                       "; expected a fraction of the surface in [0, 1] (0: off)");
-  if (options.area_extra_depth < 0 || options.area_extra_depth > 12)
-    throw InvalidInput("area_extra_depth is " + std::to_string(options.area_extra_depth) +
-                       "; expected 0 (off) to 12 levels past max_depth");
-  if (!(options.protrusion_stretch >= 0))
-    throw InvalidInput("protrusion_stretch is " + std::to_string(options.protrusion_stretch) +
-                       "; expected a stretch >= 0 (0: off)");
-  if (meshes.empty()) throw InvalidInput("no mesh to dissect");
-  for (const auto& m : meshes)
-    if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
+namespace {
+
+// A mesh's landmarks by name ("seed0".."seed3", then its features), as 3D points; empty without
+// seeds.
+std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect& m) {
+  std::vector<std::pair<std::string, Vec3>> out;
+  const TriMesh& mesh = *m.mesh;
+  auto at = [&](int vertex, const landmarks::SurfacePoint& where) {
+    if (vertex >= 0 && vertex < mesh.num_vertices()) return mesh.positions[vertex];
+    if (where.face < 0 || where.face >= mesh.num_faces())
+      throw InvalidInput((m.name.empty() ? std::string("a mesh") : m.name) + ": a landmark refers to face " +
+                         std::to_string(where.face) + ", out of range (0.." + std::to_string(mesh.num_faces() - 1) +
+                         ")");
+    return landmarks::position_of(mesh, where);
+  };
+  for (int k = 0; k < 4; ++k) {
+    if (m.seed_points) out.emplace_back("seed" + std::to_string(k), at(-1, (*m.seed_points)[k]));
+    else if (m.seeds) out.emplace_back("seed" + std::to_string(k), at((*m.seeds)[k], {}));
+    else return {};
+  }
+  for (const auto& f : m.features) out.emplace_back(f.name, at(f.vertex, f.where));
+  return out;
+}
+
+// The area-weighted mean distance from `mesh`'s vertices to `to`.
+double mean_distance(const TriMesh& mesh, const metro::SurfaceDistance& to) {
+  std::vector<double> area(mesh.positions.size(), 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.faces[f]) area[v] += face_area(mesh, f) / 3;
+  double sum = 0, total = 0;
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (area[v] <= 0) continue;
+    sum += area[v] * to.distance(mesh.positions[v]);
+    total += area[v];
+  }
+  return total > 0 ? sum / total : 0;
+}
+
+// dissect_set after the checks and the pose detection (`detected` turns same_pose on).
+DissectionSet dissect_posed(const std::vector<MeshToDissect>& meshes, const DissectOptions& given, bool detected,
+                            const Context& context) {
+  DissectOptions options = given;
+  options.same_pose = given.same_pose || detected;
   auto folded = [&meshes](const DissectionSet& s, std::string* where) {
     long n = 0;
     for (size_t i = 0; i < s.meshes.size(); ++i)
@@ -121,6 +150,82 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
     try_again(o, "edge+mean-value", &DissectionSet::maps_fallback,
               maps_name(options.geodesic_seed_curves, options.intrinsic_cotan));
   }
+  return out;
+}
+
+}  // namespace
+
+std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes) {
+  if (meshes.size() < 2) return std::nullopt;
+  const auto first = landmark_positions(meshes[0]);
+  if (first.empty()) return std::nullopt;
+  const metro::SurfaceDistance to_first(*meshes[0].mesh, "the first mesh");
+  double worst = 0;
+  for (size_t i = 1; i < meshes.size(); ++i) {
+    const auto mine = landmark_positions(meshes[i]);
+    if (mine.empty()) return std::nullopt;
+    std::vector<Vec3> from, to;
+    for (const auto& [name, x] : mine)
+      for (const auto& [name0, x0] : first)
+        if (name == name0) {
+          from.push_back(x);
+          to.push_back(x0);
+        }
+    Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
+    for (size_t k = 0; k < from.size(); ++k) {
+      a.col(k) = from[k];
+      b.col(k) = to[k];
+    }
+    const Eigen::Matrix4d pose = Eigen::umeyama(a, b, true);
+    TriMesh moved = *meshes[i].mesh;
+    for (auto& x : moved.positions) x = (pose * x.homogeneous()).head<3>();
+    const metro::SurfaceDistance to_moved(moved, "a moved mesh");
+    const double d = 0.5 * (mean_distance(moved, to_first) + mean_distance(*meshes[0].mesh, to_moved));
+    worst = std::max(worst, d);
+  }
+  const double diag = bounding_box(meshes[0].mesh->positions).diagonal();
+  return diag > 0 ? worst / diag : 0.0;
+}
+
+DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
+                          const Context& context) {
+  if (!(options.tau >= 1.0)) throw InvalidInput("--tau must be at least 1 (the stretch of an isometry)");
+  if (!(options.min_split_area >= 0 && options.min_split_area <= 1))
+    throw InvalidInput("min_split_area is " + std::to_string(options.min_split_area) +
+                       "; expected a fraction of the surface in [0, 1] (0: off)");
+  if (!(options.force_split_area >= 0 && options.force_split_area <= 1))
+    throw InvalidInput("force_split_area is " + std::to_string(options.force_split_area) +
+                       "; expected a fraction of the surface in [0, 1] (0: off)");
+  if (options.area_extra_depth < 0 || options.area_extra_depth > 12)
+    throw InvalidInput("area_extra_depth is " + std::to_string(options.area_extra_depth) +
+                       "; expected 0 (off) to 12 levels past max_depth");
+  if (!(options.protrusion_stretch >= 0))
+    throw InvalidInput("protrusion_stretch is " + std::to_string(options.protrusion_stretch) +
+                       "; expected a stretch >= 0 (0: off)");
+  if (!(options.same_pose_detect >= 0))
+    throw InvalidInput("same_pose_detect is " + std::to_string(options.same_pose_detect) +
+                       "; expected a fraction of the diagonal >= 0 (0: off)");
+  if (meshes.empty()) throw InvalidInput("no mesh to dissect");
+  for (const auto& m : meshes)
+    if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
+  // Same pose found by measurement (DissectOptions::same_pose_detect).
+  double measured = -1;
+  bool detected = false;
+  if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
+    if (const auto d = pose_distance(meshes)) {
+      measured = *d;
+      // One mesh given several times maps by the identity already; nothing to pose.
+      bool identical = true;
+      for (size_t i = 1; i < meshes.size() && identical; ++i)
+        identical = meshes[i].mesh->positions == meshes[0].mesh->positions &&
+                    meshes[i].mesh->faces == meshes[0].mesh->faces &&
+                    landmark_positions(meshes[i]) == landmark_positions(meshes[0]);
+      detected = *d <= options.same_pose_detect && !identical;
+    }
+  }
+  DissectionSet out = dissect_posed(meshes, options, detected, context);
+  out.pose_distance = measured;
+  out.same_pose_detected = detected;
   return out;
 }
 

@@ -135,7 +135,18 @@ struct DissectOptions {
   /// quinary split, a feature would be nearer a cut than feature_cut_margin, or the split fails.
   /// Wrong for meshes in different poses. Off by default.
   bool same_pose = false;
+  /// Turns same_pose on by itself when the meshes are found in one pose: every mesh, moved onto
+  /// the first by the landmarks' similarity, lies at a mean distance of at most this fraction of
+  /// the first mesh's diagonal from it (pose_distance). Needs seeds in every mesh. 0: off (the
+  /// library's default; qs-dissect uses kSamePoseDetect unless told --same-pose or
+  /// --no-same-pose). \pre >= 0
+  double same_pose_detect = 0;
 };
+
+/// qs-dissect's same_pose_detect: 1% of the diagonal. Measured (README, "Same pose"): a body and
+/// its re-tessellation 0.1%, two registered bodies 0.2-0.3%, a generated surface tessellated twice
+/// 0.3%; two shapes of a generated family 1.4-2.9%.
+inline constexpr double kSamePoseDetect = 0.01;
 
 /// Why a patch over tau was left as it is.
 enum class StopReason { None, MaxDepth, TooFewFaces, SplitFailed, NoProgress, SmallArea };
@@ -263,7 +274,19 @@ struct DissectionSet {
   /// Empty, or why the set was dissected again with the common (u, v) (DissectOptions::same_pose:
   /// the posed result ended with folded leaves, the common one folds less).
   std::string same_pose_fallback;
+  /// DissectOptions::same_pose_detect: the set's pose_distance (-1: not measured) and whether it
+  /// turned same_pose on.
+  double pose_distance = -1;
+  bool same_pose_detected = false;
 };
+
+/// How far a set is from one pose: for every mesh but the first, the least-squares similarity
+/// (Umeyama) of its landmarks (the 4 seeds, then the features both have) onto the first mesh's
+/// moves it onto the first, and the symmetric mean distance between the two surfaces is taken
+/// (from each one's vertices to the other, weighted by vertex area); the largest over the meshes,
+/// as a fraction of the first mesh's bounding-box diagonal. nullopt when a mesh has no seeds or
+/// the set has fewer than 2 meshes. \throws InvalidInput for a landmark outside its mesh.
+std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes);
 
 /// "geodesic+cotan", "edge+mean-value", ...: the seed curves and patch weights of a dissection.
 std::string maps_name(bool geodesic_seed_curves, bool intrinsic_cotan);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -21,6 +22,8 @@
 #include <unordered_map>
 
 #include "qs/core/error.h"
+#include "qs/landmarks/landmarks.h"
+#include "qs/metro/metro.h"
 #include "qs/param/square_param.h"
 
 namespace qs::maprefine {
@@ -218,6 +221,10 @@ struct PatchProblem {
   std::vector<Vec2> basis;             // per local vertex with dims 1: d uv / d unknown
   std::vector<Eigen::Matrix2d> dm_inv;  // per face: inverse of the 3D edge matrix in a local frame
   std::vector<double> area;            // per face: 3D area (the energy's weight)
+  // RefineOptions::pose_pull, per local vertex (empty: none): the energy (uv - target)^T pull
+  // (uv - target), pull = weight * the reference's metric at the target (zero: no pull).
+  std::vector<Eigen::Matrix2d> pull;
+  std::vector<Vec2> target;
   int unknowns = 0;
   double total_area = 0;
 
@@ -408,8 +415,9 @@ class PatchSolver {
     for (size_t t = 0; t < prob_.faces.size(); ++t) a_[t] = metric_jacobian(prob_, t, metric_);
   }
 
-  // Energy (sum of area * symDirichlet) at uv under the current metric; +inf when a face folds.
-  double energy(const std::vector<Vec2>& uv) const {
+  // Distortion energy (sum of area * symDirichlet) at uv under the current metric; +inf when a
+  // face folds.
+  double distortion(const std::vector<Vec2>& uv) const {
     double e = 0;
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const double f = face_energy(prob_, t, a_[t], b_[t], uv);
@@ -417,6 +425,22 @@ class PatchSolver {
       e += f;
     }
     return e;
+  }
+
+  // The pose pull's energy at uv (0 without one).
+  double pull(const std::vector<Vec2>& uv) const {
+    double e = 0;
+    for (size_t v = 0; v < prob_.pull.size(); ++v) {
+      const Vec2 d = uv[v] - prob_.target[v];
+      e += d.dot(prob_.pull[v] * d);
+    }
+    return e;
+  }
+
+  // What the solver minimizes: the distortion and the pose pull.
+  double energy(const std::vector<Vec2>& uv) const {
+    const double e = distortion(uv);
+    return std::isfinite(e) ? e + pull(uv) : kInf;
   }
 
   // One projected Newton step; returns false when no progress was made.
@@ -461,6 +485,21 @@ class PatchSolver {
           trip.emplace_back(cols[r].first, cols[q].first,
                             cols[r].second.dot(hx.block<2, 2>(2 * kr, 2 * kq) * cols[q].second));
         }
+      }
+    }
+    // The pose pull: gradient 2 P (uv - target), Hessian 2 P per free vertex.
+    for (size_t v = 0; v < prob_.pull.size(); ++v) {
+      if (prob_.dims[v] == 0) continue;
+      const Vec2 gv = 2 * prob_.pull[v] * (prob_.uv[v] - prob_.target[v]);
+      const Eigen::Matrix2d hv = 2 * prob_.pull[v];
+      const int i = prob_.var[v];
+      if (prob_.dims[v] == 2) {
+        g.segment<2>(i) += gv;
+        for (int r = 0; r < 2; ++r)
+          for (int q = 0; q < 2; ++q) trip.emplace_back(i + r, i + q, hv(r, q));
+      } else {
+        g[i] += prob_.basis[v].dot(gv);
+        trip.emplace_back(i, i, prob_.basis[v].dot(hv * prob_.basis[v]));
       }
     }
     // The diagonal is always in the pattern (it takes the regularization), so the pattern is the
@@ -544,6 +583,9 @@ void check_set(const std::vector<dissect::Dissection>& meshes, const RefineOptio
                        std::to_string(options.border_iterations) + "), corner sweeps (" +
                        std::to_string(options.corner_sweeps) + ") and corner iterations (" +
                        std::to_string(options.corner_iterations) + ") must be >= 0");
+  if (!(options.pose_pull >= 0 && std::isfinite(options.pose_pull)))
+    throw InvalidInput("refine_maps: pose pull " + std::to_string(options.pose_pull) +
+                       " must be a finite weight >= 0 (0: off)");
   const size_t np = meshes[0].chart.patches.size();
   for (size_t i = 0; i < meshes.size(); ++i) {
     const auto& c = meshes[i].chart;
@@ -729,8 +771,9 @@ PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const Refine
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
-  res.energy_before = e;
-  res.energy_after = e;
+  const double e_start = e;
+  res.energy_before = solver.distortion(pr.uv);
+  res.energy_after = res.energy_before;
   if (!std::isfinite(e)) {
     res.skipped = true;  // folded to start with: left alone, and left out of the energies
     res.energy_before = res.energy_after = res.area = 0;
@@ -745,7 +788,7 @@ PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const Refine
     if (!more || !std::isfinite(e)) break;
   }
   // Keep the result only if it is bijective, inside the square and better.
-  bool ok = std::isfinite(e) && e < res.energy_before;
+  bool ok = std::isfinite(e) && e < e_start;
   for (const auto& c : pr.tri)
     if (!(0.5 * tri_det(pr.uv[c[0]], pr.uv[c[1]], pr.uv[c[2]]) > param::kZeroUvArea)) ok = false;
   for (const auto& q : pr.uv)
@@ -756,7 +799,7 @@ PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const Refine
     res.energy_after = res.energy_before;
     return res;
   }
-  res.energy_after = e;
+  res.energy_after = solver.distortion(pr.uv);
   res.changed = pr.uv != start;
   return res;
 }
@@ -794,6 +837,127 @@ void parallel_for(int n, int threads, const Context& context, F&& body) {
   context.check_cancel();
 }
 
+// ---- The same-pose pull (RefineOptions::pose_pull) -----------------------------------------------
+
+// The reference's patches as nearest-point trees (patch-local vertices), built once per set.
+struct PullPatch {
+  std::vector<int> faces;  // tree face -> chart face
+  std::optional<metro::SurfaceDistance> tree;
+};
+
+// The pull of one mesh B: B's frame moved into the reference's, the reference's patch trees, and
+// the weight per unit area and squared length.
+struct PosePull {
+  const dissect::Chart* ref = nullptr;
+  const std::vector<PullPatch>* patches = nullptr;
+  Eigen::Matrix4d to_ref = Eigen::Matrix4d::Identity();
+  double weight = 0;
+};
+
+std::vector<PullPatch> build_pull_patches(const dissect::Chart& ref, const RefineOptions& options,
+                                          const Context& context) {
+  const int np = static_cast<int>(ref.patches.size());
+  std::vector<PullPatch> out(np);
+  for (int f = 0; f < ref.mesh.num_faces(); ++f) out[ref.face_patch[f]].faces.push_back(f);
+  parallel_for(np, options.threads, context, [&](int p) {
+    TriMesh m;
+    std::unordered_map<int, int> local;
+    for (int f : out[p].faces) {
+      Tri t{};
+      for (int k = 0; k < 3; ++k) {
+        const int v = ref.mesh.faces[f][k];
+        auto [it, added] = local.try_emplace(v, static_cast<int>(m.positions.size()));
+        if (added) m.positions.push_back(ref.mesh.positions[v]);
+        t[k] = it->second;
+      }
+      m.faces.push_back(t);
+    }
+    if (!m.faces.empty()) out[p].tree.emplace(m, "reference patch");
+  });
+  return out;
+}
+
+// The landmarks' similarity from mesh b to the reference (seeds, then features by name), as
+// qs-dissect --same-pose fits it the other way.
+Eigen::Matrix4d pose_to_reference(const dissect::Dissection& ref, const dissect::Dissection& b) {
+  std::vector<Vec3> from, to;
+  for (int k = 0; k < 4; ++k) {
+    from.push_back(b.chart.mesh.positions[b.seeds[k]]);
+    to.push_back(ref.chart.mesh.positions[ref.seeds[k]]);
+  }
+  for (const auto& fb : b.features)
+    for (const auto& fr : ref.features)
+      if (fr.name == fb.name && fb.vertex >= 0 && fr.vertex >= 0) {
+        from.push_back(b.chart.mesh.positions[fb.vertex]);
+        to.push_back(ref.chart.mesh.positions[fr.vertex]);
+      }
+  Eigen::Matrix3Xd a(3, from.size()), c(3, to.size());
+  for (size_t k = 0; k < from.size(); ++k) {
+    a.col(k) = from[k];
+    c.col(k) = to[k];
+  }
+  return Eigen::umeyama(a, c, true);
+}
+
+// The reference's point nearest to y (in the reference's frame) within reference patch p: its
+// (u, v) in p, the reference's 3D metric there and the squared distance. False when there is none
+// (no face, or a zero-area uv face).
+bool nearest_on_patch(const PosePull& pull, int p, const Vec3& y, Vec2& uv, Eigen::Matrix2d& metric, double& d2) {
+  const PullPatch& pp = (*pull.patches)[p];
+  if (!pp.tree) return false;
+  const auto hit = pp.tree->closest(y);
+  if (hit.face < 0) return false;
+  const dissect::Chart& ref = *pull.ref;
+  const int f = pp.faces[hit.face];
+  const auto& t = ref.mesh.faces[f];
+  const auto& fuv = ref.face_uv[f];
+  const Vec3& x0 = ref.mesh.positions[t[0]];
+  Eigen::Matrix2d ds;
+  ds.col(0) = fuv[1] - fuv[0];
+  ds.col(1) = fuv[2] - fuv[0];
+  if (!(0.5 * ds.determinant() > param::kZeroUvArea)) return false;
+  const auto b = landmarks::closest_on_triangle(y, x0, ref.mesh.positions[t[1]], ref.mesh.positions[t[2]]);
+  Mat32 e;
+  e.col(0) = ref.mesh.positions[t[1]] - x0;
+  e.col(1) = ref.mesh.positions[t[2]] - x0;
+  const Mat32 g = e * ds.inverse();
+  uv = b[0] * fuv[0] + b[1] * fuv[1] + b[2] * fuv[2];
+  metric = g.transpose() * g;
+  d2 = hit.distance * hit.distance;
+  return true;
+}
+
+// Where a free local vertex of a problem is pulled to: (local vertex, its point moved into the
+// reference's frame) -> target (u, v) and the reference's 3D metric there, in the problem's
+// coordinates; false: no pull on it.
+using PullTargetFn = std::function<bool(int, const Vec3&, Vec2&, Eigen::Matrix2d&)>;
+
+// Fills a problem's pull: every free local vertex of B that `locate` places gets its target and as
+// weight the pull's weight times a third of its faces' area times the metric.
+void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull, const PullTargetFn& locate) {
+  pr.pull.assign(pr.uv.size(), Eigen::Matrix2d::Zero());
+  pr.target.assign(pr.uv.size(), Vec2::Zero());
+  std::vector<double> area(pr.uv.size(), 0.0);
+  for (size_t t = 0; t < pr.tri.size(); ++t)
+    for (int l : pr.tri[t]) area[l] += pr.area[t] / 3;
+  for (size_t l = 0; l < pr.uv.size(); ++l) {
+    if (pr.dims[l] != 2) continue;
+    const Vec3 y = (pull.to_ref * chart.mesh.positions[pr.vertices[l]].homogeneous()).head<3>();
+    Eigen::Matrix2d m;
+    if (locate(static_cast<int>(l), y, pr.target[l], m)) pr.pull[l] = pull.weight * area[l] * m;
+  }
+}
+
+// add_pull for a problem of one patch's interior: the target in the vertex's own patch.
+void add_patch_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull) {
+  if (pr.face_patch.empty()) return;
+  const int p = pr.face_patch.front();
+  add_pull(pr, chart, pull, [&](int, const Vec3& y, Vec2& uv, Eigen::Matrix2d& m) {
+    double d2 = 0;
+    return nearest_on_patch(pull, p, y, uv, m, d2);
+  });
+}
+
 struct MeshResult {
   double energy_before = 0, energy_after = 0, area = 0;  // unnormalized energies, 3D area
   int free = 0, held = 0, steps = 0, refined = 0, skipped = 0;
@@ -802,7 +966,7 @@ struct MeshResult {
 // Interior pass: every patch on its own (parallel); returns per patch results.
 std::vector<PatchResult> interior_pass(dissect::Dissection& b, const std::vector<ReferencePatch>& refs,
                                        const std::vector<double>& scale, const RefineOptions& options,
-                                       bool optimize, const Context& context) {
+                                       bool optimize, const Context& context, const PosePull* pull) {
   std::vector<PatchProblem> probs = build_problems(b);
   std::vector<PatchResult> results(probs.size());
   // Largest patches first: better balance; the result does not depend on the order.
@@ -812,6 +976,7 @@ std::vector<PatchResult> interior_pass(dissect::Dissection& b, const std::vector
                    [&](int x, int y) { return probs[x].faces.size() > probs[y].faces.size(); });
   parallel_for(static_cast<int>(order.size()), options.threads, context, [&](int i) {
     const int p = order[i];
+    if (pull && optimize) add_patch_pull(probs[p], b.chart, *pull);
     results[p] = solve_problem(probs[p], patch_metric(probs[p], refs, scale), options, optimize);
   });
   for (size_t p = 0; p < probs.size(); ++p)
@@ -874,7 +1039,7 @@ std::vector<ReferencePatch> build_refs(const dissect::Chart& ref, const RefineOp
 }
 
 MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& refs, const RefineOptions& options,
-                    bool optimize, const Context& context) {
+                    bool optimize, const Context& context, const PosePull* pull = nullptr) {
   const int np = static_cast<int>(b.chart.patches.size());
   std::vector<double> area_b(np, 0.0), scale(np, 1.0);
   for (int f = 0; f < b.chart.mesh.num_faces(); ++f) area_b[b.chart.face_patch[f]] += face_area(b.chart.mesh, f);
@@ -900,7 +1065,7 @@ MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& r
     out.energy_after = e;
     out.area = area;
   };
-  note(interior_pass(b, refs, scale, options, optimize, context), true);
+  note(interior_pass(b, refs, scale, options, optimize, context, pull), true);
   if (optimize && options.slide_borders && options.iterations > 0) {
     PatchProblem sides = build_side_problem(b);
     const PatchResult r = solve_problem(sides, patch_metric(sides, refs, scale), options, true);
@@ -909,7 +1074,7 @@ MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& r
       write_back(sides, b.chart);
       for (int p : sides.face_patch) changed[p] = 1;
       out.free += sides.unknowns;
-      note(interior_pass(b, refs, scale, options, true, context), false);
+      note(interior_pass(b, refs, scale, options, true, context, pull), false);
     }
   }
   if (!optimize) return out;
@@ -1073,7 +1238,8 @@ struct SideCut {
 // cut to commit: the refined union was bijective, lower in energy, and every piece is a positive
 // uv triangle inside its square.
 SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const std::vector<ReferencePatch>& refs,
-                  const SharedSide& side, const std::vector<char>& pinned, const RefineOptions& options) {
+                  const SharedSide& side, const std::vector<char>& pinned, const RefineOptions& options,
+                  const PosePull* pull) {
   SideCut out;
   const int nv = chart.mesh.num_vertices();
   const std::array<Glue, 2> glue = {Glue{side.p, (1 - side.side_p + 4) % 4, 0.0},
@@ -1133,6 +1299,22 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
     const Vec2 s = glue[w].to_patch(g);
     return Eigen::Matrix2d(scale * lin[w] * refs[glue[w].patch].metric(s, (*hints)[t][w]) * lin[w].transpose());
   };
+  if (pull) {
+    // The pose pull toward the nearer of the reference's two patches, in glued (u, v).
+    add_pull(pr, chart, *pull, [&](int, const Vec3& y, Vec2& g, Eigen::Matrix2d& m) {
+      double best = kInf;
+      for (int w = 0; w < 2; ++w) {
+        Vec2 uv;
+        Eigen::Matrix2d mw;
+        double d2 = 0;
+        if (!nearest_on_patch(*pull, glue[w].patch, y, uv, mw, d2) || !(d2 < best)) continue;
+        best = d2;
+        g = glue[w].to_glued(uv);
+        m = lin[w] * mw * lin[w].transpose();
+      }
+      return best < kInf;
+    });
+  }
   const std::vector<Vec2> start = pr.uv;
   RefineOptions side_options = options;
   side_options.iterations = std::min(options.iterations, options.border_iterations);
@@ -1299,7 +1481,7 @@ struct AcrossResult {
 // parallel (their unions share no face) and committed in order: the result does not depend on
 // the thread count.
 AcrossResult refine_across(dissect::Dissection& b, const std::vector<ReferencePatch>& refs,
-                           const RefineOptions& options, const Context& context) {
+                           const RefineOptions& options, const Context& context, const PosePull* pull) {
   AcrossResult out;
   const auto sides = shared_sides(b.chart);
   std::vector<std::vector<int>> groups;
@@ -1325,7 +1507,7 @@ AcrossResult refine_across(dissect::Dissection& b, const std::vector<ReferencePa
       const ChartIndex index(b.chart);
       std::vector<SideCut> cuts(group.size());
       parallel_for(static_cast<int>(group.size()), options.threads, context, [&](int i) {
-        cuts[i] = plan_side(b.chart, index, refs, sides[group[i]], pinned, options);
+        cuts[i] = plan_side(b.chart, index, refs, sides[group[i]], pinned, options, pull);
       });
       for (const auto& cut : cuts) {
         out.steps += cut.steps;
@@ -2251,6 +2433,8 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
   RefineReport report;
   report.meshes.resize(meshes.size());
   const std::vector<ReferencePatch> refs = build_refs(meshes[options.reference].chart, options, context);
+  std::vector<PullPatch> pull_patches;
+  if (options.pose_pull > 0) pull_patches = build_pull_patches(meshes[options.reference].chart, options, context);
   context.report("refine maps", 0);
   for (size_t i = 0; i < meshes.size(); ++i) {
     auto& r = report.meshes[i];
@@ -2266,6 +2450,15 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       r.identity = true;
       count_faces(meshes[i].chart, r);
       continue;
+    }
+    std::optional<PosePull> pull;
+    if (options.pose_pull > 0) {
+      pull.emplace();
+      pull->ref = &ref;
+      pull->patches = &pull_patches;
+      pull->to_ref = pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]);
+      const double len = kPullLength * bounding_box(ref.mesh.positions).diagonal();
+      pull->weight = options.pose_pull / (len * len);
     }
     double before = -1;
     const bool corners = options.move_corners && options.iterations > 0 && options.corner_sweeps > 0;
@@ -2288,14 +2481,14 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       update_figures(meshes[i], std::vector<char>(meshes[i].chart.patches.size(), 1));
     }
     if (across) {
-      const AcrossResult a = refine_across(meshes[i], refs, options, context);
+      const AcrossResult a = refine_across(meshes[i], refs, options, context, pull ? &*pull : nullptr);
       r.sides_refined = a.sides_refined;
       r.sides_skipped = a.sides_skipped;
       r.cut_vertices = a.added_vertices;
       r.newton_steps += a.steps;
       update_figures(meshes[i], std::vector<char>(meshes[i].chart.patches.size(), 1));
     }
-    const MeshResult m = run_mesh(meshes[i], refs, options, true, context);
+    const MeshResult m = run_mesh(meshes[i], refs, options, true, context, pull ? &*pull : nullptr);
     r.free_vertices = m.free;
     r.held_vertices = m.held;
     r.newton_steps += m.steps;

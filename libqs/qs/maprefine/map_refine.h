@@ -67,6 +67,10 @@ enum class CornerChart {
   Power,
 };
 
+/// The length at which RefineOptions::pose_pull costs as much per unit area as its weight: 1% of
+/// the reference's bounding-box diagonal.
+inline constexpr double kPullLength = 0.01;
+
 struct RefineOptions {
   int reference = 0;         ///< the mesh of the set that is not moved. \pre 0 <= reference < #meshes
   int iterations = 30;       ///< Newton steps per patch at most. \pre >= 0
@@ -120,6 +124,13 @@ struct RefineOptions {
   int corner_iterations = 5;
   /// With move_corners: how the patches around a corner are glued into one chart (see CornerChart).
   CornerChart corner_chart = CornerChart::Sector;
+  /// The same-pose pull (`qs-dissect --same-pose`): for meshes in one pose, the interior passes
+  /// also pull every free vertex of B toward the reference's point nearest to it, B moved into the
+  /// reference's frame by the landmarks' similarity (Umeyama on the seeds and features), the
+  /// nearest point taken in the vertex's own patch. Energy: pose_pull * sum over B's vertices of
+  /// area(v) * |d(u, v)|^2 / (kPullLength * the reference's diagonal)^2, with |d|^2 the squared 3D
+  /// distance on the reference's patch (its metric at the target). 0: off. \pre >= 0
+  double pose_pull = 0;
 };
 
 /// What refinement did to one mesh of the set.
