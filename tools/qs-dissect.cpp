@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
   app.add_option("--refine-pose-pull", pose_pull,
                  "For meshes in one pose: weight of the refinement's pull of every vertex toward the first mesh's "
                  "point nearest to it (default 10; 0: off; see README, \"Same pose\")")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e6));
   std::string before_split_metric = "vertex";
   app.add_option("--refine-before-split-metric", before_split_metric,
                  "How --refine-before-split sees the first mesh's map: vertex (refine-maps's clamped, vertex-averaged "

@@ -143,4 +143,12 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
   EXPECT_GT(posed_splits, 0);
   // Without it the file does not mention it.
   EXPECT_FALSE(nlohmann::json::parse(read(d() + "/common/dissection.json"))["options"].contains("same_pose"));
+  // Usage errors: both flags, a negative pull (exit 1, nothing written).
+  RunResult r = run_tool("qs-dissect", pair + " --same-pose --no-same-pose -o " + d() + "/bad");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("--same-pose excludes --no-same-pose"));
+  r = run_tool("qs-dissect", pair + " --refine-pose-pull -1 -o " + d() + "/bad");
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("--refine-pose-pull: Value -1 not in range"));
+  EXPECT_FALSE(std::filesystem::exists(d() + "/bad"));
 }
