@@ -25,4 +25,14 @@ double surface_area(const TriMesh& mesh) {
   return s;
 }
 
+Eigen::Matrix4d fit_similarity(const std::vector<Vec3>& from, const std::vector<Vec3>& to, bool with_scale) {
+  const Eigen::Index n = static_cast<Eigen::Index>(from.size());
+  Eigen::Matrix3Xd a(3, n), b(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    a.col(i) = from[static_cast<size_t>(i)];
+    b.col(i) = to[static_cast<size_t>(i)];
+  }
+  return Eigen::umeyama(a, b, with_scale);
+}
+
 }  // namespace qs

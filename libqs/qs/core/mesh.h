@@ -36,4 +36,9 @@ double face_area(const TriMesh& mesh, int f);
 /// The sum of the face areas (in face order: deterministic).
 double surface_area(const TriMesh& mesh);
 
+/// The least-squares transform (Umeyama) taking the points `from` onto `to`, paired by index:
+/// rotation and translation, and a uniform scale when `with_scale`; as a homogeneous 4x4 matrix.
+/// \pre from.size() == to.size() (fewer than 3 points do not determine it).
+Eigen::Matrix4d fit_similarity(const std::vector<Vec3>& from, const std::vector<Vec3>& to, bool with_scale = true);
+
 }  // namespace qs

@@ -454,12 +454,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
       }
   Eigen::Matrix4d similarity = Eigen::Matrix4d::Identity();
   if (src.size() >= 3) {
-    Eigen::Matrix3Xd s(3, src.size()), d(3, dst.size());
-    for (std::size_t i = 0; i < src.size(); ++i) {
-      s.col(i) = src[i];
-      d.col(i) = dst[i];
-    }
-    similarity = Eigen::umeyama(s, d, true);
+    similarity = fit_similarity(src, dst);
   }
 
   // Samples uniformly per unit area on A's chart (A's surface): systematic along the faces.

@@ -9,7 +9,6 @@
 // and every patch side stays shared by exactly two patches: the base domain is conforming by
 // construction, and checked anyway.
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <optional>
 #include <string>
@@ -83,8 +82,10 @@ std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect
 // The area-weighted mean distance from `mesh`'s vertices to `to`.
 double mean_distance(const TriMesh& mesh, const metro::SurfaceDistance& to) {
   std::vector<double> area(mesh.positions.size(), 0.0);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int v : mesh.faces[f]) area[v] += face_area(mesh, f) / 3;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const double third = face_area(mesh, f) / 3;
+    for (int v : mesh.faces[f]) area[v] += third;
+  }
   double sum = 0, total = 0;
   for (size_t v = 0; v < mesh.positions.size(); ++v) {
     if (area[v] <= 0) continue;
@@ -94,11 +95,9 @@ double mean_distance(const TriMesh& mesh, const metro::SurfaceDistance& to) {
   return total > 0 ? sum / total : 0;
 }
 
-// dissect_set after the checks and the pose detection (`detected` turns same_pose on).
-DissectionSet dissect_posed(const std::vector<MeshToDissect>& meshes, const DissectOptions& given, bool detected,
-                            const Context& context) {
-  DissectOptions options = given;
-  options.same_pose = given.same_pose || detected;
+// dissect_set after its checks and the pose detection: the dissection and its safety nets.
+DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
+                                const Context& context) {
   auto folded = [&meshes](const DissectionSet& s, std::string* where) {
     long n = 0;
     for (size_t i = 0; i < s.meshes.size(); ++i)
@@ -171,12 +170,7 @@ std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes) {
           from.push_back(x);
           to.push_back(x0);
         }
-    Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
-    for (size_t k = 0; k < from.size(); ++k) {
-      a.col(k) = from[k];
-      b.col(k) = to[k];
-    }
-    const Eigen::Matrix4d pose = Eigen::umeyama(a, b, true);
+    const Eigen::Matrix4d pose = fit_similarity(from, to);
     TriMesh moved = *meshes[i].mesh;
     for (auto& x : moved.positions) x = (pose * x.homogeneous()).head<3>();
     const metro::SurfaceDistance to_moved(moved, "a moved mesh");
@@ -223,7 +217,9 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
       detected = *d <= options.same_pose_detect && !identical;
     }
   }
-  DissectionSet out = dissect_posed(meshes, options, detected, context);
+  DissectOptions used = options;
+  used.same_pose = options.same_pose || detected;
+  DissectionSet out = dissect_with_nets(meshes, used, context);
   out.pose_distance = measured;
   out.same_pose_detected = detected;
   return out;

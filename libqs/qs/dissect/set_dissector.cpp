@@ -134,13 +134,7 @@ void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
   pose_diagonal_.assign(nm, 0.0);
   const std::vector<Vec3> from = meshes_[0].landmark_points(loops[0].seeds);
   for (size_t i = 1; i < nm; ++i) {
-    const std::vector<Vec3> to = meshes_[i].landmark_points(loops[i].seeds);
-    Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
-    for (size_t k = 0; k < from.size(); ++k) {
-      a.col(k) = from[k];
-      b.col(k) = to[k];
-    }
-    pose_[i] = Eigen::umeyama(a, b, true);
+    pose_[i] = fit_similarity(from, meshes_[i].landmark_points(loops[i].seeds));
     pose_diagonal_[i] = bounding_box(in_[i].mesh->positions).diagonal();
   }
 }

@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -891,22 +890,24 @@ Eigen::Matrix4d pose_to_reference(const dissect::Dissection& ref, const dissect:
         from.push_back(b.chart.mesh.positions[fb.vertex]);
         to.push_back(ref.chart.mesh.positions[fr.vertex]);
       }
-  Eigen::Matrix3Xd a(3, from.size()), c(3, to.size());
-  for (size_t k = 0; k < from.size(); ++k) {
-    a.col(k) = from[k];
-    c.col(k) = to[k];
-  }
-  return Eigen::umeyama(a, c, true);
+  return fit_similarity(from, to);
 }
 
-// The reference's point nearest to y (in the reference's frame) within reference patch p: its
-// (u, v) in p, the reference's 3D metric there and the squared distance. False when there is none
-// (no face, or a zero-area uv face).
-bool nearest_on_patch(const PosePull& pull, int p, const Vec3& y, Vec2& uv, Eigen::Matrix2d& metric, double& d2) {
+// Where the pull sends a vertex: (u, v) in a reference patch, the reference's 3D metric there and
+// the distance from the vertex.
+struct PullTarget {
+  Vec2 uv;
+  Eigen::Matrix2d metric;
+  double distance = 0;
+};
+
+// The reference's point nearest to y (in the reference's frame) within reference patch p; none
+// when the patch has no face or the nearest point's uv face has zero area.
+std::optional<PullTarget> nearest_on_patch(const PosePull& pull, int p, const Vec3& y) {
   const PullPatch& pp = (*pull.patches)[p];
-  if (!pp.tree) return false;
+  if (!pp.tree) return std::nullopt;
   const auto hit = pp.tree->closest(y);
-  if (hit.face < 0) return false;
+  if (hit.face < 0) return std::nullopt;
   const dissect::Chart& ref = *pull.ref;
   const int f = pp.faces[hit.face];
   const auto& t = ref.mesh.faces[f];
@@ -915,22 +916,18 @@ bool nearest_on_patch(const PosePull& pull, int p, const Vec3& y, Vec2& uv, Eige
   Eigen::Matrix2d ds;
   ds.col(0) = fuv[1] - fuv[0];
   ds.col(1) = fuv[2] - fuv[0];
-  if (!(0.5 * ds.determinant() > param::kZeroUvArea)) return false;
+  if (!(0.5 * ds.determinant() > param::kZeroUvArea)) return std::nullopt;
   const auto b = landmarks::closest_on_triangle(y, x0, ref.mesh.positions[t[1]], ref.mesh.positions[t[2]]);
   Mat32 e;
   e.col(0) = ref.mesh.positions[t[1]] - x0;
   e.col(1) = ref.mesh.positions[t[2]] - x0;
   const Mat32 g = e * ds.inverse();
-  uv = b[0] * fuv[0] + b[1] * fuv[1] + b[2] * fuv[2];
-  metric = g.transpose() * g;
-  d2 = hit.distance * hit.distance;
-  return true;
+  return PullTarget{b[0] * fuv[0] + b[1] * fuv[1] + b[2] * fuv[2], g.transpose() * g, hit.distance};
 }
 
-// Where a free local vertex of a problem is pulled to: (local vertex, its point moved into the
-// reference's frame) -> target (u, v) and the reference's 3D metric there, in the problem's
-// coordinates; false: no pull on it.
-using PullTargetFn = std::function<bool(int, const Vec3&, Vec2&, Eigen::Matrix2d&)>;
+// Where a free vertex of a problem is pulled to: its point moved into the reference's frame ->
+// the target, (u, v) and metric in the problem's coordinates; none: no pull on it.
+using PullTargetFn = std::function<std::optional<PullTarget>(const Vec3&)>;
 
 // Fills a problem's pull: every free local vertex of B that `locate` places gets its target and as
 // weight the pull's weight times a third of its faces' area times the metric.
@@ -943,8 +940,10 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
   for (size_t l = 0; l < pr.uv.size(); ++l) {
     if (pr.dims[l] != 2) continue;
     const Vec3 y = (pull.to_ref * chart.mesh.positions[pr.vertices[l]].homogeneous()).head<3>();
-    Eigen::Matrix2d m;
-    if (locate(static_cast<int>(l), y, pr.target[l], m)) pr.pull[l] = pull.weight * area[l] * m;
+    if (const auto t = locate(y)) {
+      pr.target[l] = t->uv;
+      pr.pull[l] = pull.weight * area[l] * t->metric;
+    }
   }
 }
 
@@ -952,10 +951,7 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
 void add_patch_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull) {
   if (pr.face_patch.empty()) return;
   const int p = pr.face_patch.front();
-  add_pull(pr, chart, pull, [&](int, const Vec3& y, Vec2& uv, Eigen::Matrix2d& m) {
-    double d2 = 0;
-    return nearest_on_patch(pull, p, y, uv, m, d2);
-  });
+  add_pull(pr, chart, pull, [&](const Vec3& y) { return nearest_on_patch(pull, p, y); });
 }
 
 struct MeshResult {
@@ -1301,18 +1297,14 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
   };
   if (pull) {
     // The pose pull toward the nearer of the reference's two patches, in glued (u, v).
-    add_pull(pr, chart, *pull, [&](int, const Vec3& y, Vec2& g, Eigen::Matrix2d& m) {
-      double best = kInf;
+    add_pull(pr, chart, *pull, [&](const Vec3& y) {
+      std::optional<PullTarget> best;
       for (int w = 0; w < 2; ++w) {
-        Vec2 uv;
-        Eigen::Matrix2d mw;
-        double d2 = 0;
-        if (!nearest_on_patch(*pull, glue[w].patch, y, uv, mw, d2) || !(d2 < best)) continue;
-        best = d2;
-        g = glue[w].to_glued(uv);
-        m = lin[w] * mw * lin[w].transpose();
+        const auto t = nearest_on_patch(*pull, glue[w].patch, y);
+        if (t && (!best || t->distance < best->distance))
+          best = PullTarget{glue[w].to_glued(t->uv), lin[w] * t->metric * lin[w].transpose(), t->distance};
       }
-      return best < kInf;
+      return best;
     });
   }
   const std::vector<Vec2> start = pr.uv;
@@ -2434,7 +2426,13 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
   report.meshes.resize(meshes.size());
   const std::vector<ReferencePatch> refs = build_refs(meshes[options.reference].chart, options, context);
   std::vector<PullPatch> pull_patches;
-  if (options.pose_pull > 0) pull_patches = build_pull_patches(meshes[options.reference].chart, options, context);
+  double pull_weight = 0;
+  if (options.pose_pull > 0) {
+    const dissect::Chart& ref = meshes[static_cast<size_t>(options.reference)].chart;
+    pull_patches = build_pull_patches(ref, options, context);
+    const double len = kPullLength * bounding_box(ref.mesh.positions).diagonal();
+    pull_weight = options.pose_pull / (len * len);
+  }
   context.report("refine maps", 0);
   for (size_t i = 0; i < meshes.size(); ++i) {
     auto& r = report.meshes[i];
@@ -2457,8 +2455,7 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       pull->ref = &ref;
       pull->patches = &pull_patches;
       pull->to_ref = pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]);
-      const double len = kPullLength * bounding_box(ref.mesh.positions).diagonal();
-      pull->weight = options.pose_pull / (len * len);
+      pull->weight = pull_weight;
     }
     double before = -1;
     const bool corners = options.move_corners && options.iterations > 0 && options.corner_sweeps > 0;

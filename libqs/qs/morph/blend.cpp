@@ -20,15 +20,9 @@ std::vector<Vec3> align_to(const std::vector<Vec3>& shape, const std::vector<Vec
     throw InvalidInput("align_to: " + std::to_string(shape.size()) + " and " + std::to_string(base.size()) +
                        " vertices; alignment needs two non-empty shapes with one vertex numbering");
   if (how == Align::None) return shape;
-  const Eigen::Index n = static_cast<Eigen::Index>(shape.size());
-  Eigen::Matrix3Xd from(3, n), to(3, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    from.col(i) = shape[i];
-    to.col(i) = base[i];
-  }
-  const Eigen::Matrix4d t = Eigen::umeyama(from, to, how == Align::Similarity);
+  const Eigen::Matrix4d t = fit_similarity(shape, base, how == Align::Similarity);
   std::vector<Vec3> out(shape.size());
-  for (Eigen::Index i = 0; i < n; ++i) out[i] = t.topLeftCorner<3, 3>() * shape[i] + t.topRightCorner<3, 1>();
+  for (size_t i = 0; i < shape.size(); ++i) out[i] = t.topLeftCorner<3, 3>() * shape[i] + t.topRightCorner<3, 1>();
   return out;
 }
 
