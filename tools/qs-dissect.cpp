@@ -423,7 +423,9 @@ int main(int argc, char** argv) {
       if (result.same_pose_fallback.empty())
         text << "same pose: " << result.same_pose_loops << " of " << inputs.size() - 1
              << " seed loops routed by pose, " << result.same_pose_splits
-             << " splits with inner corners placed by pose, " << result.same_pose_common << " at the common (u,v)\n";
+             << " splits with inner corners placed by pose, " << result.same_pose_common << " at the common (u,v); "
+             << result.same_pose_maps << " node maps taken over from the first mesh by nearest points, "
+             << result.same_pose_own_maps << " kept their own (folded)\n";
       else
         text << "same pose: not used (" << result.same_pose_fallback << "; the common (u,v) fold less)\n";
     }

@@ -624,6 +624,32 @@ TEST(PosePull, BringsOneSurfaceTessellatedTwiceCloserToTheIdentity) {
   }
 }
 
+// DissectOptions::same_pose_maps: before every split the second mesh's map of the node is taken
+// over from the first's by nearest points, so the cuts (straight at equal (u, v)) run along the
+// same curves on both surfaces. One surface tessellated twice: every node map is taken over, the
+// leaves stay bijective, and the dissection alone (no refinement) lies closer to the identity
+// than with each mesh's own node maps.
+TEST(SamePoseMaps, TakeTheFirstMeshsNodeMapsOver) {
+  const auto fam = same_shape_pair();
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  std::vector<qs::dissect::MeshToDissect> in;
+  for (const auto& s : fam.shapes) in.push_back(cr::dissect_input(s));
+  qs::dissect::DissectOptions o;
+  o.same_pose = true;
+  const auto taken = qs::dissect::dissect_set(in, o);
+  o.same_pose_maps = false;
+  const auto own = qs::dissect::dissect_set(in, o);
+  EXPECT_GT(taken.same_pose_maps, 0);
+  EXPECT_EQ(taken.same_pose_own_maps, 0);
+  EXPECT_EQ(own.same_pose_maps + own.same_pose_own_maps, 0);
+  for (const auto* set : {&taken, &own})
+    for (const auto& d : set->meshes) EXPECT_EQ(folded_faces(d.chart), 0);
+  const auto e_taken = measure(truth, taken.meshes);
+  const auto e_own = measure(truth, own.meshes);
+  // Measured: mean 0.90% -> 0.69% of the diagonal.
+  EXPECT_LT(e_taken.mean, 0.85 * e_own.mean) << e_own.mean << " -> " << e_taken.mean;
+}
+
 // pose_distance: 0 for a mesh and a copy moved by a similarity, small for one surface
 // tessellated twice, large for two shapes of a family; nothing without seeds.
 TEST(PoseDistance, SeparatesOnePoseFromAFamily) {

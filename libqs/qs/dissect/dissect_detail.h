@@ -23,6 +23,10 @@
 #include "qs/landmarks/landmarks.h"
 #include "qs/param/square_param.h"
 
+namespace qs::metro {
+class SurfaceDistance;
+}
+
 namespace qs::dissect::detail {
 
 // A split that could not be completed; the parent is restored and kept as a leaf.
@@ -324,6 +328,19 @@ class SetDissector {
   std::vector<Eigen::Matrix4d> pose_;  // same_pose: mesh 0 -> mesh i (landmarks' similarity)
   std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
 };
+
+/// same_pose_maps: rounds of the fold repair of transfer_node_map (round r frees r + 1 more
+/// rings around the folds); a map still folded after them is not taken over.
+constexpr int kTransferRepairRounds = 6;
+
+/// DissectOptions::same_pose_maps: mesh i's map of a node (`p`) taken over from mesh 0's (`ref`):
+/// every vertex of p but its border and `held` ones goes to the (u, v) of ref's point nearest to
+/// it once moved into mesh 0's frame by `to_ref` (a vertex farther than `reach` from ref is left
+/// to the repair), then folded faces are mended by uniform (Tutte) solves over the free vertices
+/// around them, a ring wider each round (kTransferRepairRounds). Returns whether p.sp changed:
+/// only to a bijective map (every face positive, counted).
+bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
+                       double reach, const std::vector<char>& held, Param& p);
 
 /// same_pose: a posed corner farther than this fraction of its mesh's diagonal from the point it
 /// stands for means the meshes are not in one pose there; the split keeps its common (u, v).

@@ -135,6 +135,12 @@ struct DissectOptions {
   /// quinary split, a feature would be nearer a cut than feature_cut_margin, or the split fails.
   /// Wrong for meshes in different poses. Off by default.
   bool same_pose = false;
+  /// With same_pose: before every split, each mesh's map of the node (but the first's) is taken
+  /// over from the first mesh's by nearest points (the landmarks' similarity, then every interior
+  /// vertex at the (u, v) of the first mesh's nearest point of the node; folds mended by Tutte
+  /// solves around them; kept only when bijective), so that the split's cuts, straight at equal
+  /// (u, v), run along the same curves on every surface. false: each mesh's own map.
+  bool same_pose_maps = true;
   /// Turns same_pose on by itself when the meshes are found in one pose: every mesh, moved onto
   /// the first by the landmarks' similarity, lies at a mean distance of at most this fraction of
   /// the first mesh's diagonal from it (pose_distance). Needs seeds in every mesh. 0: off (the
@@ -271,6 +277,10 @@ struct DissectionSet {
   int same_pose_splits = 0;
   int same_pose_common = 0;
   int same_pose_loops = 0;  ///< meshes but the first whose seed loop follows the first's by pose
+  /// DissectOptions::same_pose_maps: node maps (of meshes but the first, before a split) taken
+  /// over from the first mesh's, and those that kept their own (still folded after the repair).
+  int same_pose_maps = 0;
+  int same_pose_own_maps = 0;
   /// Empty, or why the set was dissected again with the common (u, v) (DissectOptions::same_pose:
   /// the posed result ended with folded leaves, the common one folds less).
   std::string same_pose_fallback;

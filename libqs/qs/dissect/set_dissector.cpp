@@ -16,6 +16,7 @@
 
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
+#include "qs/metro/metro.h"
 
 namespace qs::dissect::detail {
 
@@ -132,6 +133,7 @@ void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
   const size_t nm = meshes_.size();
   pose_.assign(nm, Eigen::Matrix4d::Identity());
   pose_diagonal_.assign(nm, 0.0);
+  pose_diagonal_[0] = bounding_box(in_[0].mesh->positions).diagonal();
   const std::vector<Vec3> from = meshes_[0].landmark_points(loops[0].seeds);
   for (size_t i = 1; i < nm; ++i) {
     pose_[i] = fit_similarity(from, meshes_[i].landmark_points(loops[i].seeds));
@@ -400,6 +402,21 @@ DissectionSet SetDissector::run() {
           if (!sp.bijective()) return;
           p.sp = std::move(sp);
         }, node_faces >= kParallelFaces);
+      }
+      // DissectOptions::same_pose_maps: every mesh's map of the node taken over from mesh 0's.
+      if (opt_.same_pose && opt_.same_pose_maps && nm > 1 && ps[0].sp.bijective()) {
+        const TriMesh ref_mesh{ps[0].ex.pm.positions, ps[0].ex.pm.faces};
+        const metro::SurfaceDistance on_ref(ref_mesh, "the first mesh's node");
+        std::vector<char> taken(nm, 0);
+        parallel_for(nm - 1, [&](size_t k) {
+          Param& p = ps[k + 1];
+          if (!p.sp.bijective()) return;
+          std::vector<char> held(p.sp.uv.size(), 0);
+          for (const auto& [f, local] : p.features) held[local] = 1;
+          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0],
+                                           held, p);
+        }, node_faces >= kParallelFaces);
+        for (size_t i = 1; i < nm; ++i) ++(taken[i] ? out.same_pose_maps : out.same_pose_own_maps);
       }
       std::vector<std::array<Node, 5>> kids(meshes_.size());
       // DissectOptions::same_pose: every mesh's inner corners where mesh 0's lie on its surface;
