@@ -336,8 +336,9 @@ constexpr int kTransferRepairRounds = 6;
 /// DissectOptions::same_pose_maps: mesh i's map of a node (`p`) taken over from mesh 0's (`ref`):
 /// every vertex of p but its border and `held` ones goes to the (u, v) of ref's point nearest to
 /// it once moved into mesh 0's frame by `to_ref` (a vertex farther than `reach` from ref is left
-/// to the repair), then folded faces are mended by uniform (Tutte) solves over the free vertices
-/// around them, a ring wider each round (kTransferRepairRounds). Returns whether p.sp changed:
+/// to the repair), then folded faces are mended by solves of the node's own weights (p.weights)
+/// over the free vertices around them, every other interior vertex pinned, a ring wider each
+/// round (kTransferRepairRounds). Returns whether p.sp changed:
 /// only to a bijective map (every face positive, counted).
 bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
                        double reach, const std::vector<char>& held, Param& p);

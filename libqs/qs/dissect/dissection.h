@@ -137,9 +137,11 @@ struct DissectOptions {
   bool same_pose = false;
   /// With same_pose: before every split, each mesh's map of the node (but the first's) is taken
   /// over from the first mesh's by nearest points (the landmarks' similarity, then every interior
-  /// vertex at the (u, v) of the first mesh's nearest point of the node; folds mended by Tutte
-  /// solves around them; kept only when bijective), so that the split's cuts, straight at equal
-  /// (u, v), run along the same curves on every surface. false: each mesh's own map.
+  /// vertex at the (u, v) of the first mesh's nearest point of the node; folds mended by solves
+  /// of the node's own weights around them; kept only when bijective), so that the split's cuts,
+  /// straight at equal (u, v), run along the same curves on every surface. false: each mesh's
+  /// own map. On by default (README, "Same pose": the bodies against their own re-tessellation
+  /// 0.19 / 0.17% -> 0.17 / 0.15% mean).
   bool same_pose_maps = true;
   /// Turns same_pose on by itself when the meshes are found in one pose: every mesh, moved onto
   /// the first by the landmarks' similarity, lies at a mean distance of at most this fraction of

@@ -12,10 +12,6 @@
 
 namespace qs::dissect::detail {
 
-namespace {
-
-}  // namespace
-
 bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
                        double reach, const std::vector<char>& held, Param& p) {
   const param::PatchMesh& pm = p.ex.pm;
@@ -56,9 +52,10 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
     r.erase(std::unique(r.begin(), r.end()), r.end());
   }
 
-  // Folds (and unplaced vertices) mended by Tutte solves over the free vertices around them,
-  // one ring wider each round; the map is kept only when it ends with every face positive.
-  // (The border is where the node's own map put it; parameterize_square places it the same way.)
+  // Folds (and unplaced vertices) mended by solves of the node's own weights over the free
+  // vertices around them, one ring wider each round; the map is kept only when it ends with
+  // every face positive. Only the free vertices take the solve's (u, v): the border stays where
+  // the node's map put it (parameterize_square places it by the same rule).
   param::SquareParam sp = p.sp;
   for (int round = 0; round <= kTransferRepairRounds; ++round) {
     std::vector<char> free(n, 0);
