@@ -140,7 +140,7 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
   if (bad > 0 && options.same_pose && meshes.size() > 1) {
     DissectOptions o = used;
     o.same_pose = false;
-    try_again(o, "the common (u,v)", &DissectionSet::same_pose_fallback, "posed corners");
+    try_again(o, "the common (u,v)", &DissectionSet::same_pose_fallback, "the pose (posed corners, node maps)");
   }
   if (bad > 0 && options.fallback_maps && (options.geodesic_seed_curves || options.intrinsic_cotan)) {
     DissectOptions o = used;

@@ -124,6 +124,13 @@ struct Param {
   param::InteriorWeights weights = param::InteriorWeights::MeanValue;  // of every solve of this patch
 };
 
+// 1 at the local vertices of p's features, 0 elsewhere (the vertices a node map must keep).
+inline std::vector<char> feature_mask(const Param& p) {
+  std::vector<char> held(p.sp.uv.size(), 0);
+  for (const auto& [k, local] : p.features) held[local] = 1;
+  return held;
+}
+
 // The dissection state of one mesh of the set: the cut mesh and the faces of every tree node.
 // The set driver (SetDissector) walks the union tree and asks each mesh to parameterize, split,
 
@@ -334,14 +341,14 @@ class SetDissector {
 constexpr int kTransferRepairRounds = 6;
 
 /// DissectOptions::same_pose_maps: mesh i's map of a node (`p`) taken over from mesh 0's (`ref`):
-/// every vertex of p but its border and `held` ones goes to the (u, v) of ref's point nearest to
+/// every vertex of p but its border and its features goes to the (u, v) of ref's point nearest to
 /// it once moved into mesh 0's frame by `to_ref` (a vertex farther than `reach` from ref is left
 /// to the repair), then folded faces are mended by solves of the node's own weights (p.weights)
 /// over the free vertices around them, every other interior vertex pinned, a ring wider each
 /// round (kTransferRepairRounds). Returns whether p.sp changed:
 /// only to a bijective map (every face positive, counted).
 bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
-                       double reach, const std::vector<char>& held, Param& p);
+                       double reach, Param& p);
 
 /// same_pose: a posed corner farther than this fraction of its mesh's diagonal from the point it
 /// stands for means the meshes are not in one pose there; the split keeps its common (u, v).

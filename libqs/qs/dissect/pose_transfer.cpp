@@ -13,12 +13,11 @@
 namespace qs::dissect::detail {
 
 bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
-                       double reach, const std::vector<char>& held, Param& p) {
+                       double reach, Param& p) {
   const param::PatchMesh& pm = p.ex.pm;
   const int n = static_cast<int>(pm.positions.size());
-  std::vector<char> border(n, 0), fixed(n, 0);
-  for (int v : pm.boundary) border[v] = 1;
-  for (int v = 0; v < n; ++v) fixed[v] = border[v] || held[v];
+  std::vector<char> border(n, 0), fixed = feature_mask(p);
+  for (int v : pm.boundary) border[v] = fixed[v] = 1;
 
   // Every free vertex at the (u, v) of mesh 0's nearest point; one farther than `reach` is
   // left to the repair below.
@@ -56,7 +55,6 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
   // vertices around them, one ring wider each round; the map is kept only when it ends with
   // every face positive. Only the free vertices take the solve's (u, v): the border stays where
   // the node's map put it (parameterize_square places it by the same rule).
-  param::SquareParam sp = p.sp;
   for (int round = 0; round <= kTransferRepairRounds; ++round) {
     std::vector<char> free(n, 0);
     bool any = false;
@@ -67,6 +65,7 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
         for (int k = 0; k < 3; ++k)
           if (!fixed[t[k]]) free[t[k]] = any = true;
     if (!any) {
+      param::SquareParam sp = p.sp;
       sp.uv = std::move(uv);
       param::count_uv_faces(pm.faces, sp);
       if (!sp.bijective()) return false;

@@ -392,10 +392,8 @@ DissectionSet SetDissector::run() {
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
           if (!p.sp.bijective() || !ps[0].sp.bijective()) return;
-          std::vector<char> held(p.sp.uv.size(), 0);
-          for (const auto& [f, local] : p.features) held[local] = 1;
           std::vector<Vec2> uv = p.sp.uv;
-          if (!opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, p.ex.pm, uv, held)) return;
+          if (!opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, p.ex.pm, uv, feature_mask(p))) return;
           param::SquareParam sp = p.sp;
           sp.uv = std::move(uv);
           param::count_uv_faces(p.ex.pm.faces, sp);
@@ -411,10 +409,7 @@ DissectionSet SetDissector::run() {
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
           if (!p.sp.bijective()) return;
-          std::vector<char> held(p.sp.uv.size(), 0);
-          for (const auto& [f, local] : p.features) held[local] = 1;
-          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0],
-                                           held, p);
+          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0], p);
         }, node_faces >= kParallelFaces);
         for (size_t i = 1; i < nm; ++i) ++(taken[i] ? out.same_pose_maps : out.same_pose_own_maps);
       }
