@@ -1655,7 +1655,8 @@ constexpr int kOrigin = -2, kGeneric = -1;
 // Refines B's map on the star of a corner and plans the cut along the k rays (see above). `pinned`:
 // corners, seeds and features of B. Only an outcome Moved has a cut to commit.
 CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, const std::vector<ReferencePatch>& refs,
-                      const CornerStar& star, const std::vector<char>& pinned, const RefineOptions& options) {
+                      const CornerStar& star, const std::vector<char>& pinned, const RefineOptions& options,
+                      const PosePull* pull) {
   CornerCut out;
   const int k = static_cast<int>(star.patches.size());
   const bool power = options.corner_chart == CornerChart::Power;
@@ -1732,14 +1733,8 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
   const double scale = area_a > 0 ? pr.total_area / area_a : 1.0;
   std::vector<Eigen::Matrix2d> lin(k);
   for (int j = 0; j < k; ++j) lin[j] = Glue{star.patches[j], turns[j], 0.0}.linear();
-  auto hints = std::make_shared<std::vector<int>>(pr.faces.size() * k, -1);
-  const MetricFn metric = [&, hints](size_t t, const Vec2& g) {
-    double ang = std::atan2(g.y(), g.x());
-    if (ang < 0) ang += 2 * M_PI;
-    const int j = std::clamp(static_cast<int>(std::floor(ang / (2 * M_PI / k))), 0, k - 1);
-    const Vec2 q = unglue(g, j);
-    const Vec2 s = turn_square(q.cwiseMax(0.0).cwiseMin(1.0), 4 - turns[j]);
-    const Eigen::Matrix2d ms = refs[star.patches[j]].metric(s, (*hints)[t * k + j]);
+  // A metric ms of patch star.patches[j] at glued point g, in glued (u, v).
+  auto glued_metric = [&](int j, const Vec2& g, const Eigen::Matrix2d& ms) {
     Eigen::Matrix2d c = sector_inverse[j];
     if (power) {
       const Vec2 w = rotate(g, -2 * M_PI * j / k);
@@ -1748,8 +1743,30 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
       const double mag = b * std::pow(r, b - 1), phi = (b - 1) * std::atan2(w.y(), w.x()) - 2 * M_PI * j / k;
       c << mag * std::cos(phi), -mag * std::sin(phi), mag * std::sin(phi), mag * std::cos(phi);
     }
-    return Eigen::Matrix2d(scale * c.transpose() * lin[j] * ms * lin[j].transpose() * c);
+    return Eigen::Matrix2d(c.transpose() * lin[j] * ms * lin[j].transpose() * c);
   };
+  auto hints = std::make_shared<std::vector<int>>(pr.faces.size() * k, -1);
+  const MetricFn metric = [&, hints](size_t t, const Vec2& g) {
+    double ang = std::atan2(g.y(), g.x());
+    if (ang < 0) ang += 2 * M_PI;
+    const int j = std::clamp(static_cast<int>(std::floor(ang / (2 * M_PI / k))), 0, k - 1);
+    const Vec2 q = unglue(g, j);
+    const Vec2 s = turn_square(q.cwiseMax(0.0).cwiseMin(1.0), 4 - turns[j]);
+    return Eigen::Matrix2d(scale * glued_metric(j, g, refs[star.patches[j]].metric(s, (*hints)[t * k + j])));
+  };
+  if (pull) {
+    // The pose pull toward the nearest of the reference's k patches around the corner, glued.
+    add_pull(pr, chart, *pull, [&](const Vec3& y) {
+      std::optional<PullTarget> best;
+      for (int j = 0; j < k; ++j) {
+        const auto t = nearest_on_patch(*pull, star.patches[j], y);
+        if (!t || (best && t->distance >= best->distance)) continue;
+        const Vec2 g = glue(turn_square(t->uv, turns[j]), j);
+        best = PullTarget{g, glued_metric(j, g, t->metric), t->distance};
+      }
+      return best;
+    });
+  }
   const std::vector<Vec2> start = pr.uv;
   RefineOptions corner_options = options;
   corner_options.iterations = std::min(options.iterations, options.corner_iterations);
@@ -2038,7 +2055,7 @@ struct CornerResult {
 // patches), planned in parallel within a group and committed in order: the result does not depend
 // on the thread count.
 CornerResult move_corners(dissect::Dissection& b, const std::vector<ReferencePatch>& refs,
-                          const RefineOptions& options, const Context& context) {
+                          const RefineOptions& options, const Context& context, const PosePull* pull) {
   CornerResult out;
   auto& chart = b.chart;
   const int np = static_cast<int>(chart.patches.size());
@@ -2097,7 +2114,7 @@ CornerResult move_corners(dissect::Dissection& b, const std::vector<ReferencePat
           cuts[i].outcome = CornerOutcome::Irregular;
           return;
         }
-        cuts[i] = plan_corner(chart, index, refs, *star, pinned, options);
+        cuts[i] = plan_corner(chart, index, refs, *star, pinned, options, pull);
       });
       for (size_t i = 0; i < cuts.size(); ++i) {
         const auto& cc = cuts[i];
@@ -2468,8 +2485,8 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       // An interior pass first: the corner stars then start from maps already refined inside
       // their patches (measured: gen-s1 mean 1.23% -> 1.02% against moving the dissection's
       // corners directly).
-      r.newton_steps += run_mesh(meshes[i], refs, options, true, context).steps;
-      const CornerResult c = move_corners(meshes[i], refs, options, context);
+      r.newton_steps += run_mesh(meshes[i], refs, options, true, context, pull ? &*pull : nullptr).steps;
+      const CornerResult c = move_corners(meshes[i], refs, options, context, pull ? &*pull : nullptr);
       r.corners_moved = c.moved;
       r.corners_irregular = c.irregular;
       r.corners_skipped = c.skipped;
