@@ -624,6 +624,35 @@ TEST(PosePull, BringsOneSurfaceTessellatedTwiceCloserToTheIdentity) {
   }
 }
 
+// The corner moves pull too: with RefineOptions::move_corners, the cone charts around the
+// corners are pulled toward the nearest points like the interiors and the sides, so moving the
+// corners brings one surface tessellated twice closer to the identity than holding them.
+TEST(PosePull, MovesTheCornersTowardTheNearestPointsToo) {
+  const auto fam = same_shape_pair();
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  const auto dissected = dissect_pair(fam);
+  mr::RefineOptions o;
+  o.move_corners = true;
+  auto unpulled = dissected;
+  mr::refine_maps(unpulled, o);
+  o.pose_pull = 10;
+  auto pulled = dissected;
+  const auto r = expect_thread_independent(pulled, o);
+  EXPECT_GT(r.meshes[1].corners_moved, 0);
+  EXPECT_EQ(r.meshes[1].flipped_faces + r.meshes[1].zero_area_faces, 0);
+  EXPECT_EQ(pulled[1].seeds, dissected[1].seeds);
+  auto fixed = dissected;
+  o.move_corners = false;
+  mr::refine_maps(fixed, o);
+  const auto e_unpulled = measure(truth, unpulled);
+  const auto e_pulled = measure(truth, pulled);
+  const auto e_fixed = measure(truth, fixed);
+  EXPECT_LT(e_pulled.mean, 0.8 * e_unpulled.mean) << e_unpulled.mean << " -> " << e_pulled.mean;
+  // Measured 0.2053 with the corners held, 0.2029 moved with the pull (0.2068 when the corner
+  // moves did not pull: they undid part of what the pull had gained).
+  EXPECT_LT(e_pulled.mean, e_fixed.mean) << e_fixed.mean << " -> " << e_pulled.mean;
+}
+
 // DissectOptions::same_pose_maps: before every split the second mesh's map of the node is taken
 // over from the first's by nearest points, so the cuts (straight at equal (u, v)) run along the
 // same curves on both surfaces. One surface tessellated twice: every node map is taken over, the

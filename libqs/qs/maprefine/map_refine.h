@@ -124,11 +124,12 @@ struct RefineOptions {
   int corner_iterations = 5;
   /// With move_corners: how the patches around a corner are glued into one chart (see CornerChart).
   CornerChart corner_chart = CornerChart::Sector;
-  /// The pose pull (qs-dissect, for meshes in one pose): the interior passes and the side moves of
-  /// across_borders also pull every free vertex of B toward the reference's point nearest to it, B
-  /// moved into the reference's frame by the landmarks' similarity (Umeyama on the seeds and
-  /// features), the nearest point taken in the vertex's own patch (in the nearer of the two
-  /// patches of a side being moved). Energy: pose_pull * sum over B's vertices of
+  /// The pose pull (qs-dissect, for meshes in one pose): the interior passes, the side moves of
+  /// across_borders and the corner moves of move_corners also pull every free vertex of B toward
+  /// the reference's point nearest to it, B moved into the reference's frame by the landmarks'
+  /// similarity (Umeyama on the seeds and features), the nearest point taken in the vertex's own
+  /// patch (in the nearest of the two patches of a side, or of the k patches of a corner, being
+  /// moved). Energy: pose_pull * sum over B's vertices of
   /// area(v) * |d(u, v)|^2 / (kPullLength * the reference's diagonal)^2, with |d|^2 the squared 3D
   /// distance on the reference's patch (its metric at the target). 0: off. \pre >= 0
   double pose_pull = 0;
