@@ -947,6 +947,18 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
   }
 }
 
+// The nearest of several reference patches to y (patch i of n given by `patch(i)`), its target
+// carried into the problem's glued coordinates by `carry(i, target)`; none when no patch places y.
+template <class PatchOf, class Carry>
+std::optional<PullTarget> nearest_of(const PosePull& pull, int n, const Vec3& y, PatchOf&& patch, Carry&& carry) {
+  std::optional<PullTarget> best;
+  for (int i = 0; i < n; ++i) {
+    const auto t = nearest_on_patch(pull, patch(i), y);
+    if (t && (!best || t->distance < best->distance)) best = carry(i, *t);
+  }
+  return best;
+}
+
 // add_pull for a problem of one patch's interior: the target in the vertex's own patch.
 void add_patch_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull) {
   if (pr.face_patch.empty()) return;
@@ -1298,13 +1310,11 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
   if (pull) {
     // The pose pull toward the nearer of the reference's two patches, in glued (u, v).
     add_pull(pr, chart, *pull, [&](const Vec3& y) {
-      std::optional<PullTarget> best;
-      for (int w = 0; w < 2; ++w) {
-        const auto t = nearest_on_patch(*pull, glue[w].patch, y);
-        if (t && (!best || t->distance < best->distance))
-          best = PullTarget{glue[w].to_glued(t->uv), lin[w] * t->metric * lin[w].transpose(), t->distance};
-      }
-      return best;
+      return nearest_of(
+          *pull, 2, y, [&](int w) { return glue[w].patch; },
+          [&](int w, const PullTarget& t) {
+            return PullTarget{glue[w].to_glued(t.uv), lin[w] * t.metric * lin[w].transpose(), t.distance};
+          });
     });
   }
   const std::vector<Vec2> start = pr.uv;
@@ -1757,14 +1767,12 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
   if (pull) {
     // The pose pull toward the nearest of the reference's k patches around the corner, glued.
     add_pull(pr, chart, *pull, [&](const Vec3& y) {
-      std::optional<PullTarget> best;
-      for (int j = 0; j < k; ++j) {
-        const auto t = nearest_on_patch(*pull, star.patches[j], y);
-        if (!t || (best && t->distance >= best->distance)) continue;
-        const Vec2 g = glue(turn_square(t->uv, turns[j]), j);
-        best = PullTarget{g, glued_metric(j, g, t->metric), t->distance};
-      }
-      return best;
+      return nearest_of(
+          *pull, k, y, [&](int j) { return star.patches[j]; },
+          [&](int j, const PullTarget& t) {
+            const Vec2 g = glue(turn_square(t.uv, turns[j]), j);
+            return PullTarget{g, glued_metric(j, g, t.metric), t.distance};
+          });
     });
   }
   const std::vector<Vec2> start = pr.uv;
@@ -2466,13 +2474,14 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       count_faces(meshes[i].chart, r);
       continue;
     }
-    std::optional<PosePull> pull;
+    PosePull pose;
+    const PosePull* pull = nullptr;  // none for meshes in different poses
     if (options.pose_pull > 0) {
-      pull.emplace();
-      pull->ref = &ref;
-      pull->patches = &pull_patches;
-      pull->to_ref = pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]);
-      pull->weight = pull_weight;
+      pose.ref = &ref;
+      pose.patches = &pull_patches;
+      pose.to_ref = pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]);
+      pose.weight = pull_weight;
+      pull = &pose;
     }
     double before = -1;
     const bool corners = options.move_corners && options.iterations > 0 && options.corner_sweeps > 0;
@@ -2485,8 +2494,8 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       // An interior pass first: the corner stars then start from maps already refined inside
       // their patches (measured: gen-s1 mean 1.23% -> 1.02% against moving the dissection's
       // corners directly).
-      r.newton_steps += run_mesh(meshes[i], refs, options, true, context, pull ? &*pull : nullptr).steps;
-      const CornerResult c = move_corners(meshes[i], refs, options, context, pull ? &*pull : nullptr);
+      r.newton_steps += run_mesh(meshes[i], refs, options, true, context, pull).steps;
+      const CornerResult c = move_corners(meshes[i], refs, options, context, pull);
       r.corners_moved = c.moved;
       r.corners_irregular = c.irregular;
       r.corners_skipped = c.skipped;
@@ -2495,14 +2504,14 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
       update_figures(meshes[i], std::vector<char>(meshes[i].chart.patches.size(), 1));
     }
     if (across) {
-      const AcrossResult a = refine_across(meshes[i], refs, options, context, pull ? &*pull : nullptr);
+      const AcrossResult a = refine_across(meshes[i], refs, options, context, pull);
       r.sides_refined = a.sides_refined;
       r.sides_skipped = a.sides_skipped;
       r.cut_vertices = a.added_vertices;
       r.newton_steps += a.steps;
       update_figures(meshes[i], std::vector<char>(meshes[i].chart.patches.size(), 1));
     }
-    const MeshResult m = run_mesh(meshes[i], refs, options, true, context, pull ? &*pull : nullptr);
+    const MeshResult m = run_mesh(meshes[i], refs, options, true, context, pull);
     r.free_vertices = m.free;
     r.held_vertices = m.held;
     r.newton_steps += m.steps;
