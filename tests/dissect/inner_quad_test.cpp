@@ -10,11 +10,7 @@ namespace {
 using qs::Vec2;
 using qs::dissect::detail::inner_quad_ok;
 
-std::array<Vec2, 4> standard(const Vec2& peak, double w) {
-  std::array<Vec2, 4> q;
-  for (int i = 0; i < 4; ++i) q[i] = (1 - w) * qs::dissect::detail::kSquare[i] + w * peak;
-  return q;
-}
+std::array<Vec2, 4> standard(const Vec2& peak, double w) { return qs::dissect::detail::inner_corners(peak, w); }
 
 }  // namespace
 

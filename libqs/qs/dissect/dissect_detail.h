@@ -290,8 +290,20 @@ double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b);
 /// inner corner i to i + 1) crossing (split_choice.cpp).
 bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin);
 
-/// Smallest distance from the features to the 8 cuts of a split at (peak, w) (split_choice.cpp).
-double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w);
+/// The inner corners of a split at (peak, w): (1 - w) p_i + w peak for the square's corners p_i.
+inline std::array<Vec2, 4> inner_corners(const Vec2& peak, double w) {
+  std::array<Vec2, 4> inner;
+  for (int i = 0; i < 4; ++i) inner[i] = (1 - w) * kSquare[i] + w * peak;
+  return inner;
+}
+
+/// Smallest distance from the features to the 8 cuts of a split with inner corners `inner`
+/// (split_choice.cpp); infinity without features.
+double feature_clearance(const std::vector<Vec2>& features, const std::array<Vec2, 4>& inner);
+/// The same for a split at (peak, w).
+inline double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w) {
+  return feature_clearance(features, inner_corners(peak, w));
+}
 /// The children's stretch predicted from the parent's map for a split at (peak, w) (split_choice.cpp).
 double predicted_children_stretch(const Param& p, const Vec2& peak, double w);
 

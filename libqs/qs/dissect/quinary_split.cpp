@@ -127,9 +127,7 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
 }
 
 std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const Vec2& peak_uv, double w) {
-  std::array<Vec2, 4> inner;
-  for (int i = 0; i < 4; ++i) inner[i] = (1 - w) * kSquare[i] + w * peak_uv;
-  return split(node, p, inner);
+  return split(node, p, inner_corners(peak_uv, w));
 }
 
 std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner) {

@@ -162,8 +162,7 @@ bool SetDissector::pose_loop(size_t i, std::vector<SeedLoop>& loops, const std::
 std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<Param>& ps, const Vec2& peak,
                                                             double w) const {
   const size_t nm = ps.size();
-  std::array<Vec2, 4> common;
-  for (int c = 0; c < 4; ++c) common[c] = (1 - w) * kSquare[c] + w * peak;
+  const std::array<Vec2, 4> common = inner_corners(peak, w);
   std::vector<std::array<Vec2, 4>> out(nm, common);
   // Mesh 0's inner corners on its surface: the point of its node at that (u, v).
   const param::PatchMesh& pm0 = ps[0].ex.pm;
@@ -203,20 +202,17 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     }
     if (!near) continue;
     // As far toward the posed corners as still makes a split (a posed corner on the node's
-    // border, where the nodes of the two meshes differ, or a quad folded by a squeezed map).
+    // border, where the nodes of the two meshes differ, or a quad folded by a squeezed map) and
+    // keeps the features clear of the cuts, as the common split keeps them (feature_cut_margin).
+    std::vector<Vec2> fuv;
+    for (const auto& [k, local] : ps[i].features) fuv.push_back(uv[local]);
     for (const double t : {1.0, 0.75, 0.5, 0.25}) {
       std::array<Vec2, 4> q;
       for (int c = 0; c < 4; ++c) q[c] = (1 - t) * common[c] + t * posed[c];
-      if (!inner_quad_ok(q, kSamePoseMargin)) continue;
-      // Features stay clear of the cuts, as the common split keeps them (feature_cut_margin).
-      bool clear = true;
-      for (const auto& [k, local] : ps[i].features)
-        for (int c = 0; c < 4; ++c)
-          clear = clear && segment_distance(uv[local], kSquare[c], q[c]) >= opt_.feature_cut_margin &&
-                  segment_distance(uv[local], q[c], q[(c + 1) % 4]) >= opt_.feature_cut_margin;
-      if (!clear) continue;
-      out[i] = q;
-      break;
+      if (inner_quad_ok(q, kSamePoseMargin) && feature_clearance(fuv, q) >= opt_.feature_cut_margin) {
+        out[i] = q;
+        break;
+      }
     }
   }
   return out;

@@ -99,12 +99,12 @@ bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin) {
   return true;
 }
 
-// The smallest distance from the features to the 8 cuts (and their ends) of a split at (peak, w).
-double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, double w) {
+// The smallest distance from the features to the 8 cuts (and their ends) of a split.
+double feature_clearance(const std::vector<Vec2>& features, const std::array<Vec2, 4>& inner) {
   std::array<Vec2, 8> c;
   for (int i = 0; i < 4; ++i) {
     c[i] = kSquare[i];
-    c[i + 4] = (1 - w) * kSquare[i] + w * peak;
+    c[i + 4] = inner[i];
   }
   double best = std::numeric_limits<double>::infinity();
   for (const Vec2& q : features)
@@ -122,10 +122,11 @@ double feature_clearance(const std::vector<Vec2>& features, const Vec2& peak, do
 // Faces are subsampled to about 2000 (deterministic stride); a face folded by the prediction
 // counts as stretch 1e3.
 double predicted_children_stretch(const Param& p, const Vec2& peak, double w) {
+  const std::array<Vec2, 4> inner = inner_corners(peak, w);
   std::array<Vec2, 8> c;
   for (int i = 0; i < 4; ++i) {
     c[i] = kSquare[i];
-    c[i + 4] = (1 - w) * kSquare[i] + w * peak;
+    c[i + 4] = inner[i];
   }
   std::array<std::array<Vec2, 4>, 5> quad;
   for (int k = 0; k < 4; ++k) quad[k] = {c[k], c[(k + 1) % 4], c[(k + 1) % 4 + 4], c[k + 4]};
