@@ -217,6 +217,41 @@ TEST(Metro, SurfaceDistanceMatchesBruteForce) {
   }
 }
 
+TEST(Metro, ClosestFacingKeepsToTheQuerysSideOfAThinPart) {
+  // A thin slab seen from inside its lower sheet: the upper sheet (facing down) is nearer, but
+  // only the lower sheet faces up as the query's normal does.
+  TriMesh m;
+  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 0.1), Vec3(1, 0, 0.1), Vec3(0, 1, 0.1)};
+  m.faces = {{0, 1, 2}, {3, 5, 4}};  // facing up at z = 0, down at z = 0.1
+  const qs::metro::SurfaceDistance sd(m);
+  const Vec3 q(0.2, 0.2, 0.06);
+  EXPECT_EQ(sd.closest(q).face, 1);
+  const auto up = sd.closest_facing(q, Vec3(0, 0, 3), 0.0);  // any length: the direction counts
+  EXPECT_EQ(up.face, 0);
+  EXPECT_NEAR(up.distance, 0.06, 1e-15);
+  EXPECT_NEAR((up.point - Vec3(0.2, 0.2, 0)).norm(), 0, 1e-15);
+  EXPECT_EQ(sd.closest_facing(q, Vec3(0, 0, -1), 0.0).face, 1);
+  // A cosine no face meets, and a zero direction: none.
+  const auto none = sd.closest_facing(q, Vec3(1, 0, 0), 0.5);
+  EXPECT_EQ(none.face, -1);
+  EXPECT_TRUE(std::isinf(none.distance));
+  EXPECT_EQ(sd.closest_facing(q, Vec3::Zero(), -1.0).face, -1);
+  // On a closed surface with the outward normal at the query's nearest point, it agrees with
+  // closest() wherever that point's face faces the same way.
+  const TriMesh b = qs::shapes::bumpy_sphere(0.3, 7, 3);
+  const qs::metro::SurfaceDistance sb(b);
+  for (int i = 0; i < 50; ++i) {
+    const double t = 0.37 * i;
+    const Vec3 p(1.1 * std::cos(t) * std::sin(0.05 + 0.06 * i), 1.1 * std::sin(t) * std::sin(0.05 + 0.06 * i),
+                 1.1 * std::cos(0.05 + 0.06 * i));
+    const auto c = sb.closest(p);
+    const auto& f = b.faces[static_cast<size_t>(c.face)];
+    const Vec3 n = (b.positions[f[1]] - b.positions[f[0]]).cross(b.positions[f[2]] - b.positions[f[0]]);
+    const auto cf = sb.closest_facing(p, n, 0.999);
+    EXPECT_NEAR(cf.distance, c.distance, 1e-12) << i;
+  }
+}
+
 TEST(Metro, DegenerateFacesAreMeasuredAsTheirEdges) {
   TriMesh m;
   m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(3, 0, 0), Vec3(0, 5, 0), Vec3(1, 5, 0), Vec3(0, 6, 0)};

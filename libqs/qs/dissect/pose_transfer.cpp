@@ -21,13 +21,21 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
 
   // Every free vertex at the (u, v) of mesh 0's nearest point; one farther than `reach` is
   // left to the repair below.
+  // Area-weighted vertex normals, turned into mesh 0's frame: the nearest point must face the
+  // same way, so that it does not jump across a thin part (to the next finger).
+  std::vector<Vec3> normal(n, Vec3::Zero());
+  for (const Tri& t : pm.faces) {
+    const Vec3 a = (pm.positions[t[1]] - pm.positions[t[0]]).cross(pm.positions[t[2]] - pm.positions[t[0]]);
+    for (int k = 0; k < 3; ++k) normal[t[k]] += a;
+  }
+  const Eigen::Matrix3d turn = to_ref.topLeftCorner<3, 3>();
   std::vector<Vec2> uv = p.sp.uv;
   std::vector<char> unplaced(n, 0);
   int placed = 0;
   for (int v = 0; v < n; ++v) {
     if (fixed[v]) continue;
     const Vec3 q = (to_ref * pm.positions[v].homogeneous()).head<3>();
-    const auto c = on_ref.closest(q);
+    const auto c = on_ref.closest_facing(q, turn * normal[v], kSamePoseFacingCos);
     if (c.face < 0 || c.distance > reach) {
       unplaced[v] = 1;
       continue;

@@ -167,7 +167,7 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
   // Mesh 0's inner corners on its surface: the point of its node at that (u, v).
   const param::PatchMesh& pm0 = ps[0].ex.pm;
   const std::vector<Vec2>& uv0 = ps[0].sp.uv;
-  std::array<Vec3, 4> x0;
+  std::array<Vec3, 4> x0, n0;  // mesh 0's corner points and the normals of their faces
   for (int c = 0; c < 4; ++c) {
     const auto [f, bary] = best_uv_face(common[c], pm0.faces.size(), [&](size_t k) {
       const Tri& t = pm0.faces[k];
@@ -177,6 +177,7 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     const Tri& t = pm0.faces[f];
     const Vec3 l = bary.cwiseMax(0.0) / bary.cwiseMax(0.0).sum();
     x0[c] = l[0] * pm0.positions[t[0]] + l[1] * pm0.positions[t[1]] + l[2] * pm0.positions[t[2]];
+    n0[c] = (pm0.positions[t[1]] - pm0.positions[t[0]]).cross(pm0.positions[t[2]] - pm0.positions[t[0]]).normalized();
   }
   for (size_t i = 1; i < nm; ++i) {
     // Mesh i's point nearest to mesh 0's corner moved by the landmarks' similarity, within its
@@ -188,8 +189,12 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     bool near = true;
     for (int c = 0; c < 4 && near; ++c) {
       const Vec3 target = (pose_[i] * x0[c].homogeneous()).head<3>();
+      const Vec3 facing = (pose_[i].topLeftCorner<3, 3>() * n0[c]).normalized();
       double best = INFINITY;
       for (const Tri& t : pm.faces) {
+        // Only faces that face as mesh 0's does (kSamePoseFacingCos): not the next finger's back.
+        const Vec3 n = (pm.positions[t[1]] - pm.positions[t[0]]).cross(pm.positions[t[2]] - pm.positions[t[0]]);
+        if (!(n.dot(facing) >= kSamePoseFacingCos * n.norm())) continue;
         const auto l = landmarks::closest_on_triangle(target, pm.positions[t[0]], pm.positions[t[1]], pm.positions[t[2]]);
         const Vec3 x = l[0] * pm.positions[t[0]] + l[1] * pm.positions[t[1]] + l[2] * pm.positions[t[2]];
         const double d = (x - target).squaredNorm();

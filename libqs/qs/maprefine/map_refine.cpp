@@ -901,12 +901,13 @@ struct PullTarget {
   double distance = 0;
 };
 
-// The reference's point nearest to y (in the reference's frame) within reference patch p; none
-// when the patch has no face or the nearest point's uv face has zero area.
-std::optional<PullTarget> nearest_on_patch(const PosePull& pull, int p, const Vec3& y) {
+// The reference's point nearest to y (in the reference's frame) within reference patch p, on a
+// face that faces as `normal` does (dissect::kSamePoseFacingCos); none when the patch has no such
+// face or the nearest point's uv face has zero area.
+std::optional<PullTarget> nearest_on_patch(const PosePull& pull, int p, const Vec3& y, const Vec3& normal) {
   const PullPatch& pp = (*pull.patches)[p];
   if (!pp.tree) return std::nullopt;
-  const auto hit = pp.tree->closest(y);
+  const auto hit = pp.tree->closest_facing(y, normal, dissect::kSamePoseFacingCos);
   if (hit.face < 0) return std::nullopt;
   const dissect::Chart& ref = *pull.ref;
   const int f = pp.faces[hit.face];
@@ -925,9 +926,9 @@ std::optional<PullTarget> nearest_on_patch(const PosePull& pull, int p, const Ve
   return PullTarget{b[0] * fuv[0] + b[1] * fuv[1] + b[2] * fuv[2], g.transpose() * g, hit.distance};
 }
 
-// Where a free vertex of a problem is pulled to: its point moved into the reference's frame ->
-// the target, (u, v) and metric in the problem's coordinates; none: no pull on it.
-using PullTargetFn = std::function<std::optional<PullTarget>(const Vec3&)>;
+// Where a free vertex of a problem is pulled to: its point and normal moved into the reference's
+// frame -> the target, (u, v) and metric in the problem's coordinates; none: no pull on it.
+using PullTargetFn = std::function<std::optional<PullTarget>(const Vec3&, const Vec3&)>;
 
 // Fills a problem's pull: every free local vertex of B that `locate` places gets its target and as
 // weight the pull's weight times a third of its faces' area times the metric.
@@ -935,12 +936,18 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
   pr.pull.assign(pr.uv.size(), Eigen::Matrix2d::Zero());
   pr.target.assign(pr.uv.size(), Vec2::Zero());
   std::vector<double> area(pr.uv.size(), 0.0);
-  for (size_t t = 0; t < pr.tri.size(); ++t)
-    for (int l : pr.tri[t]) area[l] += pr.area[t] / 3;
+  std::vector<Vec3> normal(pr.uv.size(), Vec3::Zero());  // a free vertex has all its faces here
+  for (size_t t = 0; t < pr.tri.size(); ++t) {
+    const auto& c = chart.mesh.faces[pr.faces[t]];
+    const Vec3 n = (chart.mesh.positions[c[1]] - chart.mesh.positions[c[0]])
+                       .cross(chart.mesh.positions[c[2]] - chart.mesh.positions[c[0]]);
+    for (int l : pr.tri[t]) area[l] += pr.area[t] / 3, normal[l] += n;
+  }
+  const Eigen::Matrix3d turn = pull.to_ref.topLeftCorner<3, 3>();
   for (size_t l = 0; l < pr.uv.size(); ++l) {
     if (pr.dims[l] != 2) continue;
     const Vec3 y = (pull.to_ref * chart.mesh.positions[pr.vertices[l]].homogeneous()).head<3>();
-    if (const auto t = locate(y)) {
+    if (const auto t = locate(y, turn * normal[l])) {
       pr.target[l] = t->uv;
       pr.pull[l] = pull.weight * area[l] * t->metric;
     }
@@ -950,10 +957,11 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
 // The nearest of several reference patches to y (patch i of n given by `patch(i)`), its target
 // carried into the problem's glued coordinates by `carry(i, target)`; none when no patch places y.
 template <class PatchOf, class Carry>
-std::optional<PullTarget> nearest_of(const PosePull& pull, int n, const Vec3& y, PatchOf&& patch, Carry&& carry) {
+std::optional<PullTarget> nearest_of(const PosePull& pull, int n, const Vec3& y, const Vec3& normal, PatchOf&& patch,
+                                     Carry&& carry) {
   std::optional<PullTarget> best;
   for (int i = 0; i < n; ++i) {
-    const auto t = nearest_on_patch(pull, patch(i), y);
+    const auto t = nearest_on_patch(pull, patch(i), y, normal);
     if (t && (!best || t->distance < best->distance)) best = carry(i, *t);
   }
   return best;
@@ -963,7 +971,7 @@ std::optional<PullTarget> nearest_of(const PosePull& pull, int n, const Vec3& y,
 void add_patch_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull) {
   if (pr.face_patch.empty()) return;
   const int p = pr.face_patch.front();
-  add_pull(pr, chart, pull, [&](const Vec3& y) { return nearest_on_patch(pull, p, y); });
+  add_pull(pr, chart, pull, [&](const Vec3& y, const Vec3& n) { return nearest_on_patch(pull, p, y, n); });
 }
 
 struct MeshResult {
@@ -1309,9 +1317,9 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
   };
   if (pull) {
     // The pose pull toward the nearer of the reference's two patches, in glued (u, v).
-    add_pull(pr, chart, *pull, [&](const Vec3& y) {
+    add_pull(pr, chart, *pull, [&](const Vec3& y, const Vec3& n) {
       return nearest_of(
-          *pull, 2, y, [&](int w) { return glue[w].patch; },
+          *pull, 2, y, n, [&](int w) { return glue[w].patch; },
           [&](int w, const PullTarget& t) {
             return PullTarget{glue[w].to_glued(t.uv), lin[w] * t.metric * lin[w].transpose(), t.distance};
           });
@@ -1766,9 +1774,9 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
   };
   if (pull) {
     // The pose pull toward the nearest of the reference's k patches around the corner, glued.
-    add_pull(pr, chart, *pull, [&](const Vec3& y) {
+    add_pull(pr, chart, *pull, [&](const Vec3& y, const Vec3& n) {
       return nearest_of(
-          *pull, k, y, [&](int j) { return star.patches[j]; },
+          *pull, k, y, n, [&](int j) { return star.patches[j]; },
           [&](int j, const PullTarget& t) {
             const Vec2 g = glue(turn_square(t.uv, turns[j]), j);
             return PullTarget{g, glued_metric(j, g, t.metric), t.distance};

@@ -97,6 +97,7 @@ inline P3 to_p3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 struct Triangle {
   P3 a, b, c;
+  P3 n;  ///< unit normal (zero for a degenerate triangle)
   int face;
   bool degenerate;  ///< (nearly) zero area: measured as its three edges
 };
@@ -215,6 +216,7 @@ struct SurfaceDistance::Impl {
       // Relative test: |ab x ac| = |ab| |ac| sin(angle); below ~1e-10 of that the interior
       // branch of the closest-point routine would divide by (almost) zero.
       tr.degenerate = !(dot(n, n) > 1e-20 * dot(ab, ab) * dot(ac, ac));
+      tr.n = tr.degenerate ? P3{0, 0, 0} : (1 / std::sqrt(dot(n, n))) * n;
       Prim& p = prims[f];
       const double xs[3] = {tr.a.x, tr.b.x, tr.c.x}, ys[3] = {tr.a.y, tr.b.y, tr.c.y},
                    zs[3] = {tr.a.z, tr.b.z, tr.c.z};
@@ -353,10 +355,12 @@ struct SurfaceDistance::Impl {
   }
 
   /// The nearest surface point to p. `hint` (an index into tris, or -1) is tried first: a good
-  /// one (the previous sample's triangle) prunes most of the tree.
-  Hit closest(const P3& p, int hint) const {
+  /// one (the previous sample's triangle) prunes most of the tree. With `facing`, only triangles
+  /// whose normal n has dot(n, *facing) >= min_cos count (none: tri -1).
+  Hit closest(const P3& p, int hint, const P3* facing = nullptr, double min_cos = 0) const {
     Hit best;
     auto try_tri = [&](int i) {
+      if (facing && !(dot(tris[static_cast<size_t>(i)].n, *facing) >= min_cos)) return;
       const P3 q = closest_on_triangle(p, tris[static_cast<size_t>(i)]);
       const P3 d = p - q;
       const double d2 = dot(d, d);
@@ -402,6 +406,22 @@ SurfaceDistance& SurfaceDistance::operator=(SurfaceDistance&&) noexcept = defaul
 SurfaceDistance::Closest SurfaceDistance::closest(const Vec3& query) const {
   const Impl::Hit h = impl_->closest(to_p3(query), -1);
   Closest c;
+  c.distance = std::sqrt(h.d2);
+  c.point = Vec3(h.point.x, h.point.y, h.point.z);
+  c.face = impl_->tris[static_cast<size_t>(h.tri)].face;
+  return c;
+}
+
+SurfaceDistance::Closest SurfaceDistance::closest_facing(const Vec3& query, const Vec3& facing,
+                                                         double min_cos) const {
+  const double len = facing.norm();
+  Closest c;
+  c.face = -1;
+  c.distance = std::numeric_limits<double>::infinity();
+  if (!(len > 0)) return c;
+  const P3 f = to_p3(facing / len);
+  const Impl::Hit h = impl_->closest(to_p3(query), -1, &f, min_cos);
+  if (h.tri < 0) return c;
   c.distance = std::sqrt(h.d2);
   c.point = Vec3(h.point.x, h.point.y, h.point.z);
   c.face = impl_->tris[static_cast<size_t>(h.tri)].face;

@@ -96,6 +96,11 @@ class SurfaceDistance {
     int face = -1;        ///< a face the nearest point lies on
   };
   Closest closest(const Vec3& query) const;
+  /// The nearest point among the faces whose unit normal n has dot(n, facing / |facing|) >=
+  /// min_cos (degenerate faces never count): a nearest point that keeps to the query's side of a
+  /// thin part (two fingers, a lip) when `facing` is the query's own normal. face -1 and an
+  /// infinite distance when no face qualifies or `facing` is zero.
+  Closest closest_facing(const Vec3& query, const Vec3& facing, double min_cos) const;
   double distance(const Vec3& query) const { return closest(query).distance; }
 
   struct Impl;  ///< implementation detail (metro() shares it)
