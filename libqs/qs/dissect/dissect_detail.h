@@ -354,7 +354,8 @@ constexpr int kTransferRepairRounds = 6;
 
 /// DissectOptions::same_pose_maps: mesh i's map of a node (`p`) taken over from mesh 0's (`ref`):
 /// every vertex of p but its border and its features goes to the (u, v) of ref's point nearest to
-/// it once moved into mesh 0's frame by `to_ref` (a vertex farther than `reach` from ref is left
+/// it once moved into mesh 0's frame by `to_ref`, among ref's faces that face as the vertex does
+/// (kSamePoseFacingCos; a vertex farther than `reach` from ref is left
 /// to the repair), then folded faces are mended by solves of the node's own weights (p.weights)
 /// over the free vertices around them, every other interior vertex pinned, a ring wider each
 /// round (kTransferRepairRounds). Returns whether p.sp changed:
