@@ -82,7 +82,7 @@ void write_fake_bake(const fs::path& dir, const std::string& stem, const qs::rem
   fs::create_directories(dir);
   if (with_json) std::ofstream(dir / "bake.json") << R"({"format": "qs-bake", "version": 1})";
   const auto& p = set.positions[base];
-  const auto normals = qs::morph::vertex_normals(p, set.connectivity.faces);
+  const auto normals = qs::vertex_normals(p, set.connectivity.faces);
   qs::gltf::Mesh g;
   g.name = stem;
   std::vector<int> src;
@@ -220,18 +220,18 @@ TEST(VertexNormals, AreaWeightedAndUnit) {
   // Vertex 0 is shared by a big face in z = 0 and a small face in x = 0.
   const std::vector<qs::Vec3> p = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0, 0.1, 0}, {0, 0, 0.1}};
   const std::vector<qs::Tri> f = {{0, 1, 2}, {0, 3, 4}};
-  const auto n = qs::morph::vertex_normals(p, f);
+  const auto n = qs::vertex_normals(p, f);
   const qs::Vec3 expected = (qs::Vec3(0, 0, 4) + qs::Vec3(0.01, 0, 0)).normalized();
   EXPECT_LT((n[0] - expected).norm(), 1e-12);
   EXPECT_LT((n[1] - qs::Vec3(0, 0, 1)).norm(), 1e-12);
   EXPECT_LT((n[3] - qs::Vec3(1, 0, 0)).norm(), 1e-12);
   const auto sphere = qs::shapes::icosphere(3);
-  const auto ns = qs::morph::vertex_normals(sphere.positions, sphere.faces);
+  const auto ns = qs::vertex_normals(sphere.positions, sphere.faces);
   for (size_t v = 0; v < ns.size(); ++v) {
     EXPECT_NEAR(ns[v].norm(), 1, 1e-12);
     EXPECT_GT(ns[v].dot(sphere.positions[v].normalized()), 0.999);
   }
-  EXPECT_EQ(qs::morph::vertex_normals({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {{0, 1, 2}})[0], qs::Vec3(0, 0, 1));
+  EXPECT_EQ(qs::vertex_normals({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {{0, 1, 2}})[0], qs::Vec3(0, 0, 1));
 }
 
 TEST_F(MorphFiles, FramesReadBackExactlyInBothFormats) {
@@ -294,7 +294,7 @@ TEST_F(MorphFiles, GlbHasOneTargetPerOtherShapeAndValidates) {
   ASSERT_EQ(m.targets.size(), 8u);
   EXPECT_EQ(m.targets[0].name, "shape0");
   EXPECT_EQ(m.targets[2].name, "shape3");  // the base (shape2) is skipped
-  const auto normals7 = qs::morph::vertex_normals(set.positions[7], set.connectivity.faces);
+  const auto normals7 = qs::vertex_normals(set.positions[7], set.connectivity.faces);
   for (size_t v = 0; v < m.positions.size(); v += 17) {
     EXPECT_LT((m.positions[v] + m.targets[6].position_deltas[v] - set.positions[7][v]).norm(), 1e-15);
     EXPECT_LT((m.normals[v] + m.targets[6].normal_deltas[v] - normals7[v]).norm(), 1e-15);
@@ -355,7 +355,7 @@ TEST_F(MorphFiles, BakeGivesTheMaterialUvsAndTangentsOnTheBakesVertexLayout) {
   ASSERT_TRUE(m.material && m.material->normal_texture);
   EXPECT_EQ(m.texcoords.size(), split);
   EXPECT_EQ(m.tangents.size(), split);
-  const auto normals2 = qs::morph::vertex_normals(set.positions[2], set.connectivity.faces);
+  const auto normals2 = qs::vertex_normals(set.positions[2], set.connectivity.faces);
   ASSERT_EQ(m.targets[1].tangent_deltas.size(), split);
   for (size_t v = 0; v < split; v += 7) {
     const int s = baked.vertex_source[v];

@@ -1,5 +1,7 @@
 #include "qs/core/mesh.h"
 
+#include <cmath>
+
 namespace qs {
 
 Box3 bounding_box(const std::vector<Vec3>& positions) {
@@ -23,6 +25,20 @@ double surface_area(const TriMesh& mesh) {
   double s = 0;
   for (int f = 0; f < mesh.num_faces(); ++f) s += face_area(mesh, f);
   return s;
+}
+
+std::vector<Vec3> vertex_normals(const std::vector<Vec3>& positions, const std::vector<Tri>& faces) {
+  std::vector<Vec3> n(positions.size(), Vec3::Zero());
+  for (const Tri& t : faces) {
+    // |cross| = twice the area: the sum is area-weighted.
+    const Vec3 c = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
+    for (int v : t) n[v] += c;
+  }
+  for (Vec3& v : n) {
+    const double len = v.norm();
+    v = len > 0 && std::isfinite(len) ? Vec3(v / len) : Vec3(0, 0, 1);
+  }
+  return n;
 }
 
 Eigen::Matrix4d fit_similarity(const std::vector<Vec3>& from, const std::vector<Vec3>& to, bool with_scale) {

@@ -36,6 +36,11 @@ double face_area(const TriMesh& mesh, int f);
 /// The sum of the face areas (in face order: deterministic).
 double surface_area(const TriMesh& mesh);
 
+/// Area-weighted vertex normals (the sum of the faces' cross products, normalized). A vertex
+/// whose sum vanishes (no faces, or only degenerate ones) gets (0, 0, 1).
+/// \pre faces index into positions.
+std::vector<Vec3> vertex_normals(const std::vector<Vec3>& positions, const std::vector<Tri>& faces);
+
 /// The least-squares transform (Umeyama) taking the points `from` onto `to`, paired by index:
 /// rotation and translation, and a uniform scale when `with_scale`; as a homogeneous 4x4 matrix.
 /// \pre from.size() == to.size() (fewer than 3 points do not determine it).

@@ -19,15 +19,10 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
   std::vector<char> border(n, 0), fixed = feature_mask(p);
   for (int v : pm.boundary) border[v] = fixed[v] = 1;
 
-  // Every free vertex at the (u, v) of mesh 0's nearest point; one farther than `reach` is
-  // left to the repair below.
-  // Area-weighted vertex normals, turned into mesh 0's frame: the nearest point must face the
-  // same way, so that it does not jump across a thin part (to the next finger).
-  std::vector<Vec3> normal(n, Vec3::Zero());
-  for (const Tri& t : pm.faces) {
-    const Vec3 a = (pm.positions[t[1]] - pm.positions[t[0]]).cross(pm.positions[t[2]] - pm.positions[t[0]]);
-    for (int k = 0; k < 3; ++k) normal[t[k]] += a;
-  }
+  // Every free vertex at the (u, v) of mesh 0's nearest point among the faces that face as the
+  // vertex does (its normal turned into mesh 0's frame), so that it does not jump across a thin
+  // part to the next finger; one farther than `reach` is left to the repair below.
+  const std::vector<Vec3> normal = vertex_normals(pm.positions, pm.faces);
   const Eigen::Matrix3d turn = to_ref.topLeftCorner<3, 3>();
   std::vector<Vec2> uv = p.sp.uv;
   std::vector<char> unplaced(n, 0);

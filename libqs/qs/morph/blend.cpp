@@ -93,20 +93,6 @@ std::vector<Vec3> blend(const std::vector<std::vector<Vec3>>& positions, const s
   return out;
 }
 
-std::vector<Vec3> vertex_normals(const std::vector<Vec3>& positions, const std::vector<Tri>& faces) {
-  std::vector<Vec3> n(positions.size(), Vec3::Zero());
-  for (const Tri& t : faces) {
-    // |cross| = twice the area: the sum is area-weighted.
-    const Vec3 c = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
-    for (int v : t) n[v] += c;
-  }
-  for (Vec3& v : n) {
-    const double len = v.norm();
-    v = len > 0 && std::isfinite(len) ? Vec3(v / len) : Vec3(0, 0, 1);
-  }
-  return n;
-}
-
 int shape_index(const std::vector<std::string>& names, const std::string& name) {
   for (size_t i = 0; i < names.size(); ++i)
     if (names[i] == name) return static_cast<int>(i);

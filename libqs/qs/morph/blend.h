@@ -40,11 +40,6 @@ inline std::vector<Vec3> blend(const remesh::SemiRegularSet& set, const std::vec
   return blend(set.positions, weights);
 }
 
-/// Area-weighted vertex normals (the sum of the faces' cross products, normalized). A vertex
-/// whose sum vanishes (no faces, or only degenerate ones) gets (0, 0, 1).
-/// \pre faces index into positions.
-std::vector<Vec3> vertex_normals(const std::vector<Vec3>& positions, const std::vector<Tri>& faces);
-
 /// How a shape is placed onto the base before blending (the files of different characters rarely
 /// share a pose, a facing or a scale).
 enum class Align { None, Rigid, Similarity };
