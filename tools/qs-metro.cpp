@@ -173,8 +173,15 @@ std::string distortion_text(const qs::correspondence::PairMeasure& pm) {
   return buf;
 }
 
+/// --error-map: where and how the per-vertex error maps are written.
+struct ErrorMapOptions {
+  std::optional<std::string> folder;
+  double scale = 0;  ///< % of the diagonal at red; 0: each pair's largest vertex error
+};
+
 int run_correspondence(const std::string& folder_name, const std::vector<std::string>& maps, long samples,
-                       std::uint64_t seed, int level, bool as_json, const std::optional<std::string>& output) {
+                       std::uint64_t seed, int level, bool as_json, const std::optional<std::string>& output,
+                       const ErrorMapOptions& error_map) {
   namespace fs = std::filesystem;
   const fs::path folder(folder_name);
   const qs::dissect::LoadedDissection loaded = qs::dissect::read_dissection(folder);
@@ -207,6 +214,20 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   if (samples > 0) mo.samples = samples;
   mo.seed = seed;
   mo.level = level;
+  mo.vertex_errors = error_map.folder.has_value();
+  // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal),
+  // staged and moved into the folder only when every pair has been measured and written.
+  std::optional<qs::OutputFolder> map_folder;
+  std::vector<std::string> stems(n);
+  if (error_map.folder) {
+    map_folder.emplace(*error_map.folder);
+    for (int i = 0; i < n; ++i) stems[i] = fs::path(truth.mesh(i).name).stem().string();
+    bool unique = true;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) unique = unique && stems[i] != stems[j];
+    if (!unique)
+      for (int i = 0; i < n; ++i) stems[i] = std::to_string(i) + "_" + stems[i];
+  }
   std::ostringstream text;
   nlohmann::json pairs = nlohmann::json::array();
   text << "qs-metro: correspondence of " << folder_name << " (" << n << " meshes, "
@@ -236,6 +257,26 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
       text << "  ground truth: exact at the vertices; between them within the re-tessellation's distance from its "
               "reference, at most " << tol << "\n";
     }
+    nlohmann::json map_json;
+    if (map_folder) {
+      const std::string file = stems[0] + "_to_" + stems[b] + ".error.ply";
+      double vmax = 0, vsum = 0;
+      for (double e : pm.vertex_error) vmax = std::max(vmax, e), vsum += e;
+      const double vmean = pm.vertex_error.empty() ? 0 : vsum / pm.vertex_error.size();
+      const double scale = error_map.scale > 0 ? error_map.scale : vmax > 0 ? vmax : 1;
+      qs::correspondence::write_error_map(map_folder->staging() / file, truth.mesh(0).mesh, pm, scale);
+      const std::string where = (fs::path(*error_map.folder) / file).string();
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "  error map: %s (A's %zu vertices: mean %.3f%%, max %.3f%%; red at %.3f%%)\n", where.c_str(),
+                    pm.vertex_error.size(), vmean, vmax, scale);
+      text << line;
+      map_json = {{"file", where},
+                  {"vertices", pm.vertex_error.size()},
+                  {"vertex_mean_percent", vmean},
+                  {"vertex_max_percent", vmax},
+                  {"red_at_percent", scale}};
+    }
     pairs.push_back({{"a", truth.mesh(0).name},
                      {"b", truth.mesh(b).name},
                      {"samples", pm.samples},
@@ -255,7 +296,9 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                      {"baseline_landmarks", pm.baseline_landmarks},
                      {"truth_tolerance_percent", pm.truth_tolerance},
                      {"truth_tolerance_mean_percent", pm.truth_tolerance_mean}});
+    if (map_folder) pairs.back()["error_map"] = map_json;
   }
+  if (map_folder) map_folder->commit();
   nlohmann::json doc = {{"dissection", folder_name},
                         {"meshes", n},
                         {"patches", loaded.meshes[0].dissection.chart.patches.size()},
@@ -286,6 +329,7 @@ int main(int argc, char** argv) {
   std::optional<std::string> correspondence;
   std::vector<std::string> maps;
   int level = 0;
+  ErrorMapOptions error_map;
   app.add_option("A", file_a, "First mesh (.obj .off .ply .stl); its bounding-box diagonal is the "
                               "reference for the percentages");
   app.add_option("B", file_b, "Second mesh");
@@ -297,6 +341,13 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 12));
   app.add_option("--map", maps, "With --correspondence: a map file per mesh in the dissection's order, '-' for "
                                 "none (default: <stem>.map.json beside each mesh when present)");
+  app.add_option("--error-map", error_map.folder,
+                 "With --correspondence: also write, per pair, A's mesh with each vertex's error (and the "
+                 "baseline's) as a coloured PLY into this folder: <A>_to_<B>.error.ply");
+  app.add_option("--error-scale", error_map.scale,
+                 "With --error-map: the error (% of B's diagonal) drawn red (default: each pair's largest vertex "
+                 "error)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--samples", samples,
                  "Surface samples per direction (default: max(100000, 2 x the larger face count)); with "
                  "--correspondence: points on A per pair (default 100000)")
@@ -319,8 +370,10 @@ int main(int argc, char** argv) {
     if (correspondence) {
       if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
       if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
-      return run_correspondence(*correspondence, maps, samples, seed, level, as_json, output);
+      if (error_map.scale > 0 && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
+      return run_correspondence(*correspondence, maps, samples, seed, level, as_json, output, error_map);
     }
+    if (error_map.folder || error_map.scale > 0) throw qs::UsageError("--error-map and --error-scale need --correspondence");
     if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
     if (level != 0) throw qs::UsageError("--level needs --correspondence");
     if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");

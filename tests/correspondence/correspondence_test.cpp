@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "qs/core/error.h"
 #include "qs/correspondence/correspondence.h"
@@ -14,6 +17,7 @@
 #include "qs/family/family.h"
 #include "qs/family/retessellate.h"
 #include "qs/family/surface_map.h"
+#include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/mesh/validate.h"
@@ -22,6 +26,7 @@
 using ::testing::HasSubstr;
 using qs::Vec3;
 namespace cr = qs::correspondence;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -269,6 +274,89 @@ TEST(Measure, AFamilyPairHasOrderedFiniteStatisticsIndependentOfThreads) {
   const auto other = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
   EXPECT_NE(other.dissection.mean, one.dissection.mean);
   EXPECT_NEAR(other.dissection.mean, one.dissection.mean, 0.1 * one.dissection.mean);
+}
+
+TEST(Measure, VertexErrorsAreExactForTheIdentityAndAgreeWithTheSamples) {
+  const auto fam = small_family(2, 6);
+  cr::MeasureOptions o;
+  o.samples = 20000;
+  {
+    const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[0]});
+    const cr::GroundTruth truth({plain_truth(fam.shapes[0].mesh, "a"), plain_truth(fam.shapes[0].mesh, "b")});
+    EXPECT_TRUE(cr::measure_pair(truth, inputs_of(set), 0, 1, o).vertex_error.empty());  // not asked for
+    o.vertex_errors = true;
+    const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+    ASSERT_EQ(pm.vertex_error.size(), fam.shapes[0].mesh.positions.size());
+    ASSERT_EQ(pm.vertex_baseline_error.size(), pm.vertex_error.size());
+    for (std::size_t v = 0; v < pm.vertex_error.size(); ++v) {
+      EXPECT_LT(pm.vertex_error[v], 1e-9) << v;
+      EXPECT_LT(pm.vertex_baseline_error[v], 1e-6) << v;
+    }
+  }
+  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[1]});
+  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
+  o.threads = 1;
+  const auto one = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  o.threads = 3;
+  const auto three = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  EXPECT_EQ(one.vertex_error, three.vertex_error);
+  EXPECT_EQ(one.vertex_baseline_error, three.vertex_baseline_error);
+  double sum = 0, base = 0, most = 0;
+  for (std::size_t v = 0; v < one.vertex_error.size(); ++v) {
+    ASSERT_TRUE(std::isfinite(one.vertex_error[v]) && one.vertex_error[v] >= 0) << v;
+    sum += one.vertex_error[v];
+    base += one.vertex_baseline_error[v];
+    most = std::max(most, one.vertex_error[v]);
+  }
+  // The vertices sample the surface as the area samples do (the generator spaces them evenly per
+  // unit area): the means agree within a quarter, and no vertex is worse than the worst sample by
+  // more than the sampling's own spread.
+  const double n = static_cast<double>(one.vertex_error.size());
+  EXPECT_NEAR(sum / n, one.dissection.mean, 0.25 * one.dissection.mean);
+  EXPECT_NEAR(base / n, one.baseline.mean, 0.25 * one.baseline.mean);
+  EXPECT_LT(most, 1.5 * one.dissection.max);
+  EXPECT_GT(most, 0.5 * one.dissection.max);
+}
+
+TEST(ErrorMap, ColoursRunFromBlueToRedAndTheFileReadsBack) {
+  using C = std::array<unsigned char, 3>;
+  EXPECT_EQ(cr::error_colour(0, 2), (C{0, 0, 255}));
+  EXPECT_EQ(cr::error_colour(0.5, 2), (C{0, 255, 255}));
+  EXPECT_EQ(cr::error_colour(1, 2), (C{0, 255, 0}));
+  EXPECT_EQ(cr::error_colour(1.5, 2), (C{255, 255, 0}));
+  EXPECT_EQ(cr::error_colour(2, 2), (C{255, 0, 0}));
+  EXPECT_EQ(cr::error_colour(7, 2), (C{255, 0, 0}));
+  EXPECT_EQ(cr::error_colour(-1, 2), (C{0, 0, 255}));
+  EXPECT_EQ(cr::error_colour(std::nan(""), 2), (C{255, 0, 0}));
+
+  const auto fam = small_family(1, 4);
+  const qs::TriMesh& mesh = fam.shapes[0].mesh;
+  cr::PairMeasure pm;
+  const fs::path file = fs::temp_directory_path() / ("qs_error_map_" + std::to_string(::getpid()) + ".ply");
+  EXPECT_THROW(cr::write_error_map(file, mesh, pm, 1.0), qs::InvalidInput);  // no vertex errors
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    pm.vertex_error.push_back(static_cast<double>(v % 7));
+    pm.vertex_baseline_error.push_back(0.5);
+  }
+  EXPECT_THROW(cr::write_error_map(file, mesh, pm, 0.0), qs::InvalidInput);
+  EXPECT_FALSE(fs::exists(file));
+  cr::write_error_map(file, mesh, pm, 6.0);
+  const auto read = qs::io::read_mesh(file);
+  EXPECT_EQ(read.mesh.positions, mesh.positions);
+  EXPECT_EQ(read.mesh.faces, mesh.faces);
+  // Vertex 6's record: x y z (3 doubles), error 6, baseline 0.5 (floats), red.
+  std::ifstream in(file, std::ios::binary);
+  const std::string bytes(std::istreambuf_iterator<char>(in), {});
+  const std::size_t record = 3 * 8 + 2 * 4 + 3, at = bytes.find("end_header\n") + 11 + 6 * record + 24;
+  float e = 0, b = 0;
+  std::memcpy(&e, bytes.data() + at, 4);
+  std::memcpy(&b, bytes.data() + at + 4, 4);
+  EXPECT_EQ(e, 6.0f);
+  EXPECT_EQ(b, 0.5f);
+  EXPECT_EQ(static_cast<unsigned char>(bytes[at + 8]), 255);
+  EXPECT_EQ(static_cast<unsigned char>(bytes[at + 9]), 0);
+  EXPECT_EQ(static_cast<unsigned char>(bytes[at + 10]), 0);
+  fs::remove(file);
 }
 
 TEST(Measure, TheRemeshMapConvergesToTheChartMapWithTheLevel) {

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -68,6 +69,50 @@ TEST_F(CorrespondenceTool, MeasuresAFamilyPairAgainstItsMapFiles) {
   sa << a.rdbuf();
   sb << b.rdbuf();
   EXPECT_EQ(sa.str(), sb.str());
+}
+
+TEST_F(CorrespondenceTool, WritesAColouredErrorMapPerPair) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --error-map " + d() +
+                                         "/maps --json -o " + d() + "/m.json");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  std::ifstream in(d() + "/m.json");
+  const auto doc = nlohmann::json::parse(in);
+  const auto& em = doc["pairs"][0]["error_map"];
+  const std::string file = d() + "/maps/shape00_to_shape01.error.ply";
+  EXPECT_EQ(em["file"], file);
+  EXPECT_EQ(em["vertices"], 802);  // qs-family: V = faces / 2 + 2
+  EXPECT_GT(em["vertex_mean_percent"].get<double>(), 0);
+  EXPECT_GE(em["vertex_max_percent"].get<double>(), em["vertex_mean_percent"].get<double>());
+  EXPECT_EQ(em["red_at_percent"].get<double>(), em["vertex_max_percent"].get<double>());
+  ASSERT_TRUE(fs::exists(file));
+  std::ifstream ply(file, std::ios::binary);
+  std::string header, line;
+  while (std::getline(ply, line) && line != "end_header") header += line + "\n";
+  EXPECT_THAT(header, HasSubstr("element vertex 802\n"));
+  EXPECT_THAT(header, HasSubstr("property float error\nproperty float baseline_error\nproperty uchar red\n"));
+  // A fixed scale, in text; the same bytes again for the same options.
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --error-map " + d() +
+                               "/maps2 --error-scale 1.5");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("error map: " + d() + "/maps2/shape00_to_shape01.error.ply (A's 802 vertices: mean "));
+  EXPECT_THAT(r.out, HasSubstr("red at 1.500%)"));
+  ASSERT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --error-map " + d() +
+                                     "/maps3 --error-scale 1.5").exit, 0);
+  auto bytes = [](const std::string& f) {
+    std::ifstream i(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(i), {});
+  };
+  EXPECT_EQ(bytes(d() + "/maps2/shape00_to_shape01.error.ply"), bytes(d() + "/maps3/shape00_to_shape01.error.ply"));
+  // Misuse: usage errors (1), and nothing written.
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --error-scale 2").exit, 1);
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --error-map " + d() + "/m4 --error-scale 0").exit, 1);
+  EXPECT_EQ(run_tool("qs-metro", mesh(0) + " " + mesh(1) + " --error-map " + d() + "/m5").exit, 1);
+  EXPECT_FALSE(fs::exists(d() + "/m4"));
+  EXPECT_FALSE(fs::exists(d() + "/m5"));
+  // An error map folder that is a file: i/o error (3).
+  std::ofstream(d() + "/afile") << "x";
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --error-map " + d() + "/afile").exit, 3);
 }
 
 TEST_F(CorrespondenceTool, TwoMeshesWithOneFaceListNeedNoMap) {

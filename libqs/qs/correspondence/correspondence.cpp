@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <thread>
 #include <unordered_map>
 
+#include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/io/read_mesh.h"
@@ -457,6 +459,24 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
     similarity = fit_similarity(src, dst);
   }
 
+  // Where the dissection sends A's point (patch, st) on B: B's chart at (patch, st), or the point of
+  // B's level-n remesh triangle at (u, v) (the cell cut by qs-remesh's diagonal rule).
+  auto map_point = [&](int patch, const Vec2& st, int& hint) -> Vec3 {
+    if (options.level == 0) return sampler.point(patch, st, hint);
+    const int cells = 1 << options.level;
+    const int i = std::min(cells - 1, static_cast<int>(st.x() * cells));
+    const int j = std::min(cells - 1, static_cast<int>(st.y() * cells));
+    const double fu = st.x() * cells - i, fv = st.y() * cells - j;
+    auto grid = [&](int gi, int gj) {
+      return sampler.point(patch, Vec2(static_cast<double>(gi) / cells, static_cast<double>(gj) / cells), hint);
+    };
+    const Vec3 p00 = grid(i, j), p10 = grid(i + 1, j), p11 = grid(i + 1, j + 1), p01 = grid(i, j + 1);
+    if ((2 * i < cells) == (2 * j < cells))  // diagonal (i,j)-(i+1,j+1)
+      return fu >= fv ? Vec3(p00 + fu * (p10 - p00) + fv * (p11 - p10)) : Vec3(p00 + fv * (p01 - p00) + fu * (p11 - p01));
+    return fu + fv <= 1 ? Vec3(p00 + fu * (p10 - p00) + fv * (p01 - p00))  // diagonal (i+1,j)-(i,j+1)
+                        : Vec3(p11 + (1 - fu) * (p01 - p11) + (1 - fv) * (p10 - p11));
+  };
+
   // Samples uniformly per unit area on A's chart (A's surface): systematic along the faces.
   const int nf = ca.mesh.num_faces();
   std::vector<double> cumulative(nf + 1, 0.0);
@@ -493,25 +513,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
         const Vec2 uv = beta[0] * ca.face_uv[f][0] + beta[1] * ca.face_uv[f][1] + beta[2] * ca.face_uv[f][2];
         const int patch = ca.face_patch[f];
         const Vec2 st = uv.cwiseMax(0.0).cwiseMin(1.0);
-        Vec3 mapped;
-        if (options.level == 0) {
-          mapped = sampler.point(patch, st, hint);
-        } else {
-          // The remesh's triangle at (u, v): cell (i, j) cut by qs-remesh's diagonal rule.
-          const int cells = 1 << options.level;
-          const int i = std::min(cells - 1, static_cast<int>(st.x() * cells));
-          const int j = std::min(cells - 1, static_cast<int>(st.y() * cells));
-          const double fu = st.x() * cells - i, fv = st.y() * cells - j;
-          auto grid = [&](int gi, int gj) {
-            return sampler.point(patch, Vec2(static_cast<double>(gi) / cells, static_cast<double>(gj) / cells), hint);
-          };
-          const Vec3 p00 = grid(i, j), p10 = grid(i + 1, j), p11 = grid(i + 1, j + 1), p01 = grid(i, j + 1);
-          if ((2 * i < cells) == (2 * j < cells))  // diagonal (i,j)-(i+1,j+1)
-            mapped = fu >= fv ? Vec3(p00 + fu * (p10 - p00) + fv * (p11 - p10)) : Vec3(p00 + fv * (p01 - p00) + fu * (p11 - p01));
-          else  // diagonal (i+1,j)-(i,j+1)
-            mapped = fu + fv <= 1 ? Vec3(p00 + fu * (p10 - p00) + fv * (p01 - p00))
-                                  : Vec3(p11 + (1 - fu) * (p01 - p11) + (1 - fv) * (p10 - p11));
-        }
+        const Vec3 mapped = map_point(patch, st, hint);
         const auto ca_closest = on_a.closest(x);
         const landmarks::SurfacePoint on_input = surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point);
         const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
@@ -532,6 +534,45 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   if (cancelled) throw Error(ErrorCode::Internal, "cancelled");
 
   PairMeasure pm;
+  if (options.vertex_errors) {
+    // At A's input vertices (the chart's first ones), through the wedge of each one's first chart
+    // face; the truth at a vertex through an input face around it.
+    const TriMesh& ma = truth.mesh(a).mesh;
+    const int nv = ma.num_vertices();
+    std::vector<int> chart_face(nv, -1), chart_corner(nv, -1), input_face(nv, -1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int v = ca.mesh.faces[f][k];
+        if (v < nv && chart_face[v] < 0) chart_face[v] = f, chart_corner[v] = k;
+      }
+    for (int f = 0; f < ma.num_faces(); ++f)
+      for (int v : ma.faces[f])
+        if (input_face[v] < 0) input_face[v] = f;
+    pm.vertex_error.assign(nv, 0.0);
+    pm.vertex_baseline_error.assign(nv, 0.0);
+    std::atomic<int> next_vertex{0};
+    auto vertices = [&] {
+      int hint = -1;
+      constexpr int kVertexChunk = 256;
+      for (int c = next_vertex++; c * kVertexChunk < nv; c = next_vertex++)
+        for (int v = c * kVertexChunk; v < std::min(nv, (c + 1) * kVertexChunk); ++v) {
+          if (chart_face[v] < 0 || input_face[v] < 0) continue;  // unused vertex (validation drops them)
+          const int f = chart_face[v];
+          const Vec3& x = ma.positions[v];
+          const Vec3 mapped =
+              map_point(ca.face_patch[f], ca.face_uv[f][chart_corner[v]].cwiseMax(0.0).cwiseMin(1.0), hint);
+          const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, surface_point_at(ma, input_face[v], x)));
+          pm.vertex_error[v] = 100 * (mapped - exact).norm() / diag;
+          const Vec3 moved = (similarity * x.homogeneous()).head<3>();
+          pm.vertex_baseline_error[v] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
+        }
+    };
+    std::vector<std::thread> vertex_pool;
+    for (int i = 1; i < threads; ++i) vertex_pool.emplace_back(vertices);
+    vertices();
+    for (auto& th : vertex_pool) th.join();
+    context.check_cancel();
+  }
   pm.a = a;
   pm.b = b;
   pm.level = options.level;
@@ -579,6 +620,50 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   pm.truth_tolerance = 100 * truth.tolerance() / diag;
   pm.truth_tolerance_mean = 100 * truth.tolerance_mean() / diag;
   return pm;
+}
+
+std::array<unsigned char, 3> error_colour(double error, double scale) {
+  // blue, cyan, green, yellow, red at 0, 1/4, 1/2, 3/4, 1 of the scale
+  static constexpr double kStops[5][3] = {{0, 0, 255}, {0, 255, 255}, {0, 255, 0}, {255, 255, 0}, {255, 0, 0}};
+  const double t = std::clamp(std::isfinite(error) && scale > 0 ? error / scale : 1.0, 0.0, 1.0) * 4;
+  const int i = std::min(3, static_cast<int>(t));
+  const double f = t - i;
+  std::array<unsigned char, 3> c{};
+  for (int k = 0; k < 3; ++k)
+    c[k] = static_cast<unsigned char>(std::lround((1 - f) * kStops[i][k] + f * kStops[i + 1][k]));
+  return c;
+}
+
+void write_error_map(const std::filesystem::path& path, const TriMesh& mesh, const PairMeasure& measure,
+                     double scale) {
+  const std::size_t nv = mesh.positions.size();
+  if (measure.vertex_error.size() != nv || measure.vertex_baseline_error.size() != nv)
+    throw InvalidInput("error map " + path.string() + ": " + std::to_string(measure.vertex_error.size()) +
+                       " vertex errors for a mesh of " + std::to_string(nv) + " vertices (measure with vertex_errors)");
+  if (!(scale > 0) || !std::isfinite(scale))
+    throw InvalidInput("error map " + path.string() + ": the colour scale must be a positive number");
+  AtomicFile file(path);
+  std::ostream& out = file.stream();
+  auto put = [&out](auto value) { out.write(reinterpret_cast<const char*>(&value), sizeof(value)); };  // little endian
+  out << "ply\nformat binary_little_endian 1.0\n"
+      << "comment qs correspondence error map: A's mesh, per vertex the error of the dissection's map and of the "
+         "similarity + nearest-point baseline, % of B's bounding-box diagonal\n"
+      << "comment colour scale: red at " << scale << "%\n"
+      << "element vertex " << nv << "\nproperty double x\nproperty double y\nproperty double z\n"
+      << "property float error\nproperty float baseline_error\n"
+      << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+      << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (std::size_t v = 0; v < nv; ++v) {
+    for (int k = 0; k < 3; ++k) put(mesh.positions[v][k]);
+    put(static_cast<float>(measure.vertex_error[v]));
+    put(static_cast<float>(measure.vertex_baseline_error[v]));
+    for (unsigned char c : error_colour(measure.vertex_error[v], scale)) put(c);
+  }
+  for (const Tri& t : mesh.faces) {
+    put(static_cast<std::uint8_t>(3));
+    for (int k = 0; k < 3; ++k) put(static_cast<std::int32_t>(t[k]));
+  }
+  file.commit();
 }
 
 dissect::MeshToDissect dissect_input(const family::FamilyShape& shape) {

@@ -21,6 +21,7 @@
 // onto B by the least-squares similarity of the landmarks (Umeyama; the dissection's seeds and
 // features), then each point's nearest point of B.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -87,6 +88,9 @@ struct MeasureOptions {
   /// level-n common remesh, the point of its grid triangle at (u, v) (qs-remesh's diagonal rule,
   /// grid vertices evaluated on B's chart), i.e. where that remesh puts the point. \pre 0..12
   int level = 0;
+  /// Also measure at every vertex of A's (validated) mesh: PairMeasure::vertex_error and
+  /// vertex_baseline_error, for an error map (write_error_map).
+  bool vertex_errors = false;
 };
 
 /// Distances in % of B's bounding-box diagonal.
@@ -122,6 +126,10 @@ struct PairMeasure {
   bool distortion_on_b = false;  ///< seen on B's faces (maps B -> A), see above
   double distortion = 0, distortion_median = 0, truth_distortion = 0, truth_distortion_median = 0;
   int distortion_folded = 0, truth_distortion_folded = 0;
+  /// With MeasureOptions::vertex_errors, per vertex of A's validated mesh (else empty), in % of the
+  /// diagonal: the dissection's map at the vertex (through A's chart wedge of the vertex's first
+  /// chart face, as `level` says) against its exact image, and the baseline's error there.
+  std::vector<double> vertex_error, vertex_baseline_error;
 };
 
 /// One dissected mesh as the measure needs it: its chart (whose first vertices are the validated
@@ -140,6 +148,18 @@ std::vector<std::pair<std::string, Vec3>> dissection_landmarks(const dissect::Di
 /// Progress stage: "correspondence".
 PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedInput>& inputs, int a, int b,
                          const MeasureOptions& options = {}, const Context& context = {});
+
+/// The colour of an error on the error map's ramp (blue 0, cyan, green, yellow, red at `scale` and
+/// beyond). \pre scale > 0.
+std::array<unsigned char, 3> error_colour(double error, double scale);
+
+/// Writes A's mesh with the pair's per-vertex errors as a binary little-endian PLY (atomically):
+/// per vertex x, y, z (double), `error` and `baseline_error` (float, % of B's diagonal) and the
+/// error's colour (uchar red, green, blue, error_colour at `scale`); the faces as in `mesh`.
+/// \pre measure.vertex_error and vertex_baseline_error have one value per vertex of `mesh`
+/// (InvalidInput otherwise), scale > 0. \throws IoError when the file cannot be written.
+void write_error_map(const std::filesystem::path& path, const TriMesh& mesh, const PairMeasure& measure,
+                     double scale);
 
 /// A generated shape as qs-dissect takes it: its seeds as surface points (inserted exactly) and its
 /// limb tips as named features. The mesh is referred to, not copied.
