@@ -6,6 +6,8 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <exception>
+#include <mutex>
 #include <thread>
 #include <unordered_map>
 
@@ -551,11 +553,13 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
     pm.vertex_error.assign(nv, 0.0);
     pm.vertex_baseline_error.assign(nv, 0.0);
     std::atomic<int> next_vertex{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
     auto vertices = [&] {
       int hint = -1;
       constexpr int kVertexChunk = 256;
       for (int c = next_vertex++; c * kVertexChunk < nv; c = next_vertex++)
-        for (int v = c * kVertexChunk; v < std::min(nv, (c + 1) * kVertexChunk); ++v) {
+        for (int v = c * kVertexChunk; v < std::min(nv, (c + 1) * kVertexChunk); ++v) try {
           if (chart_face[v] < 0 || input_face[v] < 0) continue;  // unused vertex (validation drops them)
           const int f = chart_face[v];
           const Vec3& x = ma.positions[v];
@@ -565,12 +569,16 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
           pm.vertex_error[v] = 100 * (mapped - exact).norm() / diag;
           const Vec3 moved = (similarity * x.homogeneous()).head<3>();
           pm.vertex_baseline_error[v] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
+        } catch (...) {
+          const std::lock_guard<std::mutex> lock(failure_mutex);
+          if (!failure) failure = std::current_exception();
         }
     };
     std::vector<std::thread> vertex_pool;
     for (int i = 1; i < threads; ++i) vertex_pool.emplace_back(vertices);
     vertices();
     for (auto& th : vertex_pool) th.join();
+    if (failure) std::rethrow_exception(failure);
     context.check_cancel();
   }
   pm.a = a;
