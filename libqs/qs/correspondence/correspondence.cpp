@@ -6,13 +6,12 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <exception>
-#include <mutex>
 #include <thread>
 #include <unordered_map>
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
@@ -552,34 +551,21 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
         if (input_face[v] < 0) input_face[v] = f;
     pm.vertex_error.assign(nv, 0.0);
     pm.vertex_baseline_error.assign(nv, 0.0);
-    std::atomic<int> next_vertex{0};
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    auto vertices = [&] {
+    constexpr int kVertexChunk = 256;
+    parallel_for((nv + kVertexChunk - 1) / kVertexChunk, options.threads, context, [&](int c) {
       int hint = -1;
-      constexpr int kVertexChunk = 256;
-      for (int c = next_vertex++; c * kVertexChunk < nv; c = next_vertex++)
-        for (int v = c * kVertexChunk; v < std::min(nv, (c + 1) * kVertexChunk); ++v) try {
-          if (chart_face[v] < 0 || input_face[v] < 0) continue;  // unused vertex (validation drops them)
-          const int f = chart_face[v];
-          const Vec3& x = ma.positions[v];
-          const Vec3 mapped =
-              map_point(ca.face_patch[f], ca.face_uv[f][chart_corner[v]].cwiseMax(0.0).cwiseMin(1.0), hint);
-          const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, surface_point_at(ma, input_face[v], x)));
-          pm.vertex_error[v] = 100 * (mapped - exact).norm() / diag;
-          const Vec3 moved = (similarity * x.homogeneous()).head<3>();
-          pm.vertex_baseline_error[v] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
-        } catch (...) {
-          const std::lock_guard<std::mutex> lock(failure_mutex);
-          if (!failure) failure = std::current_exception();
-        }
-    };
-    std::vector<std::thread> vertex_pool;
-    for (int i = 1; i < threads; ++i) vertex_pool.emplace_back(vertices);
-    vertices();
-    for (auto& th : vertex_pool) th.join();
-    if (failure) std::rethrow_exception(failure);
-    context.check_cancel();
+      for (int v = c * kVertexChunk; v < std::min(nv, (c + 1) * kVertexChunk); ++v) {
+        if (chart_face[v] < 0 || input_face[v] < 0) continue;  // unused vertex (validation drops them)
+        const int f = chart_face[v];
+        const Vec3& x = ma.positions[v];
+        const Vec3 mapped =
+            map_point(ca.face_patch[f], ca.face_uv[f][chart_corner[v]].cwiseMax(0.0).cwiseMin(1.0), hint);
+        const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, surface_point_at(ma, input_face[v], x)));
+        pm.vertex_error[v] = 100 * (mapped - exact).norm() / diag;
+        const Vec3 moved = (similarity * x.homogeneous()).head<3>();
+        pm.vertex_baseline_error[v] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
+      }
+    });
   }
   pm.a = a;
   pm.b = b;

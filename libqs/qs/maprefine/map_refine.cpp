@@ -21,6 +21,7 @@
 #include <unordered_map>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/metro/metro.h"
 #include "qs/param/square_param.h"
@@ -807,33 +808,6 @@ PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const Refine
 void write_back(const PatchProblem& pr, dissect::Chart& chart) {
   for (size_t t = 0; t < pr.faces.size(); ++t)
     for (int k = 0; k < 3; ++k) chart.face_uv[pr.faces[t]][k] = pr.uv[pr.tri[t][k]];
-}
-
-template <class F>
-void parallel_for(int n, int threads, const Context& context, F&& body) {
-  threads = std::max(1, std::min(threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()), n));
-  std::atomic<int> next{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto work = [&] {
-    for (int i; (i = next++) < n;) {
-      if (failed || (context.cancel && context.cancel->load())) return;
-      try {
-        body(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
-        failed = true;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-  context.check_cancel();
 }
 
 // ---- The same-pose pull (RefineOptions::pose_pull) -----------------------------------------------
