@@ -168,11 +168,13 @@ int main(int argc, char** argv) {
                  "(z^(4/k)); see README")
       ->capture_default_str()
       ->check(CLI::IsMember({"sector", "power"}));
-  bool refine_before_split = false;
-  auto* before_split_flag = app.add_flag("--refine-before-split", refine_before_split,
-               "Experiment (issue 17): before a patch is split, refine every mesh's map of it against the first "
-               "mesh's, so that the split points (equal (u,v) in every mesh) correspond better (off by default; "
-               "see README, \"Map refinement\")");
+  bool refine_before_split = false, no_refine_before_split = false;
+  app.add_flag("--refine-before-split", refine_before_split,
+               "Before a patch is split, refine every mesh's map of it against the first mesh's, so that the split "
+               "points (equal (u,v) in every mesh) correspond better (the default; see README, \"Map refinement\")");
+  app.add_flag("--no-refine-before-split", no_refine_before_split,
+               "Split every patch at equal (u,v) of each mesh's own map (the default before issue 17's measurement)");
+  app.get_option("--no-refine-before-split")->excludes("--refine-before-split");
   app.add_flag("--same-pose", opt.same_pose,
                "The meshes are in one pose (registered scans, re-tessellations of one surface): place every split's "
                "inner corners in each mesh at its points nearest the first mesh's, after the landmarks' similarity, "
@@ -186,13 +188,14 @@ int main(int argc, char** argv) {
                  "For meshes in one pose: weight of the refinement's pull of every vertex toward the first mesh's "
                  "point nearest to it (default 10; 0: off; see README, \"Same pose\")")
       ->check(CLI::Range(0.0, 1e6));
-  std::string before_split_metric = "vertex";
+  std::string before_split_metric = "composition";
   app.add_option("--refine-before-split-metric", before_split_metric,
-                 "How --refine-before-split sees the first mesh's map: vertex (refine-maps's clamped, vertex-averaged "
-                 "metric), face (its face's metric, unclamped) or composition (the composed map itself); see README")
+                 "How the refinement before a split sees the first mesh's map: composition (the composed map "
+                 "itself), vertex (refine-maps's clamped, vertex-averaged metric) or face (its face's metric, "
+                 "unclamped); see README")
       ->capture_default_str()
       ->check(CLI::IsMember({"vertex", "face", "composition"}))
-      ->needs(before_split_flag);
+      ->excludes("--no-refine-before-split");
   app.add_option("--min-split-area", opt.min_split_area,
                  "Do not split a patch over tau (bijective) that holds less than this fraction of its mesh's area; "
                  "the leaf repair takes it (0: off; fewer slivers along limbs)")
@@ -238,6 +241,7 @@ int main(int argc, char** argv) {
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;
+    refine_before_split = !no_refine_before_split;
     if (refine_before_split) {
       qs::maprefine::NodeRefineOptions node;
       node.metric = before_split_metric == "face"          ? qs::maprefine::NodeMetric::Face
@@ -361,9 +365,10 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
-      if (refine_before_split && i > 0)
-        text << "  refine before split (experiment): every split node's map refined against mesh 0's first, seen as "
-             << before_split_metric << "\n";
+      if (refine_before_split && i > 0 && !used.same_pose)
+        text << "  refine before split: split nodes' maps refined against mesh 0's first, seen as "
+             << before_split_metric << " (" << result.before_split_refined << " refined, " << result.before_split_own
+             << " kept their own, over all meshes)\n";
       if (i < refine_report.meshes.size()) {
         const auto& r = refine_report.meshes[i];
         if (r.identity)

@@ -135,25 +135,30 @@ TEST_F(RefineMapsTool, CornersMoveDeterministicallyAndTheLaterStagesReadIt) {
   }
 }
 
-// --refine-before-split (issue 17 experiment): the maps of the split nodes are refined before the
-// cuts; the set stays bijective, the run is deterministic, the measure reads it, and the metric
-// option is checked.
-TEST_F(RefineMapsTool, RefineBeforeSplitIsDeterministicAndItsMetricNeedsTheFlag) {
-  const std::string flags = " --refine-before-split --refine-before-split-metric composition";
-  RunResult r = run_tool("qs-dissect", pair() + flags + " -o " + d() + "/rbs");
+// Refinement before a split (issue 17, on by default): the maps of the split nodes are refined
+// before the cuts; the set stays bijective, the run is deterministic, --refine-before-split says
+// the default out loud, --no-refine-before-split changes the charts, and the options are checked.
+TEST_F(RefineMapsTool, RefineBeforeSplitIsTheDeterministicDefaultAndCanBeTurnedOff) {
+  RunResult r = run_tool("qs-dissect", pair() + " -o " + d() + "/rbs");
   EXPECT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("  refine before split (experiment): every split node's map refined against mesh "
-                               "0's first, seen as composition\n"));
+  EXPECT_THAT(r.out, HasSubstr("  refine before split: split nodes' maps refined against mesh 0's first, seen as "
+                               "composition ("));
   EXPECT_THAT(r.out, Not(HasSubstr("bijective: NO")));
+  const std::string flags = " --refine-before-split --refine-before-split-metric composition";
   EXPECT_EQ(run_tool("qs-dissect", pair() + flags + " --quiet -o " + d() + "/rbs2").exit, 0);
   for (const char* f : {"shape00.chart.ply", "shape01.chart.ply", "dissection.json"})
     EXPECT_EQ(bytes(dir_ / "rbs" / f), bytes(dir_ / "rbs2" / f)) << f;
   r = run_tool("qs-metro", "--correspondence " + d() + "/rbs --samples 5000");
   EXPECT_EQ(r.exit, 0) << r.out;
-  r = run_tool("qs-dissect", pair() + " --refine-before-split-metric face -o " + d() + "/bad");
-  EXPECT_EQ(r.exit, 1) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("--refine-before-split-metric requires --refine-before-split"));
-  r = run_tool("qs-dissect", pair() + " --refine-before-split --refine-before-split-metric exact -o " + d() + "/bad");
-  EXPECT_EQ(r.exit, 1) << r.out;
+  r = run_tool("qs-dissect", pair() + " --no-refine-before-split -o " + d() + "/own");
+  EXPECT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, Not(HasSubstr("refine before split")));
+  EXPECT_NE(bytes(dir_ / "rbs" / "shape01.chart.ply"), bytes(dir_ / "own" / "shape01.chart.ply"));
+  for (const char* bad : {" --no-refine-before-split --refine-before-split-metric face",
+                          " --no-refine-before-split --refine-before-split",
+                          " --refine-before-split-metric exact"}) {
+    r = run_tool("qs-dissect", pair() + bad + " -o " + d() + "/bad");
+    EXPECT_EQ(r.exit, 1) << bad << "\n" << r.out;
+  }
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }

@@ -118,12 +118,15 @@ struct DissectOptions {
   /// deeper. Default 4 (issue 13, item 3, see the README): polygirl_20k 35% -> 7% of its area in
   /// leaves over tau; horse_40k level-5 remesh error 0.0023% -> 0.0017%.
   int area_extra_depth = 4;
-  /// Experiment of issue 17 (`qs-dissect --refine-before-split`): before a node is split, the
-  /// node's map of every mesh but mesh 0 is refined against mesh 0's map of the node by this
-  /// function (qs::maprefine::node_refiner(); the dissect module does not depend on maprefine),
-  /// so that the split points, taken at equal (u, v) in every mesh, correspond better. The
-  /// border, corners and features stay; a refined map stays bijective. Empty (the default): off.
-  /// See the README ("Map refinement") for what it measured.
+  /// Issue 17 (qs-dissect's default, `--no-refine-before-split` turns it off): before a node is
+  /// split, the node's map of every mesh but mesh 0 is refined against mesh 0's map of the node
+  /// by this function (qs::maprefine::node_refiner(); the dissect module does not depend on
+  /// maprefine), so that the split points, taken at equal (u, v) in every mesh, correspond
+  /// better. The border, corners and features stay; a refined map is kept only when it stays
+  /// bijective and the split's children's predicted stretch (predicted_children_stretch at the
+  /// chosen split) stays within tau or within the node's own map's. Not run with same_pose and
+  /// same_pose_maps (the node maps are taken over from mesh 0's). Empty (the library's default):
+  /// off. See the README ("Map refinement") for what it measured.
   NodeMapRefiner refine_before_split;
   /// The meshes are in one pose (`qs-dissect --same-pose`): registered scans, re-tessellations
   /// of one surface, characters posed alike. Every split's four inner corners, which are taken at
@@ -290,6 +293,11 @@ struct DissectionSet {
   /// over from the first mesh's, and those that kept their own (still folded after the repair).
   int same_pose_maps = 0;
   int same_pose_own_maps = 0;
+  /// DissectOptions::refine_before_split: node maps (of meshes but the first, before a split)
+  /// refined against the first mesh's, and those that kept their own (the refinement failed, or
+  /// its children's predicted stretch was higher).
+  int before_split_refined = 0;
+  int before_split_own = 0;
   /// Empty, or why the set was dissected again with the common (u, v) (DissectOptions::same_pose:
   /// the posed result ended with folded leaves, the common one folds less).
   std::string same_pose_fallback;

@@ -389,18 +389,24 @@ DissectionSet SetDissector::run() {
       // faces, checked again here).
       size_t node_faces = 0;
       for (const auto& p : ps) node_faces += p.ex.faces.size();
-      if (opt_.refine_before_split && nm > 1) {
+      // The refined map is kept only when it does not raise the children's predicted stretch
+      // above tau and its own map's (a cut that would leave a thin strip of a child on the surface:
+      // the example set's slivers). Skipped in one pose, where the maps are taken over below.
+      if (opt_.refine_before_split && nm > 1 && !(opt_.same_pose && opt_.same_pose_maps)) {
+        std::vector<char> refined(nm, 0);
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
           if (!p.sp.bijective() || !ps[0].sp.bijective()) return;
-          std::vector<Vec2> uv = p.sp.uv;
-          if (!opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, p.ex.pm, uv, feature_mask(p))) return;
-          param::SquareParam sp = p.sp;
-          sp.uv = std::move(uv);
-          param::count_uv_faces(p.ex.pm.faces, sp);
-          if (!sp.bijective()) return;
-          p.sp = std::move(sp);
+          Param q = p;
+          if (!opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, q.ex.pm, q.sp.uv, feature_mask(q))) return;
+          param::count_uv_faces(q.ex.pm.faces, q.sp);
+          if (!q.sp.bijective()) return;
+          if (predicted_children_stretch(q, peak, w) > std::max(opt_.tau, predicted_children_stretch(p, peak, w)))
+            return;
+          p.sp = std::move(q.sp);
+          refined[k + 1] = 1;
         }, node_faces >= kParallelFaces);
+        for (size_t i = 1; i < nm; ++i) ++(refined[i] ? out.before_split_refined : out.before_split_own);
       }
       // DissectOptions::same_pose_maps: every mesh's map of the node taken over from mesh 0's.
       if (opt_.same_pose && opt_.same_pose_maps && nm > 1 && ps[0].sp.bijective()) {
