@@ -365,10 +365,6 @@ int main(int argc, char** argv) {
       }
       text << "  bijective: " << (mesh_flipped == 0 ? "yes" : "NO") << " (" << mesh_flipped
            << " flipped or zero-area uv faces)\n";
-      if (refine_before_split && i > 0 && !used.same_pose)
-        text << "  refine before split: split nodes' maps refined against mesh 0's first, seen as "
-             << before_split_metric << " (" << result.before_split_refined << " refined, " << result.before_split_own
-             << " kept their own, over all meshes)\n";
       if (i < refine_report.meshes.size()) {
         const auto& r = refine_report.meshes[i];
         if (r.identity)
@@ -441,6 +437,10 @@ int main(int argc, char** argv) {
       else
         text << "same pose: not used (" << result.same_pose_fallback << "; the common (u,v) fold less)\n";
     }
+    if (refine_before_split && !used.same_pose && inputs.size() > 1)
+      text << "refine before split: split nodes' maps of every mesh but the first refined against the first's, seen as "
+           << before_split_metric << ": " << result.before_split_refined << " refined, " << result.before_split_own
+           << " kept their own\n";
 
     for (const auto& dm : out) {
       qs::check_not_an_input(fs::path(outdir) / dm.chart_file, input_paths, "-o");

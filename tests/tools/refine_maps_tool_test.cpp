@@ -141,8 +141,8 @@ TEST_F(RefineMapsTool, CornersMoveDeterministicallyAndTheLaterStagesReadIt) {
 TEST_F(RefineMapsTool, RefineBeforeSplitIsTheDeterministicDefaultAndCanBeTurnedOff) {
   RunResult r = run_tool("qs-dissect", pair() + " -o " + d() + "/rbs");
   EXPECT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("  refine before split: split nodes' maps refined against mesh 0's first, seen as "
-                               "composition ("));
+  EXPECT_THAT(r.out, HasSubstr("\nrefine before split: split nodes' maps of every mesh but the first refined "
+                               "against the first's, seen as composition: "));
   EXPECT_THAT(r.out, Not(HasSubstr("bijective: NO")));
   const std::string flags = " --refine-before-split --refine-before-split-metric composition";
   EXPECT_EQ(run_tool("qs-dissect", pair() + flags + " --quiet -o " + d() + "/rbs2").exit, 0);

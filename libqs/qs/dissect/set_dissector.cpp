@@ -397,13 +397,14 @@ DissectionSet SetDissector::run() {
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
           if (!p.sp.bijective() || !ps[0].sp.bijective()) return;
-          Param q = p;
-          if (!opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, q.ex.pm, q.sp.uv, feature_mask(q))) return;
-          param::count_uv_faces(q.ex.pm.faces, q.sp);
-          if (!q.sp.bijective()) return;
-          if (predicted_children_stretch(q, peak, w) > std::max(opt_.tau, predicted_children_stretch(p, peak, w)))
+          const double own_children = predicted_children_stretch(p, peak, w);
+          param::SquareParam own = p.sp;
+          const bool changed = opt_.refine_before_split(ps[0].ex.pm, ps[0].sp.uv, p.ex.pm, p.sp.uv, feature_mask(p));
+          if (changed) param::count_uv_faces(p.ex.pm.faces, p.sp);
+          if (!changed || !p.sp.bijective() || predicted_children_stretch(p, peak, w) > std::max(opt_.tau, own_children)) {
+            p.sp = std::move(own);
             return;
-          p.sp = std::move(q.sp);
+          }
           refined[k + 1] = 1;
         }, node_faces >= kParallelFaces);
         for (size_t i = 1; i < nm; ++i) ++(refined[i] ? out.before_split_refined : out.before_split_own);
