@@ -177,6 +177,7 @@ std::string distortion_text(const qs::correspondence::PairMeasure& pm) {
 struct ErrorMapOptions {
   std::optional<std::string> folder;
   double scale = 0;  ///< % of the diagonal at red; 0: each pair's largest vertex error
+  int worst = 0;     ///< --worst: list this many of A's vertices with the largest error per pair
 };
 
 int run_correspondence(const std::string& folder_name, const std::vector<std::string>& maps, long samples,
@@ -214,7 +215,7 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   if (samples > 0) mo.samples = samples;
   mo.seed = seed;
   mo.level = level;
-  mo.vertex_errors = error_map.folder.has_value();
+  mo.vertex_errors = error_map.folder.has_value() || error_map.worst > 0;
   // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal),
   // staged and moved into the folder only when every pair has been measured and written.
   std::optional<qs::OutputFolder> map_folder;
@@ -297,6 +298,33 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                      {"truth_tolerance_percent", pm.truth_tolerance},
                      {"truth_tolerance_mean_percent", pm.truth_tolerance_mean}});
     if (map_folder) pairs.back()["error_map"] = map_json;
+    if (error_map.worst > 0) {
+      // Where the map is worst, and whether the patch layout put the point in another patch.
+      const auto& patches = loaded.meshes[0].dissection.chart.patches;
+      const auto& patches_b = loaded.meshes[b].dissection.chart.patches;
+      const std::vector<int> worst = qs::correspondence::worst_vertices(pm, error_map.worst);
+      const qs::TriMesh& ma = truth.mesh(0).mesh;
+      text << "  worst " << worst.size() << " of A's vertices (error, baseline's error; A's patch -> the patch of "
+              "the exact image on B):\n";
+      nlohmann::json list = nlohmann::json::array();
+      for (int v : worst) {
+        const qs::Vec3& x = ma.positions[v];
+        const std::string& pa = patches[pm.vertex_patch[v]].name;
+        const std::string& pb = patches_b[pm.vertex_exact_patch[v]].name;
+        char line[400];
+        std::snprintf(line, sizeof line, "    vertex %d at (%.4g, %.4g, %.4g): %.3f%% (baseline %.3f%%), %s -> %s%s\n", v,
+                      x.x(), x.y(), x.z(), pm.vertex_error[v], pm.vertex_baseline_error[v], pa.c_str(), pb.c_str(),
+                      pa == pb ? "" : " (another patch)");
+        text << line;
+        list.push_back({{"vertex", v},
+                        {"position", {x.x(), x.y(), x.z()}},
+                        {"error_percent", pm.vertex_error[v]},
+                        {"baseline_error_percent", pm.vertex_baseline_error[v]},
+                        {"patch", pa},
+                        {"exact_patch", pb}});
+      }
+      pairs.back()["worst_vertices"] = list;
+    }
   }
   if (map_folder) map_folder->commit();
   nlohmann::json doc = {{"dissection", folder_name},
@@ -348,6 +376,10 @@ int main(int argc, char** argv) {
                  "With --error-map: the error (% of B's diagonal) drawn red (default: each pair's largest vertex "
                  "error)")
       ->check(CLI::PositiveNumber);
+  app.add_option("--worst", error_map.worst,
+                 "With --correspondence: also list, per pair, A's N vertices with the largest error (position, "
+                 "error, the baseline's error, A's patch and the patch of the exact image on B), 0..1000")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--samples", samples,
                  "Surface samples per direction (default: max(100000, 2 x the larger face count)); with "
                  "--correspondence: points on A per pair (default 100000)")
@@ -373,7 +405,8 @@ int main(int argc, char** argv) {
       if (error_map.scale > 0 && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
       return run_correspondence(*correspondence, maps, samples, seed, level, as_json, output, error_map);
     }
-    if (error_map.folder || error_map.scale > 0) throw qs::UsageError("--error-map and --error-scale need --correspondence");
+    if (error_map.folder || error_map.scale > 0 || error_map.worst > 0)
+      throw qs::UsageError("--error-map, --error-scale and --worst need --correspondence");
     if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
     if (level != 0) throw qs::UsageError("--level needs --correspondence");
     if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");

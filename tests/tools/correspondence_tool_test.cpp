@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -113,6 +114,50 @@ TEST_F(CorrespondenceTool, WritesAColouredErrorMapPerPair) {
   // An error map folder that is a file: i/o error (3).
   std::ofstream(d() + "/afile") << "x";
   EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --error-map " + d() + "/afile").exit, 3);
+}
+
+TEST_F(CorrespondenceTool, ListsTheWorstVerticesWithTheirPatches) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --worst 5 --json -o " + d() +
+                                         "/w.json --error-map " + d() + "/wm");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  std::ifstream in(d() + "/w.json");
+  const auto doc = nlohmann::json::parse(in);
+  const auto& pair = doc["pairs"][0];
+  const auto& worst = pair["worst_vertices"];
+  ASSERT_EQ(worst.size(), 5u);
+  // Largest first, the first one the error map's largest vertex error; the patches are named.
+  for (size_t k = 1; k < worst.size(); ++k)
+    EXPECT_GE(worst[k - 1]["error_percent"].get<double>(), worst[k]["error_percent"].get<double>());
+  EXPECT_DOUBLE_EQ(worst[0]["error_percent"].get<double>(), pair["error_map"]["vertex_max_percent"].get<double>());
+  std::set<int> ids;
+  for (const auto& w : worst) {
+    ids.insert(w["vertex"].get<int>());
+    EXPECT_GE(w["vertex"].get<int>(), 0);
+    EXPECT_LT(w["vertex"].get<int>(), 802);
+    EXPECT_EQ(w["position"].size(), 3u);
+    EXPECT_GE(w["baseline_error_percent"].get<double>(), 0);
+    EXPECT_FALSE(w["patch"].get<std::string>().empty());
+    EXPECT_FALSE(w["exact_patch"].get<std::string>().empty());
+  }
+  EXPECT_EQ(ids.size(), 5u);
+  // In text, one line per vertex; the same list with or without the error map.
+  r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --worst 5");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("worst 5 of A's vertices (error, baseline's error; A's patch -> the patch of the exact "
+                               "image on B):\n    vertex " + std::to_string(worst[0]["vertex"].get<int>()) + " at ("));
+  // A self pair: no error, every vertex in its own patch.
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(0) + " --quiet -o " + d() + "/self").exit, 0);
+  r = run_tool("qs-metro", "--correspondence " + d() + "/self --map - - --samples 2000 --worst 3 --json");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  for (const auto& w : nlohmann::json::parse(r.out)["pairs"][0]["worst_vertices"]) {
+    EXPECT_EQ(w["error_percent"].get<double>(), 0.0);
+    EXPECT_EQ(w["patch"], w["exact_patch"]);
+  }
+  // Misuse: usage errors (1).
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --worst 1001").exit, 1);
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --worst -1").exit, 1);
+  EXPECT_EQ(run_tool("qs-metro", mesh(0) + " " + mesh(1) + " --worst 3").exit, 1);
 }
 
 TEST_F(CorrespondenceTool, TwoMeshesWithOneFaceListNeedNoMap) {

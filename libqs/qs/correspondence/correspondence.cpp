@@ -551,6 +551,8 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
         if (input_face[v] < 0) input_face[v] = f;
     pm.vertex_error.assign(nv, 0.0);
     pm.vertex_baseline_error.assign(nv, 0.0);
+    pm.vertex_patch.assign(nv, -1);
+    pm.vertex_exact_patch.assign(nv, -1);
     constexpr int kVertexChunk = 256;
     parallel_for((nv + kVertexChunk - 1) / kVertexChunk, options.threads, context, [&](int c) {
       int hint = -1;
@@ -562,6 +564,8 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
             map_point(ca.face_patch[f], ca.face_uv[f][chart_corner[v]].cwiseMax(0.0).cwiseMin(1.0), hint);
         const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, surface_point_at(ma, input_face[v], x)));
         pm.vertex_error[v] = 100 * (mapped - exact).norm() / diag;
+        pm.vertex_patch[v] = ca.face_patch[f];
+        pm.vertex_exact_patch[v] = cb.face_patch[on_b_chart.closest(exact).face];
         const Vec3 moved = (similarity * x.homogeneous()).head<3>();
         pm.vertex_baseline_error[v] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
       }
@@ -614,6 +618,19 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   pm.truth_tolerance = 100 * truth.tolerance() / diag;
   pm.truth_tolerance_mean = 100 * truth.tolerance_mean() / diag;
   return pm;
+}
+
+std::vector<int> worst_vertices(const PairMeasure& measure, int count) {
+  if (count < 0) throw InvalidInput("worst_vertices: count " + std::to_string(count) + " is negative");
+  const std::vector<double>& e = measure.vertex_error;
+  std::vector<int> order;
+  for (int v = 0; v < static_cast<int>(e.size()); ++v)
+    if (measure.vertex_patch.empty() || measure.vertex_patch[v] >= 0) order.push_back(v);
+  const size_t k = std::min<size_t>(order.size(), static_cast<size_t>(count));
+  std::partial_sort(order.begin(), order.begin() + static_cast<long>(k), order.end(),
+                    [&](int a, int b) { return e[a] != e[b] ? e[a] > e[b] : a < b; });
+  order.resize(k);
+  return order;
 }
 
 std::array<unsigned char, 3> error_colour(double error, double scale) {

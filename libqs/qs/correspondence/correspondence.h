@@ -88,8 +88,9 @@ struct MeasureOptions {
   /// level-n common remesh, the point of its grid triangle at (u, v) (qs-remesh's diagonal rule,
   /// grid vertices evaluated on B's chart), i.e. where that remesh puts the point. \pre 0..12
   int level = 0;
-  /// Also measure at every vertex of A's (validated) mesh: PairMeasure::vertex_error and
-  /// vertex_baseline_error, for an error map (write_error_map).
+  /// Also measure at every vertex of A's (validated) mesh: PairMeasure::vertex_error,
+  /// vertex_baseline_error, vertex_patch and vertex_exact_patch, for an error map (write_error_map)
+  /// or a list of the worst vertices (worst_vertices).
   bool vertex_errors = false;
 };
 
@@ -130,7 +131,16 @@ struct PairMeasure {
   /// diagonal: the dissection's map at the vertex (through A's chart wedge of the vertex's first
   /// chart face, as `level` says) against its exact image, and the baseline's error there.
   std::vector<double> vertex_error, vertex_baseline_error;
+  /// With MeasureOptions::vertex_errors, per vertex of A's validated mesh (else empty; -1 for an
+  /// unused vertex): the patch of the vertex's first chart face on A (the one its error is measured
+  /// through), and the patch of B's chart face nearest to its exact image. Different patches mark a
+  /// point that the patch layout itself puts on the wrong side of a patch border.
+  std::vector<int> vertex_patch, vertex_exact_patch;
 };
+
+/// A's vertices with the largest dissection error, at most `count`, largest first (ties by vertex
+/// id: deterministic). \pre measure.vertex_error is filled (MeasureOptions::vertex_errors); count >= 0.
+std::vector<int> worst_vertices(const PairMeasure& measure, int count);
 
 /// One dissected mesh as the measure needs it: its chart (whose first vertices are the validated
 /// mesh's) and its landmark positions by name (seeds "seed0".."seed3", features by name).
