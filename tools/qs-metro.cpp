@@ -173,7 +173,7 @@ std::string distortion_text(const qs::correspondence::PairMeasure& pm) {
   return buf;
 }
 
-/// --error-map: where and how the per-vertex error maps are written.
+/// --error-map and --worst: what qs-metro does with the per-vertex errors (the map files, the list).
 struct ErrorMapOptions {
   std::optional<std::string> folder;
   double scale = 0;  ///< % of the diagonal at red; 0: each pair's largest vertex error
