@@ -168,10 +168,11 @@ int main(int argc, char** argv) {
                  "(z^(4/k)); see README")
       ->capture_default_str()
       ->check(CLI::IsMember({"sector", "power"}));
-  bool refine_before_split = false, no_refine_before_split = false;
-  app.add_flag("--refine-before-split", refine_before_split,
-               "Before a patch is split, refine every mesh's map of it against the first mesh's, so that the split "
-               "points (equal (u,v) in every mesh) correspond better (the default; see README, \"Map refinement\")");
+  bool no_refine_before_split = false;
+  app.add_flag("--refine-before-split")
+      ->description("Before a patch is split, refine every mesh's map of it against the first mesh's, so that the "
+                    "split points (equal (u,v) in every mesh) correspond better (the default; see README, \"Map "
+                    "refinement\")");
   app.add_flag("--no-refine-before-split", no_refine_before_split,
                "Split every patch at equal (u,v) of each mesh's own map (the default before issue 17's measurement)");
   app.get_option("--no-refine-before-split")->excludes("--refine-before-split");
@@ -241,7 +242,7 @@ int main(int argc, char** argv) {
     opt.geodesic_seed_curves = !edge_paths;
     opt.intrinsic_cotan = !mean_value;
     opt.fallback_maps = !no_fallback;
-    refine_before_split = !no_refine_before_split;
+    const bool refine_before_split = !no_refine_before_split;  // --refine-before-split says the default
     if (refine_before_split) {
       qs::maprefine::NodeRefineOptions node;
       node.metric = before_split_metric == "face"          ? qs::maprefine::NodeMetric::Face

@@ -6,7 +6,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <thread>
 #include <unordered_map>
 
 #include "qs/core/atomic_file.h"
@@ -352,24 +351,6 @@ Vec3 face_normal(const TriMesh& m, int f) {
   return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(Vec3::Zero());
 }
 
-// fn(i) for i in [0, n), in chunks over `threads` threads (0: all cores); fn writes its own slots.
-template <typename Fn>
-void parallel_chunks(long n, int threads, const Fn& fn) {
-  constexpr long kChunk = 1024;
-  const long chunks = (n + kChunk - 1) / kChunk;
-  std::atomic<long> next{0};
-  auto work = [&] {
-    for (long c = next++; c < chunks; c = next++)
-      for (long i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) fn(i);
-  };
-  int t = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
-  t = std::clamp<int>(t, 1, static_cast<int>(std::clamp<long>(chunks, 1, 64)));
-  std::vector<std::thread> pool;
-  for (int i = 1; i < t; ++i) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
-}
-
 struct DistortionPair {
   Distortion dissection, truth;
 };
@@ -391,8 +372,7 @@ DistortionPair map_distortions(const GroundTruth& truth, const dissect::Chart& c
   for (int f = ms.num_faces() - 1; f >= 0; --f)
     for (int k = 0; k < 3; ++k) corner[ms.faces[f][k]] = 3 * f + k;
   std::vector<Image> by_dissection(nv), by_truth(nv);
-  parallel_chunks(nv, threads, [&](long i) {
-    const int v = static_cast<int>(i);
+  auto map_vertex = [&](int v) {
     if (wedge[v] >= 0) {
       const int f = wedge[v] / 3, patch = cs.face_patch[f];
       const Vec2 st = cs.face_uv[f][wedge[v] % 3].cwiseMax(0.0).cwiseMin(1.0);
@@ -408,6 +388,10 @@ DistortionPair map_distortions(const GroundTruth& truth, const dissect::Chart& c
       by_truth[v].point = landmarks::position_of(mt, image);
       by_truth[v].normal = face_normal(mt, image.face);
     }
+  };
+  constexpr int kVertexChunk = 1024;
+  parallel_for((nv + kVertexChunk - 1) / kVertexChunk, threads, Context{}, [&](int c) {
+    for (int v = c * kVertexChunk; v < std::min(nv, (c + 1) * kVertexChunk); ++v) map_vertex(v);
   });
   const double area_s = surface_area(ms), area_t = surface_area(mt);
   const double scale = area_t > 0 ? std::sqrt(area_s / area_t) : 1.0;
@@ -492,47 +476,33 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
 
   constexpr long kChunk = 1024;
   const long chunks = (n + kChunk - 1) / kChunk;
-  std::atomic<long> next{0}, done{0};
-  std::atomic<bool> cancelled{false};
-  auto work = [&] {
+  std::atomic<long> done{0};
+  parallel_for(static_cast<int>(chunks), options.threads, context, [&](int c) {
     int hint = -1;
-    for (long c = next++; c < chunks; c = next++) {
-      if (context.cancel && context.cancel->load()) {
-        cancelled = true;
-        return;
-      }
-      for (long k = c * kChunk; k < std::min(n, (c + 1) * kChunk); ++k) {
-        const std::uint64_t r0 = splitmix64(options.seed * 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(k));
-        const double target = (static_cast<double>(k) + unit_double(r0)) / static_cast<double>(n) * total;
-        int f = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()) - 1;
-        f = std::clamp(f, 0, nf - 1);
-        while (f > 0 && cumulative[f + 1] - cumulative[f] <= 0) --f;
-        const double s1 = std::sqrt(unit_double(splitmix64(r0))), s2 = unit_double(splitmix64(r0 ^ 0x5bd1e995ULL));
-        const Vec3 beta(1 - s1, s1 * (1 - s2), s1 * s2);
-        const Tri& t = ca.mesh.faces[f];
-        const Vec3 x = beta[0] * ca.mesh.positions[t[0]] + beta[1] * ca.mesh.positions[t[1]] + beta[2] * ca.mesh.positions[t[2]];
-        const Vec2 uv = beta[0] * ca.face_uv[f][0] + beta[1] * ca.face_uv[f][1] + beta[2] * ca.face_uv[f][2];
-        const int patch = ca.face_patch[f];
-        const Vec2 st = uv.cwiseMax(0.0).cwiseMin(1.0);
-        const Vec3 mapped = map_point(patch, st, hint);
-        const auto ca_closest = on_a.closest(x);
-        const landmarks::SurfacePoint on_input = surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point);
-        const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
-        err[k] = 100 * (mapped - exact).norm() / diag;
-        same[k] = cb.face_patch[on_b_chart.closest(exact).face] == patch ? 1.0 : 0.0;
-        const Vec3 moved = (similarity * x.homogeneous()).head<3>();
-        base_err[k] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
-      }
-      context.report("correspondence", static_cast<double>(++done) / chunks);
+    for (long k = c * kChunk; k < std::min(n, (c + 1) * kChunk); ++k) {
+      const std::uint64_t r0 = splitmix64(options.seed * 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(k));
+      const double target = (static_cast<double>(k) + unit_double(r0)) / static_cast<double>(n) * total;
+      int f = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()) - 1;
+      f = std::clamp(f, 0, nf - 1);
+      while (f > 0 && cumulative[f + 1] - cumulative[f] <= 0) --f;
+      const double s1 = std::sqrt(unit_double(splitmix64(r0))), s2 = unit_double(splitmix64(r0 ^ 0x5bd1e995ULL));
+      const Vec3 beta(1 - s1, s1 * (1 - s2), s1 * s2);
+      const Tri& t = ca.mesh.faces[f];
+      const Vec3 x = beta[0] * ca.mesh.positions[t[0]] + beta[1] * ca.mesh.positions[t[1]] + beta[2] * ca.mesh.positions[t[2]];
+      const Vec2 uv = beta[0] * ca.face_uv[f][0] + beta[1] * ca.face_uv[f][1] + beta[2] * ca.face_uv[f][2];
+      const int patch = ca.face_patch[f];
+      const Vec2 st = uv.cwiseMax(0.0).cwiseMin(1.0);
+      const Vec3 mapped = map_point(patch, st, hint);
+      const auto ca_closest = on_a.closest(x);
+      const landmarks::SurfacePoint on_input = surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point);
+      const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
+      err[k] = 100 * (mapped - exact).norm() / diag;
+      same[k] = cb.face_patch[on_b_chart.closest(exact).face] == patch ? 1.0 : 0.0;
+      const Vec3 moved = (similarity * x.homogeneous()).head<3>();
+      base_err[k] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
     }
-  };
-  int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp<int>(threads, 1, static_cast<int>(std::min<long>(chunks, 64)));
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
-  if (cancelled) throw Error(ErrorCode::Internal, "cancelled");
+    context.report("correspondence", static_cast<double>(++done) / chunks);
+  });
 
   PairMeasure pm;
   if (options.vertex_errors) {

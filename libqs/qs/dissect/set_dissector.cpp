@@ -186,15 +186,20 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     const std::vector<Vec2>& uv = ps[i].sp.uv;
     if (!ps[i].sp.bijective()) continue;
     std::array<Vec2, 4> posed;
+    std::vector<Vec3> normal(pm.faces.size());  // unnormalized: the test below scales by the length
+    for (size_t k = 0; k < pm.faces.size(); ++k) {
+      const Tri& t = pm.faces[k];
+      normal[k] = (pm.positions[t[1]] - pm.positions[t[0]]).cross(pm.positions[t[2]] - pm.positions[t[0]]);
+    }
     bool near = true;
     for (int c = 0; c < 4 && near; ++c) {
       const Vec3 target = (pose_[i] * x0[c].homogeneous()).head<3>();
       const Vec3 facing = (pose_[i].topLeftCorner<3, 3>() * n0[c]).normalized();
       double best = INFINITY;
-      for (const Tri& t : pm.faces) {
+      for (size_t k = 0; k < pm.faces.size(); ++k) {
+        const Tri& t = pm.faces[k];
         // Only faces that face as mesh 0's does (kSamePoseFacingCos): not the next finger's back.
-        const Vec3 n = (pm.positions[t[1]] - pm.positions[t[0]]).cross(pm.positions[t[2]] - pm.positions[t[0]]);
-        if (!(n.dot(facing) >= kSamePoseFacingCos * n.norm())) continue;
+        if (!(normal[k].dot(facing) >= kSamePoseFacingCos * normal[k].norm())) continue;
         const auto l = landmarks::closest_on_triangle(target, pm.positions[t[0]], pm.positions[t[1]], pm.positions[t[2]]);
         const Vec3 x = l[0] * pm.positions[t[0]] + l[1] * pm.positions[t[1]] + l[2] * pm.positions[t[2]];
         const double d = (x - target).squaredNorm();
