@@ -900,28 +900,32 @@ std::optional<PullTarget> nearest_on_patch(const PosePull& pull, int p, const Ve
   return PullTarget{b[0] * fuv[0] + b[1] * fuv[1] + b[2] * fuv[2], g.transpose() * g, hit.distance};
 }
 
-// Where a free vertex of a problem is pulled to: its point and normal moved into the reference's
-// frame -> the target, (u, v) and metric in the problem's coordinates; none: no pull on it.
-using PullTargetFn = std::function<std::optional<PullTarget>(const Vec3&, const Vec3&)>;
+// Where a vertex of a problem is pulled to: (the patch of its faces in the problem, its point and
+// normal moved into the reference's frame) -> the target, (u, v) and metric in the problem's
+// coordinates; none: no pull on it.
+using PullTargetFn = std::function<std::optional<PullTarget>(int, const Vec3&, const Vec3&)>;
 
-// Fills a problem's pull: every free local vertex of B that `locate` places gets its target and as
-// weight the pull's weight times a third of its faces' area times the metric.
-void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull, const PullTargetFn& locate) {
+// Fills a problem's pull: every local vertex of B with at least `min_dims` unknowns (2: free; 1:
+// sliding too) that `locate` places gets its target and as weight the pull's weight times a third
+// of its faces' area times the metric.
+void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull, const PullTargetFn& locate,
+              int min_dims = 2) {
   pr.pull.assign(pr.uv.size(), Eigen::Matrix2d::Zero());
   pr.target.assign(pr.uv.size(), Vec2::Zero());
   std::vector<double> area(pr.uv.size(), 0.0);
   std::vector<Vec3> normal(pr.uv.size(), Vec3::Zero());  // a free vertex has all its faces here
+  std::vector<int> patch(pr.uv.size(), -1);
   for (size_t t = 0; t < pr.tri.size(); ++t) {
     const auto& c = chart.mesh.faces[pr.faces[t]];
     const Vec3 n = (chart.mesh.positions[c[1]] - chart.mesh.positions[c[0]])
                        .cross(chart.mesh.positions[c[2]] - chart.mesh.positions[c[0]]);
-    for (int l : pr.tri[t]) area[l] += pr.area[t] / 3, normal[l] += n;
+    for (int l : pr.tri[t]) area[l] += pr.area[t] / 3, normal[l] += n, patch[l] = pr.face_patch[t];
   }
   const Eigen::Matrix3d turn = pull.to_ref.topLeftCorner<3, 3>();
   for (size_t l = 0; l < pr.uv.size(); ++l) {
-    if (pr.dims[l] != 2) continue;
+    if (pr.dims[l] == 0 || pr.dims[l] < min_dims) continue;
     const Vec3 y = (pull.to_ref * chart.mesh.positions[pr.vertices[l]].homogeneous()).head<3>();
-    if (const auto t = locate(y, turn * normal[l])) {
+    if (const auto t = locate(patch[l], y, turn * normal[l])) {
       pr.target[l] = t->uv;
       pr.pull[l] = pull.weight * area[l] * t->metric;
     }
@@ -945,7 +949,7 @@ std::optional<PullTarget> nearest_of(const PosePull& pull, int n, const Vec3& y,
 void add_patch_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull) {
   if (pr.face_patch.empty()) return;
   const int p = pr.face_patch.front();
-  add_pull(pr, chart, pull, [&](const Vec3& y, const Vec3& n) { return nearest_on_patch(pull, p, y, n); });
+  add_pull(pr, chart, pull, [&](int, const Vec3& y, const Vec3& n) { return nearest_on_patch(pull, p, y, n); });
 }
 
 struct MeshResult {
@@ -1058,6 +1062,11 @@ MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& r
   note(interior_pass(b, refs, scale, options, optimize, context, pull), true);
   if (optimize && options.slide_borders && options.iterations > 0) {
     PatchProblem sides = build_side_problem(b);
+    // The pose pull on a sliding wedge: toward the reference's nearest point in the wedge's own
+    // patch, seen along its side (the solver projects the pull on the side's direction).
+    if (pull)
+      add_pull(sides, b.chart, *pull,
+               [&](int p, const Vec3& y, const Vec3& n) { return nearest_on_patch(*pull, p, y, n); }, 1);
     const PatchResult r = solve_problem(sides, patch_metric(sides, refs, scale), options, true);
     out.steps += r.steps;
     if (r.changed) {
@@ -1291,7 +1300,7 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
   };
   if (pull) {
     // The pose pull toward the nearer of the reference's two patches, in glued (u, v).
-    add_pull(pr, chart, *pull, [&](const Vec3& y, const Vec3& n) {
+    add_pull(pr, chart, *pull, [&](int, const Vec3& y, const Vec3& n) {
       return nearest_of(
           *pull, 2, y, n, [&](int w) { return glue[w].patch; },
           [&](int w, const PullTarget& t) {
@@ -1748,7 +1757,7 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
   };
   if (pull) {
     // The pose pull toward the nearest of the reference's k patches around the corner, glued.
-    add_pull(pr, chart, *pull, [&](const Vec3& y, const Vec3& n) {
+    add_pull(pr, chart, *pull, [&](int, const Vec3& y, const Vec3& n) {
       return nearest_of(
           *pull, k, y, n, [&](int j) { return star.patches[j]; },
           [&](int j, const PullTarget& t) {
