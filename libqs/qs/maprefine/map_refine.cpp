@@ -905,15 +905,15 @@ std::optional<PullTarget> nearest_on_patch(const PosePull& pull, int p, const Ve
 // coordinates; none: no pull on it.
 using PullTargetFn = std::function<std::optional<PullTarget>(int, const Vec3&, const Vec3&)>;
 
-// Fills a problem's pull: every local vertex of B with at least `min_dims` unknowns (2: free; 1:
-// sliding too) that `locate` places gets its target and as weight the pull's weight times a third
-// of its faces' area times the metric.
-void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull, const PullTargetFn& locate,
-              int min_dims = 2) {
+// Fills a problem's pull: every local vertex of B with unknowns (free, or sliding along a side)
+// that `locate` places gets its target and as weight the pull's weight times a third of its faces'
+// area times the metric.
+void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pull, const PullTargetFn& locate) {
   pr.pull.assign(pr.uv.size(), Eigen::Matrix2d::Zero());
   pr.target.assign(pr.uv.size(), Vec2::Zero());
   std::vector<double> area(pr.uv.size(), 0.0);
-  std::vector<Vec3> normal(pr.uv.size(), Vec3::Zero());  // a free vertex has all its faces here
+  // A free vertex has all its faces here; a sliding wedge those of its own patch.
+  std::vector<Vec3> normal(pr.uv.size(), Vec3::Zero());
   std::vector<int> patch(pr.uv.size(), -1);
   for (size_t t = 0; t < pr.tri.size(); ++t) {
     const auto& c = chart.mesh.faces[pr.faces[t]];
@@ -923,7 +923,7 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
   }
   const Eigen::Matrix3d turn = pull.to_ref.topLeftCorner<3, 3>();
   for (size_t l = 0; l < pr.uv.size(); ++l) {
-    if (pr.dims[l] == 0 || pr.dims[l] < min_dims) continue;
+    if (pr.dims[l] == 0) continue;
     const Vec3 y = (pull.to_ref * chart.mesh.positions[pr.vertices[l]].homogeneous()).head<3>();
     if (const auto t = locate(patch[l], y, turn * normal[l])) {
       pr.target[l] = t->uv;
@@ -1066,7 +1066,7 @@ MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& r
     // patch, seen along its side (the solver projects the pull on the side's direction).
     if (pull)
       add_pull(sides, b.chart, *pull,
-               [&](int p, const Vec3& y, const Vec3& n) { return nearest_on_patch(*pull, p, y, n); }, 1);
+               [&](int p, const Vec3& y, const Vec3& n) { return nearest_on_patch(*pull, p, y, n); });
     const PatchResult r = solve_problem(sides, patch_metric(sides, refs, scale), options, true);
     out.steps += r.steps;
     if (r.changed) {

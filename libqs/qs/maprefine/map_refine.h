@@ -127,10 +127,11 @@ struct RefineOptions {
   /// The pose pull (qs-dissect, for meshes in one pose): the interior passes, the side moves of
   /// across_borders, the corner moves of move_corners and the sliding pass of slide_borders (a
   /// side vertex toward the nearest point in each of its two patches, along its side) also pull
-  /// every free vertex of B toward the reference's point nearest to it, B moved into the reference's frame by the landmarks'
-  /// similarity (Umeyama on the seeds and features), the nearest point taken in the vertex's own
-  /// patch (in the nearest of the two patches of a side, or of the k patches of a corner, being
-  /// moved), among the faces that face as the vertex does (dissect::kSamePoseFacingCos). Energy: pose_pull * sum over B's vertices of
+  /// every free vertex of B toward the reference's point nearest to it, B moved into the
+  /// reference's frame by the landmarks' similarity (Umeyama on the seeds and features), the
+  /// nearest point taken in the vertex's own patch (in the nearest of the two patches of a side,
+  /// or of the k patches of a corner, being moved), among the faces that face as the vertex does
+  /// (dissect::kSamePoseFacingCos). Energy: pose_pull * sum over B's vertices of
   /// area(v) * |d(u, v)|^2 / (kPullLength * the reference's diagonal)^2, with |d|^2 the squared 3D
   /// distance on the reference's patch (its metric at the target). 0: off. \pre >= 0
   double pose_pull = 0;
