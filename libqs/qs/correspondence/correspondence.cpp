@@ -473,6 +473,21 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   std::vector<double> same(n);
   const Box3 box = bounding_box(cb.mesh.positions);
   const double diag = box.diagonal();
+  // One point x of A, at (patch, st) in A's chart and `on_input` on A's input mesh: the dissection's
+  // error and the baseline's (% of the diagonal), and the patch of B's chart nearest its exact image.
+  struct PointMeasure {
+    double error, baseline;
+    int exact_patch;
+  };
+  auto measure_point = [&](const Vec3& x, int patch, const Vec2& st, const landmarks::SurfacePoint& on_input,
+                           int& hint) {
+    const Vec3 mapped = map_point(patch, st, hint);
+    const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
+    const Vec3 moved = (similarity * x.homogeneous()).head<3>();
+    return PointMeasure{100 * (mapped - exact).norm() / diag,
+                        100 * (on_b_chart.closest(moved).point - exact).norm() / diag,
+                        cb.face_patch[on_b_chart.closest(exact).face]};
+  };
 
   constexpr long kChunk = 1024;
   const long chunks = (n + kChunk - 1) / kChunk;
@@ -492,14 +507,12 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
       const Vec2 uv = beta[0] * ca.face_uv[f][0] + beta[1] * ca.face_uv[f][1] + beta[2] * ca.face_uv[f][2];
       const int patch = ca.face_patch[f];
       const Vec2 st = uv.cwiseMax(0.0).cwiseMin(1.0);
-      const Vec3 mapped = map_point(patch, st, hint);
       const auto ca_closest = on_a.closest(x);
-      const landmarks::SurfacePoint on_input = surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point);
-      const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
-      err[k] = 100 * (mapped - exact).norm() / diag;
-      same[k] = cb.face_patch[on_b_chart.closest(exact).face] == patch ? 1.0 : 0.0;
-      const Vec3 moved = (similarity * x.homogeneous()).head<3>();
-      base_err[k] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
+      const PointMeasure m =
+          measure_point(x, patch, st, surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point), hint);
+      err[k] = m.error;
+      same[k] = m.exact_patch == patch ? 1.0 : 0.0;
+      base_err[k] = m.baseline;
     }
     context.report("correspondence", static_cast<double>(++done) / chunks);
   });
@@ -530,14 +543,12 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
         if (chart_face[v] < 0 || input_face[v] < 0) continue;  // unused vertex (validation drops them)
         const int f = chart_face[v];
         const Vec3& x = ma.positions[v];
-        const Vec3 mapped =
-            map_point(ca.face_patch[f], ca.face_uv[f][chart_corner[v]].cwiseMax(0.0).cwiseMin(1.0), hint);
-        const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, surface_point_at(ma, input_face[v], x)));
-        pm.vertex_error[v] = 100 * (mapped - exact).norm() / diag;
+        const Vec2 st = ca.face_uv[f][chart_corner[v]].cwiseMax(0.0).cwiseMin(1.0);
+        const PointMeasure m = measure_point(x, ca.face_patch[f], st, surface_point_at(ma, input_face[v], x), hint);
+        pm.vertex_error[v] = m.error;
+        pm.vertex_baseline_error[v] = m.baseline;
         pm.vertex_patch[v] = ca.face_patch[f];
-        pm.vertex_exact_patch[v] = cb.face_patch[on_b_chart.closest(exact).face];
-        const Vec3 moved = (similarity * x.homogeneous()).head<3>();
-        pm.vertex_baseline_error[v] = 100 * (on_b_chart.closest(moved).point - exact).norm() / diag;
+        pm.vertex_exact_patch[v] = m.exact_patch;
       }
     });
   }
