@@ -131,6 +131,7 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
     const long alt_bad = folded(alt, &alt_where);
     if (alt_bad >= bad) return;
     alt.same_pose_fallback = out.same_pose_fallback;
+    alt.maps_fallback = out.maps_fallback;
     alt.*why = std::to_string(bad) + " folded uv faces with " + what + " (" + where + ")";
     out = std::move(alt);
     bad = alt_bad;
@@ -148,6 +149,21 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
     o.intrinsic_cotan = false;
     try_again(o, "edge+mean-value", &DissectionSet::maps_fallback,
               maps_name(options.geodesic_seed_curves, options.intrinsic_cotan));
+  }
+  // Each net above keeps the better of its two tries, so both off together was not tried yet:
+  // a set can fold with the pose either way and with the new maps either way, yet not with
+  // neither (a camel against its re-tessellation: 54 folded uv faces posed, 73 at the common
+  // (u,v), 22 posed with edge+mean-value, none with neither).
+  if (bad > 0 && used.same_pose && meshes.size() > 1 && options.fallback_maps &&
+      (options.geodesic_seed_curves || options.intrinsic_cotan)) {
+    DissectOptions o = used;
+    o.same_pose = false;
+    o.geodesic_seed_curves = false;
+    o.intrinsic_cotan = false;
+    try_again(o, "the common (u,v) and edge+mean-value", &DissectionSet::same_pose_fallback,
+              "the pose (posed corners, node maps)");
+    if (!used.same_pose && out.maps_fallback.empty())
+      out.maps_fallback = out.same_pose_fallback;  // the maps changed too
   }
   return out;
 }

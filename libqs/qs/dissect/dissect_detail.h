@@ -348,18 +348,29 @@ class SetDissector {
   std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
 };
 
-/// same_pose_maps: rounds of the fold repair of transfer_node_map (round r frees r + 1 more
-/// rings around the folds); a map still folded after them is not taken over.
+/// same_pose_maps: rounds of the fold repair of transfer_node_map that solve the folded vertices
+/// alone, then rounds that free r + 1 rings around the folds (r = 0, 1, ...).
+constexpr int kTransferLocalRounds = 10;
 constexpr int kTransferRepairRounds = 6;
+/// same_pose_maps: transfer_node_map takes the node's own map within one ring of a feature and
+/// blends it into the taken-over map over this many rings; where folds outlast the repair, it does
+/// the same around them over 2x as many rings, then repairs again (kTransferBlendAttempts times;
+/// more attempts, over 4x and 8x the rings, mended larger tangles into worse cuts: a horse
+/// against its re-tessellation 0.26 -> 0.43% mean) before the node keeps its own map.
+constexpr int kTransferBlendRings = 3;
+constexpr int kTransferBlendAttempts = 1;
 
 /// DissectOptions::same_pose_maps: mesh i's map of a node (`p`) taken over from mesh 0's (`ref`):
 /// every vertex of p but its border and its features goes to the (u, v) of ref's point nearest to
 /// it once moved into mesh 0's frame by `to_ref`, among ref's faces that face as the vertex does
-/// (kSamePoseFacingCos; a vertex farther than `reach` from ref is left
-/// to the repair), then folded faces are mended by solves of the node's own weights (p.weights)
-/// over the free vertices around them, every other interior vertex pinned, a ring wider each
-/// round (kTransferRepairRounds). Returns whether p.sp changed:
-/// only to a bijective map (every face positive, counted).
+/// (kSamePoseFacingCos; a vertex farther than `reach` from ref is left to the repair), except
+/// around the features, where p's own map is blended in (kTransferBlendRings); then folded faces
+/// are mended by solves of the node's own weights (p.weights) over the folded vertices
+/// (kTransferLocalRounds), then over the free vertices around them, every other interior vertex
+/// pinned, a ring wider each round (kTransferRepairRounds); where folds remain, p's own map is
+/// blended in around them and the repair runs again (kTransferBlendAttempts). p's own map may
+/// fold (the take-over can mend a node that folds in this mesh).
+/// Returns whether p.sp changed: only to a bijective map (every face positive, counted).
 bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
                        double reach, Param& p);
 

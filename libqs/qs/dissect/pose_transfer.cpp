@@ -3,6 +3,7 @@
 // curves on every surface (see transfer_node_map in dissect_detail.h).
 
 #include <algorithm>
+#include <optional>
 #include <vector>
 
 #include "qs/core/error.h"
@@ -54,20 +55,93 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
     r.erase(std::unique(r.begin(), r.end()), r.end());
   }
 
+  // The node's own map and the taken-over one agree on the border and at the features (both at
+  // their common (u, v)), and the own map is mostly a good local shape (bijective unless the node
+  // folds in this mesh, which the take-over can mend). Around a held vertex the taken-over rings
+  // can still fold against it: the two landmarks of a feature are one point only up to each
+  // mesh's tessellation, which a squeezed map magnifies, and an inserted feature or a cut vertex
+  // next to a sliver turns over at the slightest offset. There the own map's shape is taken:
+  // within one ring of `from` entirely, then blended into the taken-over map over `rings` rings.
+  auto blend_own = [&](std::vector<Vec2>& at, const std::vector<int>& from, int rings) {
+    std::vector<int> hops(n, -1), frontier;
+    for (int v : from)
+      if (hops[v] < 0) {
+        hops[v] = 0;
+        frontier.push_back(v);
+      }
+    for (int h = 1; h <= rings && !frontier.empty(); ++h) {
+      std::vector<int> next;
+      for (int v : frontier)
+        for (int w : ring[v])
+          if (hops[w] < 0) {
+            hops[w] = h;
+            next.push_back(w);
+          }
+      frontier.swap(next);
+    }
+    for (int v = 0; v < n; ++v) {
+      if (hops[v] < 0 || fixed[v]) continue;
+      const double own = hops[v] <= 1 ? 1.0 : 1.0 - static_cast<double>(hops[v] - 1) / rings;
+      at[v] = (1 - own) * at[v] + own * p.sp.uv[v];
+      unplaced[v] = 0;
+    }
+  };
+  std::vector<int> features;
+  for (const auto& [k, local] : p.features) features.push_back(local);
+  blend_own(uv, features, kTransferBlendRings);
+
   // Folds (and unplaced vertices) mended by solves of the node's own weights over the free
-  // vertices around them, one ring wider each round; the map is kept only when it ends with
-  // every face positive. Only the free vertices take the solve's (u, v): the border stays where
-  // the node's map put it (parameterize_square places it by the same rule).
-  for (int round = 0; round <= kTransferRepairRounds; ++round) {
-    std::vector<char> free(n, 0);
-    bool any = false;
-    for (int v = 0; v < n; ++v)
-      if (unplaced[v]) free[v] = any = true;
-    for (const Tri& t : pm.faces)
-      if (signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) <= param::kZeroUvArea)
-        for (int k = 0; k < 3; ++k)
-          if (!fixed[t[k]]) free[t[k]] = any = true;
-    if (!any) {
+  // vertices around them: first the folded vertices alone, again and again, then one ring wider
+  // each round. Only the free vertices take the solve's (u, v): the border stays where the node's
+  // map put it (parameterize_square places it by the same rule). Returns the vertices of the
+  // faces still folded (empty: every face positive), nullopt when a solve fails.
+  auto repair = [&](std::vector<Vec2>& at) -> std::optional<std::vector<int>> {
+    std::vector<int> left;
+    for (int round = 0; round <= kTransferLocalRounds + kTransferRepairRounds; ++round) {
+      std::vector<char> free(n, 0);
+      bool any = false;
+      for (int v = 0; v < n; ++v)
+        if (unplaced[v]) free[v] = any = true;
+      for (const Tri& t : pm.faces)
+        if (signed_area(at[t[0]], at[t[1]], at[t[2]]) <= param::kZeroUvArea)
+          for (int k = 0; k < 3; ++k)
+            if (!fixed[t[k]]) free[t[k]] = any = true;
+      left.clear();
+      for (int v = 0; v < n; ++v)
+        if (free[v]) left.push_back(v);
+      if (!any || round == kTransferLocalRounds + kTransferRepairRounds) break;
+      const int grow = round < kTransferLocalRounds ? 0 : round - kTransferLocalRounds + 1;
+      for (int g = 0; g < grow; ++g) {
+        std::vector<char> wider = free;
+        for (int v = 0; v < n; ++v)
+          if (free[v])
+            for (int w : ring[v])
+              if (!fixed[w]) wider[w] = 1;
+        free.swap(wider);
+      }
+      // The free vertices by the node's own weights, every other interior vertex pinned where
+      // it is: in the limit (all free) the node's own map.
+      param::SquareParamOptions po;
+      po.weights = p.weights;
+      for (int v = 0; v < n; ++v)
+        if (!free[v] && !border[v]) po.pinned.emplace_back(v, at[v]);
+      try {
+        const param::SquareParam solved = param::parameterize_square(pm, po);
+        for (int v = 0; v < n; ++v)
+          if (free[v]) at[v] = solved.uv[v];
+      } catch (const Error&) {
+        return std::nullopt;
+      }
+      std::fill(unplaced.begin(), unplaced.end(), 0);
+    }
+    return left;
+  };
+
+  // Where folds remain, the own map's shape around them, over more rings each attempt.
+  for (int attempt = 0; attempt <= kTransferBlendAttempts; ++attempt) {
+    const std::optional<std::vector<int>> left = repair(uv);
+    if (!left) return false;
+    if (left->empty()) {
       param::SquareParam sp = p.sp;
       sp.uv = std::move(uv);
       param::count_uv_faces(pm.faces, sp);
@@ -75,29 +149,7 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
       p.sp = std::move(sp);
       return true;
     }
-    if (round == kTransferRepairRounds) break;
-    for (int grow = 0; grow < round + 1; ++grow) {
-      std::vector<char> wider = free;
-      for (int v = 0; v < n; ++v)
-        if (free[v])
-          for (int w : ring[v])
-            if (!fixed[w]) wider[w] = 1;
-      free.swap(wider);
-    }
-    // The free vertices by the node's own weights, every other interior vertex pinned where
-    // it is: in the limit (all free) the node's own map.
-    param::SquareParamOptions po;
-    po.weights = p.weights;
-    for (int v = 0; v < n; ++v)
-      if (!free[v] && !border[v]) po.pinned.emplace_back(v, uv[v]);
-    try {
-      const param::SquareParam solved = param::parameterize_square(pm, po);
-      for (int v = 0; v < n; ++v)
-        if (free[v]) uv[v] = solved.uv[v];
-    } catch (const Error&) {
-      return false;
-    }
-    std::fill(unplaced.begin(), unplaced.end(), 0);
+    blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
   return false;
 }

@@ -419,9 +419,9 @@ DissectionSet SetDissector::run() {
         const TriMesh ref_mesh{ps[0].ex.pm.positions, ps[0].ex.pm.faces};
         const metro::SurfaceDistance on_ref(ref_mesh, "the first mesh's node");
         std::vector<char> taken(nm, 0);
+        // Also where the mesh's own map of the node folds: only a bijective map is taken over.
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
-          if (!p.sp.bijective()) return;
           taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0], p);
         }, node_faces >= kParallelFaces);
         for (size_t i = 1; i < nm; ++i) ++(taken[i] ? out.same_pose_maps : out.same_pose_own_maps);
