@@ -36,10 +36,6 @@ namespace {
 using qs::TriMesh;
 using qs::Vec3;
 
-// qs-dissect's defaults for the refinement in one pose (tools/qs-dissect.cpp).
-constexpr double kPosePull = 10.0;
-constexpr int kPoseBorderIterations = 3;
-
 // `a`'s chart carried onto `b_mesh` (a's input connectivity, other positions): every chart vertex
 // keeps its place on a's input faces (the input's own vertices by id, the others through their
 // closest point of a's input mesh), so the chart map a -> b is the identity of the connectivity.
@@ -94,8 +90,8 @@ void run_pair(const char* label, const TriMesh& a, const TriMesh& b, const qs::d
   opt.refine_before_split = qs::maprefine::node_refiner(ro, node);
   const qs::dissect::DissectionSet set = qs::dissect::dissect_set({a_in, b_in}, opt);
   if (set.same_pose_detected && set.same_pose_fallback.empty()) {
-    ro.pose_pull = pose_pull >= 0 ? pose_pull : kPosePull;
-    if (ro.pose_pull > 0) ro.border_iterations = kPoseBorderIterations;
+    ro.pose_pull = pose_pull >= 0 ? pose_pull : qs::maprefine::kDefaultPosePull;
+    if (ro.pose_pull > 0) ro.border_iterations = qs::maprefine::kPoseBorderIterations;
   }
   std::vector<qs::correspondence::TruthMesh> tm(2);
   tm[0].name = "A";
@@ -165,12 +161,7 @@ int main(int argc, char** argv) {
       if (m[0].mesh.faces != m[1].mesh.faces) throw qs::InvalidInput("--pair: the two meshes' face lists differ");
       std::vector<qs::dissect::MeshToDissect> in(2);
       for (int i = 0; i < 2; ++i) {
-        qs::mesh::ValidationResult v;
-        v.mesh = m[i].mesh;
-        v.report.accepted = true;
-        v.vertex_map.resize(m[i].mesh.num_vertices());
-        for (int k = 0; k < m[i].mesh.num_vertices(); ++k) v.vertex_map[k] = k;
-        const qs::landmarks::Landmarks lm = qs::landmarks::read_landmarks(pair[2], v);
+        const qs::landmarks::Landmarks lm = qs::landmarks::read_landmarks(pair[2], qs::mesh::validate(m[i].mesh));
         if (lm.seeds.size() != 4) throw qs::InvalidInput(pair[2] + ": 4 seeds needed");
         in[i].mesh = &m[i].mesh;
         in[i].name = pair[i];

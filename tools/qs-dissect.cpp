@@ -27,14 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The pull of the map refinement toward nearest points for meshes in one pose
-// (RefineOptions::pose_pull) when --refine-pose-pull is not given.
-constexpr double kDefaultPosePull = 10.0;
-// ... and its Newton steps per glued pair of patches when --refine-border-iterations is not given
-// (RefineOptions::border_iterations is 1 otherwise): with the pull, the sides carry the patch
-// curves toward the first mesh's (README, "Same pose": human-same's worst point 3.02 -> 2.02%).
-constexpr int kPoseBorderIterations = 3;
-
 // Seeds as surface points: qs-dissect inserts a seed that is not on a vertex into the mesh, so that
 // it is exactly a corner of the two seed patches.
 std::array<qs::landmarks::SurfacePoint, 4> seeds_from_landmarks(const qs::landmarks::Landmarks& lm) {
@@ -322,9 +314,9 @@ int main(int argc, char** argv) {
     // One pose (told or found): posed splits (unless they fell back) and the refinement's pull.
     const bool one_pose = opt.same_pose || result.same_pose_detected;
     used.same_pose = one_pose && result.same_pose_fallback.empty();
-    refine_opt.pose_pull = !one_pose ? 0 : pose_pull >= 0 ? pose_pull : kDefaultPosePull;
+    refine_opt.pose_pull = !one_pose ? 0 : pose_pull >= 0 ? pose_pull : qs::maprefine::kDefaultPosePull;
     if (refine_opt.pose_pull > 0 && app.count("--refine-border-iterations") == 0)
-      refine_opt.border_iterations = kPoseBorderIterations;
+      refine_opt.border_iterations = qs::maprefine::kPoseBorderIterations;
     const double seconds = std::chrono::duration<double>(t2 - t1).count();
     double refine_seconds = 0;
     qs::maprefine::RefineReport refine_report;

@@ -30,6 +30,11 @@ class CorrespondenceTool : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   std::string d() const { return dir_.string(); }
   std::string mesh(int i) const { return d() + "/shape0" + std::to_string(i) + ".obj"; }
+  // The shared test meshes: $QS_SHARED_MESHES, or <repo>/../shared/meshes.
+  static fs::path shared_meshes() {
+    const char* env = std::getenv("QS_SHARED_MESHES");
+    return env && *env ? fs::path(env) : fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
+  }
   fs::path dir_;
 };
 
@@ -256,8 +261,7 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
 // node kept its own map: a hoof of the horse, an ear of the cat ended in another patch (horse
 // 0.90% mean and 24.7% max, cat 0.32 / 11.3%; now 0.23 / 3.6% and 0.07 / 0.9%).
 TEST_F(CorrespondenceTool, SamePoseTakesEveryNodeMapOverOnRealMeshes) {
-  const char* env = std::getenv("QS_SHARED_MESHES");
-  const fs::path shared = env && *env ? fs::path(env) : fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
+  const fs::path shared = shared_meshes();
   struct Case {
     const char* mesh;
     const char* landmarks;
@@ -295,8 +299,7 @@ TEST_F(CorrespondenceTool, SamePoseTakesEveryNodeMapOverOnRealMeshes) {
 // (posed corners, node maps) whichever maps, and with the new maps whichever corners, but not with
 // both off; each net kept only the better of its own two tries, so this set ended with exit 4.
 TEST_F(CorrespondenceTool, FoldedInOnePoseFallsBackToTheCommonUvAndTheOldMapsTogether) {
-  const char* env = std::getenv("QS_SHARED_MESHES");
-  const fs::path shared = env && *env ? fs::path(env) : fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
+  const fs::path shared = shared_meshes();
   if (!fs::exists(shared / "camel_4k_fixed.obj")) GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
   const std::string src = (shared / "camel_4k_fixed.obj").string(), out = d() + "/camel";
   std::ofstream(out + ".landmarks.json") << R"({"seeds": [1786, 1627, 47, 1764], "features": {"fa": 743, "fb": 400}})";
