@@ -176,6 +176,10 @@ int main(int argc, char** argv) {
   bool no_same_pose = false;
   app.add_flag("--no-same-pose", no_same_pose, "Never treat the meshes as one pose (no detection)");
   app.get_option("--no-same-pose")->excludes("--same-pose");
+  bool no_untangle = false;
+  app.add_flag("--no-same-pose-untangle", no_untangle,
+               "For meshes in one pose: a node whose taken-over map folds keeps its own map instead of being "
+               "untangled toward it (see README, \"Same pose\")");
   double pose_pull = -1;
   app.add_option("--refine-pose-pull", pose_pull,
                  "For meshes in one pose: weight of the refinement's pull of every vertex toward the first mesh's "
@@ -242,6 +246,7 @@ int main(int argc, char** argv) {
                                                            : qs::maprefine::NodeMetric::Vertex;
       opt.refine_before_split = qs::maprefine::node_refiner(refine_opt, node);
     }
+    if (!no_untangle) opt.same_pose_untangle = qs::maprefine::untangler(refine_opt);
     if (outdir.empty()) outdir = default_outdir(meshes);
     // No output may replace an input: the report file, or the folder's files.
     std::vector<fs::path> input_paths(meshes.begin(), meshes.end());
@@ -422,11 +427,12 @@ int main(int argc, char** argv) {
     }
     if (one_pose && inputs.size() > 1) {
       if (result.same_pose_fallback.empty())
-        text << "same pose: " << result.same_pose_loops << " of " << inputs.size() - 1
-             << " seed loops routed by pose, " << result.same_pose_splits
-             << " splits with inner corners placed by pose, " << result.same_pose_common << " at the common (u,v); "
-             << result.same_pose_maps << " node maps taken over from the first mesh by nearest points, "
-             << result.same_pose_own_maps << " kept their own (folded)\n";
+        text << "same pose: " << result.same_pose_loops << " of " << inputs.size() - 1 << " seed loops routed by pose, "
+             << result.same_pose_splits << " splits with inner corners placed by pose, " << result.same_pose_common
+             << " at the common (u,v); " << result.same_pose_maps
+             << " node maps taken over from the first mesh by nearest points, " << result.same_pose_own_maps
+             << " kept their own (folded), " << result.same_pose_untangled
+             << " of those taken over untangled from their own\n";
       else
         text << "same pose: not used (" << result.same_pose_fallback << "; the common (u,v) fold less)\n";
     }

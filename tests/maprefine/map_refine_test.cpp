@@ -1094,3 +1094,84 @@ TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   capped.max_start_distortion = -1;
   EXPECT_THROW(mr::refine_patch(pm, uv, pm, again, held, {}, capped), qs::InvalidInput);
 }
+
+// untangle_patch (the same-pose untangler): a grid patch's map pulled toward targets that fold
+// where two interior vertices trade places, and are a smooth bijection of the square elsewhere.
+// The result follows the targets away from the trade, never folds, and holds the boundary and a
+// held vertex; a folded start or bad sizes are refused.
+TEST(UntanglePatch, FollowsFoldingTargetsWithoutFolding) {
+  constexpr int n = 13;  // vertices per side
+  qs::param::PatchMesh pm;
+  std::vector<Vec2> uv;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double x = static_cast<double>(i) / (n - 1), y = static_cast<double>(j) / (n - 1);
+      pm.positions.emplace_back(x, y, 0.1 * x * y);
+      uv.emplace_back(x, y);
+    }
+  auto id = [](int i, int j) { return j * n + i; };
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      pm.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      pm.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  for (int i = 0; i + 1 < n; ++i) pm.boundary.push_back(id(i, 0));
+  for (int j = 0; j + 1 < n; ++j) pm.boundary.push_back(id(n - 1, j));
+  for (int i = n - 1; i > 0; --i) pm.boundary.push_back(id(i, n - 1));
+  for (int j = n - 1; j > 0; --j) pm.boundary.push_back(id(0, j));
+  std::vector<Vec2> target = uv;
+  for (auto& q : target) q.x() += 0.15 * std::sin(M_PI * q.x()) * std::sin(M_PI * q.y());
+  const int a = id(3, 3), b = id(4, 3);  // traded: every target face around them folds
+  std::swap(target[a], target[b]);
+  std::vector<char> has_target(uv.size(), 1), held(uv.size(), 0);
+  has_target[id(9, 9)] = 0;  // no target: moves only with its neighbours
+  held[id(6, 9)] = 1;
+  int folded_targets = 0;
+  auto positive = [&](const std::vector<Vec2>& at, const qs::Tri& t) {
+    const Vec2 e = at[t[1]] - at[t[0]], f = at[t[2]] - at[t[0]];
+    return 0.5 * (e.x() * f.y() - e.y() * f.x()) > qs::param::kZeroUvArea;
+  };
+  for (const auto& t : pm.faces) folded_targets += !positive(target, t);
+  ASSERT_GT(folded_targets, 0);
+
+  std::vector<Vec2> out = uv;
+  ASSERT_TRUE(mr::untangle_patch(pm, out, held, target, has_target));
+  for (const auto& t : pm.faces) EXPECT_TRUE(positive(out, t));
+  for (int v : pm.boundary) EXPECT_EQ(out[v], uv[v]);
+  EXPECT_EQ(out[id(6, 9)], uv[id(6, 9)]);
+  // Away from the trade (and the held vertex) the targets are reached.
+  double far_before = 0, far_after = 0;
+  int far = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      if (std::abs(i - 3) + std::abs(j - 3) <= 4 || std::abs(i - 6) + std::abs(j - 9) <= 2 || !has_target[id(i, j)])
+        continue;
+      far_before += (uv[id(i, j)] - target[id(i, j)]).norm();
+      far_after += (out[id(i, j)] - target[id(i, j)]).norm();
+      ++far;
+    }
+  ASSERT_GT(far, 50);
+  EXPECT_LT(far_after, 0.05 * far_before) << far_before / far << " -> " << far_after / far;
+  // Deterministic.
+  std::vector<Vec2> again = uv;
+  ASSERT_TRUE(mr::untangle_patch(pm, again, held, target, has_target));
+  EXPECT_EQ(again, out);
+
+  // A start with a folded face is refused and left as it was.
+  std::vector<Vec2> folded = uv;
+  std::swap(folded[a], folded[b]);
+  const std::vector<Vec2> folded_start = folded;
+  EXPECT_FALSE(mr::untangle_patch(pm, folded, held, target, has_target));
+  EXPECT_EQ(folded, folded_start);
+  // Bad sizes and a bad pull are named.
+  std::vector<Vec2> short_target(target.begin(), target.end() - 1);
+  EXPECT_THROW(mr::untangle_patch(pm, out, held, short_target, has_target), qs::InvalidInput);
+  EXPECT_THROW(mr::untangle_patch(pm, out, held, target, has_target, -1.0), qs::InvalidInput);
+  try {
+    std::vector<char> short_held(held.begin(), held.end() - 1);
+    mr::untangle_patch(pm, out, short_held, target, has_target);
+    FAIL() << "expected InvalidInput";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("untangle_patch: the patch has 169 vertices, 169 uv, 168 held flags"));
+  }
+}

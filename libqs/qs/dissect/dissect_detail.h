@@ -369,10 +369,14 @@ constexpr int kTransferBlendAttempts = 1;
 /// (kTransferLocalRounds), then over the free vertices around them, every other interior vertex
 /// pinned, a ring wider each round (kTransferRepairRounds); where folds remain, p's own map is
 /// blended in around them and the repair runs again (kTransferBlendAttempts). p's own map may
-/// fold (the take-over can mend a node that folds in this mesh).
-/// Returns whether p.sp changed: only to a bijective map (every face positive, counted).
-bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
-                       double reach, Param& p);
+/// fold (the take-over can mend a node that folds in this mesh), and so may ref's (its (u, v) are
+/// read as they are). Where folds remain, `untangle` (when given) moves p's own map, or its
+/// stretch-minimized map (minimized_leaf) when the own map folds, toward the nearest-point (u, v)
+/// under an injectivity barrier (DissectOptions::same_pose_untangle).
+/// p.sp changes only to a bijective map (every face positive, counted).
+enum class Transfer { Own, Taken, Untangled };
+Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
+                           double reach, const NodeMapPuller& untangle, const Context& context, Param& p);
 
 /// same_pose: a posed corner farther than this fraction of its mesh's diagonal from the point it
 /// stands for means the meshes are not in one pose there; the split keeps its common (u, v).

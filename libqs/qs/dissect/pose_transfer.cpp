@@ -13,8 +13,8 @@
 
 namespace qs::dissect::detail {
 
-bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
-                       double reach, Param& p) {
+Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
+                           double reach, const NodeMapPuller& untangle, const Context& context, Param& p) {
   const param::PatchMesh& pm = p.ex.pm;
   const int n = static_cast<int>(pm.positions.size());
   std::vector<char> border(n, 0), fixed = feature_mask(p);
@@ -26,7 +26,7 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
   const std::vector<Vec3> normal = vertex_normals(pm.positions, pm.faces);
   const Eigen::Matrix3d turn = to_ref.topLeftCorner<3, 3>();
   std::vector<Vec2> uv = p.sp.uv;
-  std::vector<char> unplaced(n, 0);
+  std::vector<char> unplaced(n, 0), has_target(n, 0);
   int placed = 0;
   for (int v = 0; v < n; ++v) {
     if (fixed[v]) continue;
@@ -40,9 +40,11 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
     const auto l = landmarks::closest_on_triangle(q, ref.ex.pm.positions[t[0]], ref.ex.pm.positions[t[1]],
                                                   ref.ex.pm.positions[t[2]]);
     uv[v] = l[0] * ref.sp.uv[t[0]] + l[1] * ref.sp.uv[t[1]] + l[2] * ref.sp.uv[t[2]];
+    has_target[v] = 1;
     ++placed;
   }
-  if (placed == 0) return false;
+  if (placed == 0) return Transfer::Own;
+  const std::vector<Vec2> target = uv;
 
   std::vector<std::vector<int>> ring(n);
   for (const Tri& t : pm.faces)
@@ -140,18 +142,33 @@ bool transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, c
   // Where folds remain, the own map's shape around them, over more rings each attempt.
   for (int attempt = 0; attempt <= kTransferBlendAttempts; ++attempt) {
     const std::optional<std::vector<int>> left = repair(uv);
-    if (!left) return false;
+    if (!left) break;
     if (left->empty()) {
       param::SquareParam sp = p.sp;
       sp.uv = std::move(uv);
       param::count_uv_faces(pm.faces, sp);
-      if (!sp.bijective()) return false;
+      if (!sp.bijective()) break;
       p.sp = std::move(sp);
-      return true;
+      return Transfer::Taken;
     }
     blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
-  return false;
+  // A tangle no repair mends: the own map pulled toward the targets, never folding. An own map
+  // that folds or is squeezed to zero area (a thin leg) starts from its stretch-minimized map.
+  if (!untangle) return Transfer::Own;
+  std::vector<Vec2> pulled = p.sp.uv;
+  if (!p.sp.bijective()) {
+    const param::SquareParam m = minimized_leaf(p, kRepairRounds, context);
+    if (m.uv.empty() || !m.bijective()) return Transfer::Own;
+    pulled = m.uv;
+  }
+  if (!untangle(pm, pulled, fixed, target, has_target)) return Transfer::Own;
+  param::SquareParam sp = p.sp;
+  sp.uv = std::move(pulled);
+  param::count_uv_faces(pm.faces, sp);
+  if (!sp.bijective()) return Transfer::Own;
+  p.sp = std::move(sp);
+  return Transfer::Untangled;
 }
 
 }  // namespace qs::dissect::detail

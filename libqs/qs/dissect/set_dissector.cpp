@@ -414,17 +414,26 @@ DissectionSet SetDissector::run() {
         }, node_faces >= kParallelFaces);
         for (size_t i = 1; i < nm; ++i) ++(refined[i] ? out.before_split_refined : out.before_split_own);
       }
-      // DissectOptions::same_pose_maps: every mesh's map of the node taken over from mesh 0's.
-      if (opt_.same_pose && opt_.same_pose_maps && nm > 1 && ps[0].sp.bijective()) {
+      // DissectOptions::same_pose_maps: every mesh's map of the node taken over from mesh 0's, also
+      // where mesh 0's folds (a leg squeezed to zero uv area): the split cuts every mesh at equal
+      // (u, v), so the others must follow mesh 0's map as it is, and only theirs must be bijective
+      // (a camel against its re-tessellation: a hoof in another leg's patch, 31% of the diagonal).
+      if (opt_.same_pose && opt_.same_pose_maps && nm > 1) {
         const TriMesh ref_mesh{ps[0].ex.pm.positions, ps[0].ex.pm.faces};
         const metro::SurfaceDistance on_ref(ref_mesh, "the first mesh's node");
-        std::vector<char> taken(nm, 0);
+        std::vector<Transfer> taken(nm, Transfer::Own);
+        Context quiet = ctx_.without_progress();
+        quiet.log = nullptr;
         // Also where the mesh's own map of the node folds: only a bijective map is taken over.
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
-          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0], p);
+          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0],
+                                           opt_.same_pose_untangle, quiet, p);
         }, node_faces >= kParallelFaces);
-        for (size_t i = 1; i < nm; ++i) ++(taken[i] ? out.same_pose_maps : out.same_pose_own_maps);
+        for (size_t i = 1; i < nm; ++i) {
+          ++(taken[i] == Transfer::Own ? out.same_pose_own_maps : out.same_pose_maps);
+          out.same_pose_untangled += taken[i] == Transfer::Untangled;
+        }
       }
       std::vector<std::array<Node, 5>> kids(meshes_.size());
       // DissectOptions::same_pose: every mesh's inner corners where mesh 0's lie on its surface;

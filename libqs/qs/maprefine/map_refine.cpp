@@ -2317,28 +2317,25 @@ LinearizeFn composition_linearization(const PatchProblem& prob, const ExactRefer
   };
 }
 
-}  // namespace
-
-bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
-                  std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options,
-                  const NodeRefineOptions& node) {
+// refine_patch's and pull_patch's checks (`who` names the caller) and the patch as a problem: every
+// vertex its own wedge; boundary loop, held and unused ones fixed. None: nothing to solve.
+std::optional<PatchProblem> node_problem(const char* who, const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv,
+                                         const param::PatchMesh& patch, const std::vector<Vec2>& uv,
+                                         const std::vector<char>& held, const RefineOptions& options) {
   if (ref_uv.size() != ref.positions.size() || uv.size() != patch.positions.size() ||
       held.size() != patch.positions.size())
-    throw InvalidInput("refine_patch: the reference patch has " + std::to_string(ref.positions.size()) +
+    throw InvalidInput(std::string(who) + ": the reference patch has " + std::to_string(ref.positions.size()) +
                        " vertices and " + std::to_string(ref_uv.size()) + " uv, the patch " +
-                       std::to_string(patch.positions.size()) + " vertices, " + std::to_string(uv.size()) +
-                       " uv and " + std::to_string(held.size()) + " held flags; expected equal counts");
+                       std::to_string(patch.positions.size()) + " vertices, " + std::to_string(uv.size()) + " uv and " +
+                       std::to_string(held.size()) + " held flags; expected equal counts");
   if (options.iterations < 0 || !(options.tolerance >= 0))
-    throw InvalidInput("refine_patch: iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
+    throw InvalidInput(std::string(who) + ": iterations (" + std::to_string(options.iterations) + ") and tolerance (" +
                        std::to_string(options.tolerance) + ") must be >= 0");
-  if (!(node.max_start_distortion >= 0))
-    throw InvalidInput("refine_patch: max_start_distortion (" + std::to_string(node.max_start_distortion) +
-                       ") must be >= 0 (0: no limit)");
-  if (ref.faces.empty() || patch.faces.empty() || options.iterations == 0) return false;
+  if (ref.faces.empty() || patch.faces.empty() || options.iterations == 0) return std::nullopt;
   for (const auto& t : ref.faces)
     for (int v : t)
       if (v < 0 || v >= static_cast<int>(ref.positions.size()))
-        throw InvalidInput("refine_patch: a face of the reference uses vertex " + std::to_string(v) +
+        throw InvalidInput(std::string(who) + ": a face of the reference uses vertex " + std::to_string(v) +
                            ", expected 0.." + std::to_string(ref.positions.size() - 1));
   // The patch as a problem: every vertex its own wedge; boundary loop, held and unused ones fixed.
   const size_t nv = patch.positions.size();
@@ -2346,7 +2343,7 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   for (const auto& t : patch.faces)
     for (int v : t)
       if (v < 0 || v >= static_cast<int>(nv))
-        throw InvalidInput("refine_patch: a face uses vertex " + std::to_string(v) + ", expected 0.." +
+        throw InvalidInput(std::string(who) + ": a face uses vertex " + std::to_string(v) + ", expected 0.." +
                            std::to_string(nv - 1));
       else
         fixed[v] = held[v] != 0;
@@ -2377,22 +2374,41 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
     pr.area.push_back(area);
     pr.total_area += area;
   }
-  if (pr.unknowns == 0) return false;
+  if (pr.unknowns == 0) return std::nullopt;
+  return pr;
+}
+
+// The reference's patch as a one-patch chart (refine_maps's metric and location grid).
+std::vector<ReferencePatch> one_patch_reference(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv) {
+  dissect::Chart chart;
+  chart.mesh.positions = ref.positions;
+  chart.mesh.faces = ref.faces;
+  chart.face_patch.assign(ref.faces.size(), 0);
+  chart.face_uv.resize(ref.faces.size());
+  std::vector<int> ref_faces(ref.faces.size());
+  for (size_t f = 0; f < ref.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) chart.face_uv[f][k] = ref_uv[ref.faces[f][k]];
+    ref_faces[f] = static_cast<int>(f);
+  }
+  std::vector<ReferencePatch> refs;
+  refs.emplace_back(chart, std::move(ref_faces));
+  return refs;
+}
+
+}  // namespace
+
+bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
+                  std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options,
+                  const NodeRefineOptions& node) {
+  if (!(node.max_start_distortion >= 0))
+    throw InvalidInput("refine_patch: max_start_distortion (" + std::to_string(node.max_start_distortion) +
+                       ") must be >= 0 (0: no limit)");
+  auto problem = node_problem("refine_patch", ref, ref_uv, patch, uv, held, options);
+  if (!problem) return false;
+  PatchProblem& pr = *problem;
   PatchResult r;
   if (node.metric == NodeMetric::Vertex) {
-    // The reference as a one-patch chart (refine_maps's metric and location grid).
-    dissect::Chart chart;
-    chart.mesh.positions = ref.positions;
-    chart.mesh.faces = ref.faces;
-    chart.face_patch.assign(ref.faces.size(), 0);
-    chart.face_uv.resize(ref.faces.size());
-    std::vector<int> ref_faces(ref.faces.size());
-    for (size_t f = 0; f < ref.faces.size(); ++f) {
-      for (int k = 0; k < 3; ++k) chart.face_uv[f][k] = ref_uv[ref.faces[f][k]];
-      ref_faces[f] = static_cast<int>(f);
-    }
-    std::vector<ReferencePatch> refs;
-    refs.emplace_back(chart, std::move(ref_faces));
+    const std::vector<ReferencePatch> refs = one_patch_reference(ref, ref_uv);
     const std::vector<double> scale{refs[0].area() > 0 ? pr.total_area / refs[0].area() : 1.0};
     r = solve_problem(pr, patch_metric(pr, refs, scale), options, true);
   } else {
@@ -2423,6 +2439,59 @@ dissect::NodeMapRefiner node_refiner(const RefineOptions& options, const NodeRef
   return [options, node](const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
                          std::vector<Vec2>& uv, const std::vector<char>& held) {
     return refine_patch(ref, ref_uv, patch, uv, held, options, node);
+  };
+}
+
+bool untangle_patch(const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
+                    const std::vector<Vec2>& target, const std::vector<char>& has_target, double pull,
+                    const RefineOptions& options) {
+  const size_t n = patch.positions.size();
+  if (uv.size() != n || held.size() != n || target.size() != n || has_target.size() != n)
+    throw InvalidInput("untangle_patch: the patch has " + std::to_string(n) + " vertices, " +
+                       std::to_string(uv.size()) + " uv, " + std::to_string(held.size()) + " held flags, " +
+                       std::to_string(target.size()) + " targets and " + std::to_string(has_target.size()) +
+                       " target flags; expected equal counts");
+  if (!(pull >= 0 && std::isfinite(pull)))
+    throw InvalidInput("untangle_patch: pull " + std::to_string(pull) + " must be finite and >= 0");
+  // The patch is its own reference: node_problem's checks, with `patch` in both roles.
+  auto problem = node_problem("untangle_patch", patch, uv, patch, uv, held, options);
+  if (!problem) return false;
+  PatchProblem& pr = *problem;
+  // Each face's frame is its start (u, v) triangle instead of its 3D triangle, so the distortion
+  // is 4 per unit area at the start however squeezed the map is on the surface (measured against
+  // the 3D triangles or the first mesh's map, a squeezed node starts at 10^5..10^6 and the pull
+  // moves nothing); the pull's weight per vertex is a third of its faces' start uv area.
+  std::vector<double> area(pr.uv.size(), 0.0);
+  pr.total_area = 0;
+  for (size_t t = 0; t < pr.tri.size(); ++t) {
+    const auto& c = pr.tri[t];
+    Eigen::Matrix2d e;
+    e.col(0) = pr.uv[c[1]] - pr.uv[c[0]];
+    e.col(1) = pr.uv[c[2]] - pr.uv[c[0]];
+    const double a = 0.5 * e.determinant();
+    if (!(a > param::kZeroUvArea)) return false;  // not a bijective start
+    pr.dm_inv[t] = e.inverse();
+    pr.area[t] = a;
+    pr.total_area += a;
+    for (int l : c) area[l] += a / 3;
+  }
+  pr.pull.assign(pr.uv.size(), Eigen::Matrix2d::Zero());
+  pr.target.assign(pr.uv.size(), Vec2::Zero());
+  for (size_t v = 0; v < pr.uv.size(); ++v)
+    if (pr.dims[v] > 0 && has_target[v]) {
+      pr.target[v] = target[v];
+      pr.pull[v] = pull * area[v] * Eigen::Matrix2d::Identity();
+    }
+  const MetricFn identity = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
+  if (!solve_problem(pr, identity, options, true).changed) return false;
+  uv = pr.uv;
+  return true;
+}
+
+dissect::NodeMapPuller untangler(const RefineOptions& options, double pull) {
+  return [options, pull](const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
+                         const std::vector<Vec2>& target, const std::vector<char>& has_target) {
+    return untangle_patch(patch, uv, held, target, has_target, pull, options);
   };
 }
 

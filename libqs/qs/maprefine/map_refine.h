@@ -245,6 +245,31 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
 /// [--refine-before-split-metric vertex|face|composition]`).
 dissect::NodeMapRefiner node_refiner(const RefineOptions& options = {}, const NodeRefineOptions& node = {});
 
+/// untangle_patch's pull (DissectOptions::same_pose_untangle in qs-dissect): a vertex 1/3000 of
+/// the square from its target costs about as much as its area's distortion at rest. Measured on
+/// 18 real meshes against their re-tessellation (README, "Same pose"): 10^5 left the camel's
+/// tangles, 10^6 and 10^7 mend them, 10^7 is the better on polygirl (0.36 -> 0.25% mean), 10^8
+/// worse on the camel.
+inline constexpr double kUntanglePull = 1e7;
+
+/// Moves a patch's bijective map `uv` toward target (u, v) without folding it: the free vertices
+/// (neither held nor on the boundary loop) minimize the symmetric Dirichlet energy of the map from
+/// their start (u, v) triangles (area-weighted) plus pull x a third of their faces' start uv area
+/// x |uv - target[v]|^2 where has_target[v] != 0, by refine_maps's Newton solver, whose line search
+/// keeps every face positive. The untangler of a same-pose take-over that folds: the targets fold
+/// somewhere, the result follows them elsewhere. Keeps the result only if every uv face stays
+/// positive, inside the square, and the energy went down; returns whether uv changed (false for a
+/// start with a non-positive face).
+/// \pre uv.size() == held.size() == target.size() == has_target.size() == patch.positions.size(),
+/// pull finite and >= 0. \throws InvalidInput naming the sizes or the bad value. Deterministic.
+bool untangle_patch(const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
+                    const std::vector<Vec2>& target, const std::vector<char>& has_target, double pull = kUntanglePull,
+                    const RefineOptions& options = {});
+
+/// untangle_patch with `options` and `pull` as a dissect::NodeMapPuller: the value to put in
+/// DissectOptions::same_pose_untangle.
+dissect::NodeMapPuller untangler(const RefineOptions& options = {}, double pull = kUntanglePull);
+
 /// The normalized distortion energy of mesh `b`'s map to mesh `a` (as MeshRefineReport::
 /// energy_after): for tests and reports. \pre as refine_maps.
 double map_energy(const dissect::Dissection& a, const dissect::Dissection& b);
