@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
   bool no_untangle = false;
   app.add_flag("--no-same-pose-untangle", no_untangle,
                "For meshes in one pose: a node whose taken-over map folds keeps its own map instead of being "
-               "untangled toward it (see README, \"Same pose\")");
+               "untangled toward it, and a repaired one is not polished (see README, \"Same pose\")");
   double pose_pull = -1;
   app.add_option("--refine-pose-pull", pose_pull,
                  "For meshes in one pose: weight of the refinement's pull of every vertex toward the first mesh's "
@@ -431,8 +431,8 @@ int main(int argc, char** argv) {
              << result.same_pose_splits << " splits with inner corners placed by pose, " << result.same_pose_common
              << " at the common (u,v); " << result.same_pose_maps
              << " node maps taken over from the first mesh by nearest points, " << result.same_pose_own_maps
-             << " kept their own (folded), " << result.same_pose_untangled
-             << " of those taken over untangled from their own\n";
+             << " kept their own (folded); of those taken over " << result.same_pose_polished
+             << " polished after the repair, " << result.same_pose_untangled << " untangled from their own\n";
       else
         text << "same pose: not used (" << result.same_pose_fallback << "; the common (u,v) fold less)\n";
     }

@@ -359,6 +359,9 @@ constexpr int kTransferRepairRounds = 6;
 /// against its re-tessellation 0.26 -> 0.43% mean) before the node keeps its own map.
 constexpr int kTransferBlendRings = 3;
 constexpr int kTransferBlendAttempts = 1;
+/// same_pose_maps: after a repair, the untangler frees the vertices the repair left off their
+/// targets and this many rings around them (4 rings: the same result, slower).
+constexpr int kTransferPolishRings = 2;
 
 /// DissectOptions::same_pose_maps: mesh i's map of a node (`p`) taken over from mesh 0's (`ref`):
 /// every vertex of p but its border and its features goes to the (u, v) of ref's point nearest to
@@ -370,11 +373,14 @@ constexpr int kTransferBlendAttempts = 1;
 /// pinned, a ring wider each round (kTransferRepairRounds); where folds remain, p's own map is
 /// blended in around them and the repair runs again (kTransferBlendAttempts). p's own map may
 /// fold (the take-over can mend a node that folds in this mesh), and so may ref's (its (u, v) are
-/// read as they are). Where folds remain, `untangle` (when given) moves p's own map, or its
-/// stretch-minimized map (minimized_leaf) when the own map folds, toward the nearest-point (u, v)
-/// under an injectivity barrier (DissectOptions::same_pose_untangle).
-/// p.sp changes only to a bijective map (every face positive, counted).
-enum class Transfer { Own, Taken, Untangled };
+/// read as they are). With `untangle` (DissectOptions::same_pose_untangle), a repaired map is
+/// polished: the vertices the repair moved off their nearest-point (u, v), and
+/// kTransferPolishRings rings around them, are pulled back toward them under an injectivity
+/// barrier (Polished); where folds remain after the repair, p's own map, or its
+/// stretch-minimized map (minimized_leaf) when the own map folds, is pulled toward them over the
+/// whole node instead (Untangled). p.sp changes only to a bijective map (every face positive,
+/// counted).
+enum class Transfer { Own, Taken, Polished, Untangled };
 Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
                            double reach, const NodeMapPuller& untangle, const Context& context, Param& p);
 

@@ -27,11 +27,12 @@ using NodeMapRefiner = std::function<bool(const param::PatchMesh& ref, const std
 
 /// Untangles one mesh's map of a node toward target (u, v) (DissectOptions::same_pose_untangle):
 /// `uv` starts bijective and moves toward target[v] where has_target[v] != 0, never folding;
-/// held vertices (and the boundary loop) stay. Returns whether uv changed; a changed uv must stay
-/// bijective.
+/// held vertices (and the boundary loop) stay. `polish`: a repaired map near its targets but
+/// where it was repaired (a few steps suffice). Returns whether uv changed; a changed uv must
+/// stay bijective.
 using NodeMapPuller =
     std::function<bool(const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
-                       const std::vector<Vec2>& target, const std::vector<char>& has_target)>;
+                       const std::vector<Vec2>& target, const std::vector<char>& has_target, bool polish)>;
 
 struct DissectOptions {
   /// A patch whose normalized L2 stretch (1 = isometric up to scale) exceeds tau is split.
@@ -157,8 +158,9 @@ struct DissectOptions {
   /// With same_pose_maps: a node whose taken-over map still folds after the repair is untangled
   /// by this function instead of keeping its own map (qs::maprefine::untangler(); qs-dissect's
   /// default): from the own map (stretch-minimized when it folds), every free vertex pulled toward
-  /// its nearest-point (u, v) under an injectivity barrier. Empty (the library's default): such a
-  /// node keeps its own map.
+  /// its nearest-point (u, v) under an injectivity barrier; a repaired map is polished by it where
+  /// the repair left the nearest points (see transfer_node_map). Empty (the library's default):
+  /// repaired maps stay as repaired and a node still folded keeps its own map.
   NodeMapPuller same_pose_untangle;
   /// Turns same_pose on by itself when the meshes are found in one pose: every mesh, moved onto
   /// the first by the landmarks' similarity, lies at a mean distance of at most this fraction of
@@ -305,9 +307,11 @@ struct DissectionSet {
   int same_pose_loops = 0;  ///< meshes but the first whose seed loop follows the first's by pose
   /// DissectOptions::same_pose_maps: node maps (of meshes but the first, before a split) taken
   /// over from the first mesh's, and those that kept their own (still folded after the repair);
-  /// of the taken-over ones, those untangled by DissectOptions::same_pose_untangle.
+  /// of the taken-over ones, those polished after the repair and those untangled from their own
+  /// by DissectOptions::same_pose_untangle.
   int same_pose_maps = 0;
   int same_pose_own_maps = 0;
+  int same_pose_polished = 0;
   int same_pose_untangled = 0;
   /// DissectOptions::refine_before_split: node maps (of meshes but the first, before a split)
   /// refined against the first mesh's, and those that kept their own (the refinement failed, or

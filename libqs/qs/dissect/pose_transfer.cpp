@@ -139,7 +139,10 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     return left;
   };
 
+  int folded = 0;  // faces the nearest points fold, before the repair
+  for (const Tri& t : pm.faces) folded += signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) <= param::kZeroUvArea;
   // Where folds remain, the own map's shape around them, over more rings each attempt.
+  std::optional<param::SquareParam> repaired;
   for (int attempt = 0; attempt <= kTransferBlendAttempts; ++attempt) {
     const std::optional<std::vector<int>> left = repair(uv);
     if (!left) break;
@@ -147,28 +150,54 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
       param::SquareParam sp = p.sp;
       sp.uv = std::move(uv);
       param::count_uv_faces(pm.faces, sp);
-      if (!sp.bijective()) break;
-      p.sp = std::move(sp);
-      return Transfer::Taken;
+      if (sp.bijective()) repaired = std::move(sp);
+      break;
     }
     blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
-  // A tangle no repair mends: the own map pulled toward the targets, never folding. An own map
-  // that folds or is squeezed to zero area (a thin leg) starts from its stretch-minimized map.
+  if (repaired && (folded == 0 || !untangle)) {
+    p.sp = std::move(*repaired);
+    return Transfer::Taken;
+  }
   if (!untangle) return Transfer::Own;
-  std::vector<Vec2> pulled = p.sp.uv;
-  if (!p.sp.bijective()) {
+  // The untangler (the map pulled toward the targets under an injectivity barrier). After a
+  // repair, from the repaired map, free only where it left the targets (kTransferPolishRings
+  // rings around): the repair's solves of the own weights put those vertices by the own map's
+  // shape, not near the targets. Without one (a tangle no repair mends), from the own map over
+  // the whole node, or from its stretch-minimized map when the own map folds or is squeezed to
+  // zero area (a thin leg).
+  std::vector<Vec2> start = p.sp.uv;
+  std::vector<char> hold = fixed;
+  if (repaired) {
+    start = repaired->uv;
+    std::vector<char> off(n, 0);
+    for (int v = 0; v < n; ++v) off[v] = !has_target[v] || start[v] != target[v];
+    for (int g = 0; g < kTransferPolishRings; ++g) {
+      std::vector<char> wider = off;
+      for (int v = 0; v < n; ++v)
+        if (off[v])
+          for (int w : ring[v]) wider[w] = 1;
+      off.swap(wider);
+    }
+    for (int v = 0; v < n; ++v)
+      if (!off[v]) hold[v] = 1;
+  } else if (!p.sp.bijective()) {
     const param::SquareParam m = minimized_leaf(p, kRepairRounds, context);
     if (m.uv.empty() || !m.bijective()) return Transfer::Own;
-    pulled = m.uv;
+    start = m.uv;
   }
-  if (!untangle(pm, pulled, fixed, target, has_target)) return Transfer::Own;
   param::SquareParam sp = p.sp;
-  sp.uv = std::move(pulled);
-  param::count_uv_faces(pm.faces, sp);
-  if (!sp.bijective()) return Transfer::Own;
+  if (untangle(pm, start, hold, target, has_target, repaired.has_value())) {
+    sp.uv = std::move(start);
+    param::count_uv_faces(pm.faces, sp);
+  }
+  if (sp.uv == p.sp.uv || !sp.bijective()) {
+    if (!repaired) return Transfer::Own;
+    p.sp = std::move(*repaired);
+    return Transfer::Taken;
+  }
   p.sp = std::move(sp);
-  return Transfer::Untangled;
+  return repaired ? Transfer::Polished : Transfer::Untangled;
 }
 
 }  // namespace qs::dissect::detail

@@ -432,6 +432,7 @@ DissectionSet SetDissector::run() {
         }, node_faces >= kParallelFaces);
         for (size_t i = 1; i < nm; ++i) {
           ++(taken[i] == Transfer::Own ? out.same_pose_own_maps : out.same_pose_maps);
+          out.same_pose_polished += taken[i] == Transfer::Polished;
           out.same_pose_untangled += taken[i] == Transfer::Untangled;
         }
       }

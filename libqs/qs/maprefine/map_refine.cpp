@@ -2461,6 +2461,25 @@ bool untangle_patch(const param::PatchMesh& patch, std::vector<Vec2>& uv, const 
   // is 4 per unit area at the start however squeezed the map is on the surface (measured against
   // the 3D triangles or the first mesh's map, a squeezed node starts at 10^5..10^6 and the pull
   // moves nothing); the pull's weight per vertex is a third of its faces' start uv area.
+  // Faces without a free vertex add a constant: left out (a local untangle solves only its region).
+  {
+    size_t kept = 0;
+    for (size_t t = 0; t < pr.tri.size(); ++t) {
+      const auto& c = pr.tri[t];
+      if (pr.dims[c[0]] == 0 && pr.dims[c[1]] == 0 && pr.dims[c[2]] == 0) continue;
+      pr.faces[kept] = pr.faces[t];
+      pr.face_patch[kept] = pr.face_patch[t];
+      pr.tri[kept] = pr.tri[t];
+      pr.dm_inv[kept] = pr.dm_inv[t];
+      pr.area[kept] = pr.area[t];
+      ++kept;
+    }
+    pr.faces.resize(kept);
+    pr.face_patch.resize(kept);
+    pr.tri.resize(kept);
+    pr.dm_inv.resize(kept);
+    pr.area.resize(kept);
+  }
   std::vector<double> area(pr.uv.size(), 0.0);
   pr.total_area = 0;
   for (size_t t = 0; t < pr.tri.size(); ++t) {
@@ -2490,8 +2509,10 @@ bool untangle_patch(const param::PatchMesh& patch, std::vector<Vec2>& uv, const 
 
 dissect::NodeMapPuller untangler(const RefineOptions& options, double pull) {
   return [options, pull](const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
-                         const std::vector<Vec2>& target, const std::vector<char>& has_target) {
-    return untangle_patch(patch, uv, held, target, has_target, pull, options);
+                         const std::vector<Vec2>& target, const std::vector<char>& has_target, bool polish) {
+    RefineOptions o = options;
+    if (polish) o.iterations = std::min(o.iterations, kPolishIterations);
+    return untangle_patch(patch, uv, held, target, has_target, pull, o);
   };
 }
 

@@ -251,6 +251,10 @@ dissect::NodeMapRefiner node_refiner(const RefineOptions& options = {}, const No
 /// tangles, 10^6 and 10^7 mend them, 10^7 is the better on polygirl (0.36 -> 0.25% mean), 10^8
 /// worse on the camel.
 inline constexpr double kUntanglePull = 1e7;
+/// Newton steps of a polish by untangler() at most (README, "Same pose": a body pair with thumb
+/// seeds 0.410 / 3.13% mean / max in 1.31 s with 30 steps, 0.415 / 3.24% in 0.97 s with 10, 0.435
+/// / 4.69% in 0.92 s with 5; 0.428 / 4.68% in 0.75 s without the polish).
+inline constexpr int kPolishIterations = 10;
 
 /// Moves a patch's bijective map `uv` toward target (u, v) without folding it: the free vertices
 /// (neither held nor on the boundary loop) minimize the symmetric Dirichlet energy of the map from
@@ -267,7 +271,8 @@ bool untangle_patch(const param::PatchMesh& patch, std::vector<Vec2>& uv, const 
                     const RefineOptions& options = {});
 
 /// untangle_patch with `options` and `pull` as a dissect::NodeMapPuller: the value to put in
-/// DissectOptions::same_pose_untangle.
+/// DissectOptions::same_pose_untangle. A polish (a repaired map, its repaired region free) takes at
+/// most kPolishIterations Newton steps.
 dissect::NodeMapPuller untangler(const RefineOptions& options = {}, double pull = kUntanglePull);
 
 /// The normalized distortion energy of mesh `b`'s map to mesh `a` (as MeshRefineReport::
