@@ -32,7 +32,7 @@ RESULTS="$OUT/results.tsv"
 # Landmarks at the extremes of the principal axes (vertex ids).
 axis_landmarks() {
   python3 - "$1" "$2" "$3" <<'EOF'
-import json, math, sys
+import json, sys
 path, layout, out = sys.argv[1], sys.argv[2], sys.argv[3]
 pts = []
 with open(path) as f:
@@ -47,29 +47,11 @@ with open(path) as f:
             p = line.split()
             if p and p[0] == "v":
                 pts.append(list(map(float, p[1:4])))
+sys.path.insert(0, "examples")
+from pick_landmarks import principal_axes  # noqa: E402 (plain Python: no numpy in the base image)
+c, axes = principal_axes(pts)
+proj = [[sum((q[i] - c[i]) * d[i] for i in range(3)) for _, d in axes] for q in pts]
 n = len(pts)
-m = [sum(p[k] for p in pts) / n for k in range(3)]
-c = [[p[k] - m[k] for k in range(3)] for p in pts]
-cov = [[sum(q[i] * q[j] for q in c) for j in range(3)] for i in range(3)]
-# Principal axes: cyclic Jacobi rotations of the 3x3 covariance (no numpy in the base image).
-vec = [[float(i == j) for j in range(3)] for i in range(3)]
-for sweep in range(50):
-    for p_, q_ in ((0, 1), (0, 2), (1, 2)):
-        if abs(cov[p_][q_]) < 1e-300:
-            continue
-        th = 0.5 * math.atan2(2 * cov[p_][q_], cov[q_][q_] - cov[p_][p_])
-        cs, sn = math.cos(th), math.sin(th)
-        for k in range(3):
-            a, b = cov[k][p_], cov[k][q_]
-            cov[k][p_], cov[k][q_] = cs * a - sn * b, sn * a + cs * b
-        for k in range(3):
-            a, b = cov[p_][k], cov[q_][k]
-            cov[p_][k], cov[q_][k] = cs * a - sn * b, sn * a + cs * b
-        for k in range(3):
-            a, b = vec[k][p_], vec[k][q_]
-            vec[k][p_], vec[k][q_] = cs * a - sn * b, sn * a + cs * b
-order = sorted(range(3), key=lambda k: -cov[k][k])
-proj = [[sum(q[i] * vec[i][order[a]] for i in range(3)) for a in range(3)] for q in c]
 def arg(a, best):
     return max(range(n), key=lambda v: best * proj[v][a])
 s1, s2, f = (0, 1, 2) if layout == "a" else (0, 2, 1)

@@ -84,7 +84,8 @@ def dist(a, b):
 
 
 def principal_axes(verts):
-    """Centroid and eigen-decomposition of the vertex covariance (Jacobi), for the printout."""
+    """Centroid and eigen-decomposition of the vertex covariance (Jacobi): [(variance, direction)]
+    by decreasing variance. Also used by bench/real_self_pairs.sh."""
     n = len(verts)
     c = [sum(v[k] for v in verts) / n for k in range(3)]
     a = [[sum((v[i] - c[i]) * (v[j] - c[j]) for v in verts) / n for j in range(3)] for i in range(3)]
@@ -106,7 +107,7 @@ def principal_axes(verts):
             e[k][p], e[k][q] = cs * ekp - sn * ekq, sn * ekp + cs * ekq
     vals = [a[i][i] for i in range(3)]
     order = sorted(range(3), key=lambda i: -vals[i])
-    return c, [(vals[i], tuple(round(e[k][i], 3) for k in range(3))) for i in order]
+    return c, [(vals[i], tuple(e[k][i] for k in range(3))) for i in order]
 
 
 def components(subset, faces):
@@ -168,6 +169,7 @@ def pick(stem):
     hi = [max(v[k] for v in verts) for k in range(3)]
     c, axes = principal_axes(verts)
     print(f"{stem}: {n} vertices, bbox {lo} .. {hi}")
+    axes = [(val, tuple(round(x, 3) for x in d)) for val, d in axes]
     print(f"  centroid {[round(x, 3) for x in c]}, principal axes (variance, direction): {axes}")
     print(f"  up {up}, forward {fwd}, left {left}; height {height:.3f}, length {length:.3f}")
 
