@@ -245,8 +245,8 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
 /// [--refine-before-split-metric vertex|face|composition]`).
 dissect::NodeMapRefiner node_refiner(const RefineOptions& options = {}, const NodeRefineOptions& node = {});
 
-/// untangle_patch's pull (DissectOptions::same_pose_untangle in qs-dissect): a vertex 1/3000 of
-/// the square from its target costs about as much as its area's distortion at rest. Measured on
+/// untangle_patch's pull (DissectOptions::same_pose_untangle in qs-dissect): a vertex 6e-4 of the
+/// square from its target costs as much as its area's distortion at rest (4 per unit area). Measured on
 /// 18 real meshes against their re-tessellation (README, "Same pose"): 10^5 left the camel's
 /// tangles, 10^6 and 10^7 mend them, 10^7 is the better on polygirl (0.36 -> 0.25% mean), 10^8
 /// worse on the camel.
@@ -263,7 +263,7 @@ inline constexpr int kPolishIterations = 10;
 /// keeps every face positive. The untangler of a same-pose take-over that folds: the targets fold
 /// somewhere, the result follows them elsewhere. Keeps the result only if every uv face stays
 /// positive, inside the square, and the energy went down; returns whether uv changed (false for a
-/// start with a non-positive face).
+/// start with a non-positive face that has a free vertex; faces without one are left out).
 /// \pre uv.size() == held.size() == target.size() == has_target.size() == patch.positions.size(),
 /// pull finite and >= 0. \throws InvalidInput naming the sizes or the bad value. Deterministic.
 bool untangle_patch(const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
