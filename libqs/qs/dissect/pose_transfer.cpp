@@ -56,6 +56,17 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
   }
+  // `mask` grown by `rings` rings (over the vertices with skip[v] == 0 only, when given).
+  auto widen = [&](std::vector<char>& mask, int rings, const std::vector<char>* skip) {
+    for (int g = 0; g < rings; ++g) {
+      std::vector<char> wider = mask;
+      for (int v = 0; v < n; ++v)
+        if (mask[v])
+          for (int w : ring[v])
+            if (!skip || !(*skip)[w]) wider[w] = 1;
+      mask.swap(wider);
+    }
+  };
 
   // The node's own map and the taken-over one agree on the border and at the features (both at
   // their common (u, v)), and the own map is mostly a good local shape (bijective unless the node
@@ -112,15 +123,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
       for (int v = 0; v < n; ++v)
         if (free[v]) left.push_back(v);
       if (!any || round == kTransferLocalRounds + kTransferRepairRounds) break;
-      const int grow = round < kTransferLocalRounds ? 0 : round - kTransferLocalRounds + 1;
-      for (int g = 0; g < grow; ++g) {
-        std::vector<char> wider = free;
-        for (int v = 0; v < n; ++v)
-          if (free[v])
-            for (int w : ring[v])
-              if (!fixed[w]) wider[w] = 1;
-        free.swap(wider);
-      }
+      widen(free, round < kTransferLocalRounds ? 0 : round - kTransferLocalRounds + 1, &fixed);
       // The free vertices by the node's own weights, every other interior vertex pinned where
       // it is: in the limit (all free) the node's own map.
       param::SquareParamOptions po;
@@ -172,13 +175,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     start = repaired->uv;
     std::vector<char> off(n, 0);
     for (int v = 0; v < n; ++v) off[v] = !has_target[v] || start[v] != target[v];
-    for (int g = 0; g < kTransferPolishRings; ++g) {
-      std::vector<char> wider = off;
-      for (int v = 0; v < n; ++v)
-        if (off[v])
-          for (int w : ring[v]) wider[w] = 1;
-      off.swap(wider);
-    }
+    widen(off, kTransferPolishRings, nullptr);
     for (int v = 0; v < n; ++v)
       if (!off[v]) hold[v] = 1;
   } else if (!p.sp.bijective()) {

@@ -424,7 +424,7 @@ DissectionSet SetDissector::run() {
         std::vector<Transfer> taken(nm, Transfer::Own);
         Context quiet = ctx_.without_progress();
         quiet.log = nullptr;
-        // Also where the mesh's own map of the node folds: only a bijective map is taken over.
+        // Also where mesh i's own map of the node folds; only a bijective result is taken.
         parallel_for(nm - 1, [&](size_t k) {
           Param& p = ps[k + 1];
           taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0],
