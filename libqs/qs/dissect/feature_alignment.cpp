@@ -94,7 +94,14 @@ void SetDissector::align(const std::vector<Node>& nodes, std::vector<Param>& ps,
       try {
         warp::WarpOptions wo;
         wo.min_feature_distance = 0.5 * hold;
-        return warp::warp_square(from, to, p.sp.uv, wo, ctx_.without_progress());
+        // The warp maps the unit square. A folded map (a squeezed patch, or landmarks that do not
+        // correspond; left to the leaf repair) can put interior vertices outside it, by 1e-6 or by
+        // several units: they are warped from the nearest point of the square, which only changes
+        // where a map that folds anyway folds.
+        std::vector<Vec2> points = p.sp.uv;
+        if (!p.sp.bijective())
+          for (Vec2& q : points) q = q.cwiseMax(0.0).cwiseMin(1.0);
+        return warp::warp_square(from, to, points, wo, ctx_.without_progress());
       } catch (const Error& e) {
         const std::string m = "aligning the features of patch " + tn.name + " on " + meshes_[i].name() + ": " + e.what();
         if (e.code() == ErrorCode::InvalidInput) throw InvalidInput(m);
