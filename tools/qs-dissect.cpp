@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 20));
   app.add_option("--refine-border-iterations", refine_opt.border_iterations,
-                 "Newton steps per glued pair of patches of --refine-across-borders (default 1; 3 for meshes in "
+                 "Newton steps per glued pair of patches of --refine-across-borders (default 1; 5 for meshes in "
                  "one pose, with the pull)")
       ->check(CLI::Range(0, 1000));
   app.add_flag("--refine-corners", refine_opt.move_corners,
