@@ -231,8 +231,8 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
   EXPECT_THAT(text, HasSubstr("after the landmarks' similarity (mean), at most 1%: one pose (as --same-pose)"));
   EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose, "));
   EXPECT_THAT(text, HasSubstr("'s nearest points (one pose), weight 10"));
-  // In one pose the sides take three Newton steps unless told otherwise; one otherwise.
-  EXPECT_THAT(text, HasSubstr("chart vertices added by the cuts (Newton steps per side: at most 3)"));
+  // In one pose the sides take five Newton steps unless told otherwise; one otherwise.
+  EXPECT_THAT(text, HasSubstr("chart vertices added by the cuts (Newton steps per side: at most 5)"));
   EXPECT_THAT(read(d() + "/common.txt"), HasSubstr("(Newton steps per side: at most 1)"));
   EXPECT_THAT(text, HasSubstr("bijective: yes"));
   EXPECT_THAT(read(d() + "/common.txt"), Not(HasSubstr("pose: ")));
