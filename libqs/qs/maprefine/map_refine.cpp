@@ -447,9 +447,14 @@ class PatchSolver {
   bool step(double& e_now, double tolerance) {
     const int n = prob_.unknowns;
     if (n == 0) return false;
+    if (!analyzed_) analyze();
+    // The Hessian is assembled straight into the fixed pattern's values (slot_ lists, in the
+    // order the entries are visited below, where each lands), the gradient alongside.
     Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(prob_.faces.size() * 36);
+    double* value = h_.valuePtr();
+    std::fill(value, value + h_.nonZeros(), 0.0);
+    double diag = 0;  // the largest single diagonal contribution (scales the regularization)
+    size_t next = 0;
     for (size_t t = 0; t < prob_.faces.size(); ++t) {
       const Eigen::Vector4d j = a_[t] * corner_uv(prob_, t, prob_.uv) + b_[t];
       Eigen::Matrix2d jm;
@@ -460,30 +465,17 @@ class PatchSolver {
       const Eigen::Matrix4d hp = project_hessian(jm, hj);
       const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
       const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
-      const auto& c = prob_.tri[t];
-      // Unknown columns of the 6 corner coordinates: (unknown, d corner uv / d unknown).
       std::array<std::pair<int, Vec2>, 6> cols;
-      int ncols = 0;
       std::array<int, 6> col_corner{};
-      for (int k = 0; k < 3; ++k) {
-        const int lv = c[k];
-        if (prob_.dims[lv] == 2) {
-          col_corner[ncols] = k;
-          cols[ncols++] = {prob_.var[lv], Vec2(1, 0)};
-          col_corner[ncols] = k;
-          cols[ncols++] = {prob_.var[lv] + 1, Vec2(0, 1)};
-        } else if (prob_.dims[lv] == 1) {
-          col_corner[ncols] = k;
-          cols[ncols++] = {prob_.var[lv], prob_.basis[lv]};
-        }
-      }
+      const int ncols = face_columns(t, cols, col_corner);
       for (int r = 0; r < ncols; ++r) {
         const int kr = col_corner[r];
         g[cols[r].first] += cols[r].second.dot(gx.segment<2>(2 * kr));
         for (int q = 0; q < ncols; ++q) {
           const int kq = col_corner[q];
-          trip.emplace_back(cols[r].first, cols[q].first,
-                            cols[r].second.dot(hx.block<2, 2>(2 * kr, 2 * kq) * cols[q].second));
+          const double x = cols[r].second.dot(hx.block<2, 2>(2 * kr, 2 * kq) * cols[q].second);
+          value[slot_[next++]] += x;
+          if (r == q) diag = std::max(diag, x);
         }
       }
     }
@@ -496,30 +488,24 @@ class PatchSolver {
       if (prob_.dims[v] == 2) {
         g.segment<2>(i) += gv;
         for (int r = 0; r < 2; ++r)
-          for (int q = 0; q < 2; ++q) trip.emplace_back(i + r, i + q, hv(r, q));
+          for (int q = 0; q < 2; ++q) {
+            value[slot_[next++]] += hv(r, q);
+            if (r == q) diag = std::max(diag, hv(r, q));
+          }
       } else {
         g[i] += prob_.basis[v].dot(gv);
-        trip.emplace_back(i, i, prob_.basis[v].dot(hv * prob_.basis[v]));
+        const double x = prob_.basis[v].dot(hv * prob_.basis[v]);
+        value[slot_[next++]] += x;
+        diag = std::max(diag, x);
       }
     }
-    // The diagonal is always in the pattern (it takes the regularization), so the pattern is the
-    // same at every step: ordered once per patch.
-    double diag = 0;
-    for (const auto& t : trip)
-      if (t.row() == t.col()) diag = std::max(diag, t.value());
-    for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);
-    Eigen::SparseMatrix<double> h(n, n);
-    h.setFromTriplets(trip.begin(), trip.end());
-    if (!analyzed_) {
-      ldlt_.analyzePattern(h);
-      analyzed_ = true;
-    }
+    std::vector<double> plain(n);
+    for (int i = 0; i < n; ++i) plain[i] = value[diag_slot_[i]];
     Eigen::VectorXd d;
     double mu = 1e-10 * std::max(diag, 1e-300);
     for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
-      Eigen::SparseMatrix<double> hm = h;
-      for (int i = 0; i < n; ++i) hm.coeffRef(i, i) += mu;
-      ldlt_.factorize(hm);
+      for (int i = 0; i < n; ++i) value[diag_slot_[i]] = plain[i] + mu;
+      ldlt_.factorize(h_);
       if (ldlt_.info() != Eigen::Success) continue;
       d = ldlt_.solve(-g);
       if (ldlt_.info() == Eigen::Success && d.allFinite() && g.dot(d) < 0) break;
@@ -555,8 +541,68 @@ class PatchSolver {
   PatchProblem& prob_;
   const MetricFn& metric_;
   const LinearizeFn* linearize_;
+  // Face t's unknown columns among its 6 corner coordinates: (unknown, d corner uv / d unknown),
+  // and the corner of each; returns their count.
+  int face_columns(size_t t, std::array<std::pair<int, Vec2>, 6>& cols, std::array<int, 6>& col_corner) const {
+    int ncols = 0;
+    const auto& c = prob_.tri[t];
+    for (int k = 0; k < 3; ++k) {
+      const int lv = c[k];
+      if (prob_.dims[lv] == 2) {
+        col_corner[ncols] = k;
+        cols[ncols++] = {prob_.var[lv], Vec2(1, 0)};
+        col_corner[ncols] = k;
+        cols[ncols++] = {prob_.var[lv] + 1, Vec2(0, 1)};
+      } else if (prob_.dims[lv] == 1) {
+        col_corner[ncols] = k;
+        cols[ncols++] = {prob_.var[lv], prob_.basis[lv]};
+      }
+    }
+    return ncols;
+  }
+
+  // The Hessian's pattern (the same at every step: the faces' unknown pairs, the pull's blocks
+  // and the whole diagonal, which takes the regularization), ordered once; slot_ is where each
+  // entry step() visits lands in the value array, diag_slot_ each diagonal entry.
+  void analyze() {
+    const int n = prob_.unknowns;
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(prob_.faces.size() * 36 + n);
+    for (size_t t = 0; t < prob_.faces.size(); ++t) {
+      std::array<std::pair<int, Vec2>, 6> cols;
+      std::array<int, 6> col_corner{};
+      const int ncols = face_columns(t, cols, col_corner);
+      for (int r = 0; r < ncols; ++r)
+        for (int q = 0; q < ncols; ++q) trip.emplace_back(cols[r].first, cols[q].first, 0.0);
+    }
+    for (size_t v = 0; v < prob_.pull.size(); ++v) {
+      if (prob_.dims[v] == 0) continue;
+      const int i = prob_.var[v];
+      if (prob_.dims[v] == 2) {
+        for (int r = 0; r < 2; ++r)
+          for (int q = 0; q < 2; ++q) trip.emplace_back(i + r, i + q, 0.0);
+      } else {
+        trip.emplace_back(i, i, 0.0);
+      }
+    }
+    const size_t visited = trip.size();
+    for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);
+    h_.resize(n, n);
+    h_.setFromTriplets(trip.begin(), trip.end());
+    h_.makeCompressed();
+    const double* base = h_.valuePtr();
+    slot_.resize(visited);
+    for (size_t k = 0; k < visited; ++k) slot_[k] = &h_.coeffRef(trip[k].row(), trip[k].col()) - base;
+    diag_slot_.resize(n);
+    for (int i = 0; i < n; ++i) diag_slot_[i] = &h_.coeffRef(i, i) - base;
+    ldlt_.analyzePattern(h_);
+    analyzed_ = true;
+  }
+
   std::vector<Mat46> a_;
   std::vector<Eigen::Vector4d> b_;
+  Eigen::SparseMatrix<double> h_;
+  std::vector<std::ptrdiff_t> slot_, diag_slot_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analyzed_ = false;
 };
