@@ -3,10 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <set>
 
+#include "../common/shared_meshes.h"
 #include "check_dissection.h"
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
@@ -334,11 +334,8 @@ TEST(DissectSet, SeedsGivenAsSurfacePointsAreExactPatchCorners) {
 // with a message about the warp. Now the result is a dissection (with folded leaves, qs-dissect's
 // exit 4 that tells to check the landmarks) or a SolverError, never InvalidInput.
 TEST(DissectSet, LandmarksThatDoNotCorrespondAreNotInvalidInput) {
-  namespace fs = std::filesystem;
-  const char* env = std::getenv("QS_SHARED_MESHES");
-  const fs::path file =
-      (env && *env ? fs::path(env) : fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes") / "camel_4k_fixed.obj";
-  if (!fs::exists(file)) GTEST_SKIP() << "no " << file;
+  const std::filesystem::path file = qs::testing::shared_meshes_dir() / "camel_4k_fixed.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   const auto validated = qs::mesh::validate(qs::io::read_mesh(file).mesh);
   ASSERT_TRUE(validated.report.accepted);
   const qs::TriMesh& m = validated.mesh;

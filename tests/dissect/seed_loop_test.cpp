@@ -4,10 +4,10 @@
 
 #include "qs/dissect/seed_loop.h"
 
-#include <Eigen/Geometry>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "../common/shared_meshes.h"
 #include "qs/core/error.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
@@ -480,10 +481,7 @@ TEST(SeedLoopErrors, PatchLabelsRejectABrokenLoop) {
 
 // --- the shared real meshes (skipped when the folder is absent) ------------------------------
 
-std::filesystem::path shared_meshes_dir() {
-  if (const char* env = std::getenv("QS_SHARED_MESHES"); env && *env) return env;
-  return std::filesystem::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
-}
+using qs::testing::shared_meshes_dir;
 
 TEST(SeedLoopSharedMeshes, ChosenSeedsRouteOnEveryMesh) {
   namespace fs = std::filesystem;

@@ -2,6 +2,8 @@
 // README table. Skipped when the folder is absent. The folder: $QS_SHARED_MESHES, or
 // <repo>/../shared/meshes.
 
+#include "../common/shared_meshes.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,10 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path shared_meshes_dir() {
-  if (const char* env = std::getenv("QS_SHARED_MESHES"); env && *env) return env;
-  return fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
-}
+using qs::testing::shared_meshes_dir;
 
 /// file -> (V, F) from the README's table rows "| file | what | V | F | ...". Files of a table
 /// with a "genus" column (the higher-genus meshes, given as the sources wrote them) go to

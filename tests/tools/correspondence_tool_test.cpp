@@ -6,12 +6,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <set>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 
+#include "../common/shared_meshes.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
@@ -30,11 +31,7 @@ class CorrespondenceTool : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   std::string d() const { return dir_.string(); }
   std::string mesh(int i) const { return d() + "/shape0" + std::to_string(i) + ".obj"; }
-  // The shared test meshes: $QS_SHARED_MESHES, or <repo>/../shared/meshes.
-  static fs::path shared_meshes() {
-    const char* env = std::getenv("QS_SHARED_MESHES");
-    return env && *env ? fs::path(env) : fs::path(QS_SOURCE_DIR) / ".." / "shared" / "meshes";
-  }
+  static fs::path shared_meshes() { return qs::testing::shared_meshes_dir(); }
   fs::path dir_;
 };
 
