@@ -11,10 +11,13 @@ ctest --test-dir build --output-on-failure -j"$(nproc)"
 if [ "${QS_SKIP_SANITIZERS:-0}" != 1 ]; then
   # Each fuzz target for 7 s on its seed corpus (about a minute in all); exits 1 on a finding.
   bash scripts/fuzz.sh 7
-  # The unit tests of the modules the fuzz targets already built, under ASan + UBSan (not the
-  # tests of ../shared's meshes: the run above has them).
-  asan_tests=(qs_core_tests qs_io_tests qs_mesh_tests qs_shapes_tests qs_landmarks_tests qs_param_tests)
+  # Under ASan + UBSan: the unit tests of the modules the fuzz targets already built, and the map
+  # refinement's (its Newton solver indexes a sparse matrix's values directly; about 3 minutes
+  # more); not the tests of ../shared's meshes: the run above has them.
+  asan_tests=(qs_core_tests qs_io_tests qs_mesh_tests qs_shapes_tests qs_landmarks_tests qs_param_tests
+              qs_maprefine_tests)
   cmake --build build-fuzz -j"$(nproc)" --target "${asan_tests[@]}"
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-fuzz --output-on-failure -j"$(nproc)" -L '^(core|io|mesh|shapes|landmarks|param)$' -E '^SharedMeshes\.'
+    ctest --test-dir build-fuzz --output-on-failure -j"$(nproc)" -L '^(core|io|mesh|shapes|landmarks|param|maprefine)$' \
+      -E '^SharedMeshes\.'
 fi
