@@ -447,64 +447,36 @@ class PatchSolver {
   bool step(double& e_now, double tolerance) {
     const int n = prob_.unknowns;
     if (n == 0) return false;
-    if (!analyzed_) analyze();
-    // The Hessian is assembled straight into the fixed pattern's values (slot_ lists, in the
-    // order the entries are visited below, where each lands), the gradient alongside.
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    double* value = h_.valuePtr();
-    std::fill(value, value + h_.nonZeros(), 0.0);
+    // The Hessian's entries come in the same order at every step (assemble): the first step
+    // collects them as triplets, which fix the pattern (analyze); the later ones add each straight
+    // into the value where it landed (slot_).
     double diag = 0;  // the largest single diagonal contribution (scales the regularization)
-    size_t next = 0;
-    for (size_t t = 0; t < prob_.faces.size(); ++t) {
-      const Eigen::Vector4d j = a_[t] * corner_uv(prob_, t, prob_.uv) + b_[t];
-      Eigen::Matrix2d jm;
-      jm << j[0], j[1], j[2], j[3];
-      Eigen::Vector4d gj;
-      Eigen::Matrix4d hj;
-      if (!std::isfinite(sym_dirichlet(jm, &gj, &hj))) return false;
-      const Eigen::Matrix4d hp = project_hessian(jm, hj);
-      const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
-      const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
-      std::array<std::pair<int, Vec2>, 6> cols;
-      std::array<int, 6> col_corner{};
-      const int ncols = face_columns(t, cols, col_corner);
-      for (int r = 0; r < ncols; ++r) {
-        const int kr = col_corner[r];
-        g[cols[r].first] += cols[r].second.dot(gx.segment<2>(2 * kr));
-        for (int q = 0; q < ncols; ++q) {
-          const int kq = col_corner[q];
-          const double x = cols[r].second.dot(hx.block<2, 2>(2 * kr, 2 * kq) * cols[q].second);
-          value[slot_[next++]] += x;
-          if (r == q) diag = std::max(diag, x);
-        }
-      }
-    }
-    // The pose pull: gradient 2 P (uv - target), Hessian 2 P per free vertex.
-    for (size_t v = 0; v < prob_.pull.size(); ++v) {
-      if (prob_.dims[v] == 0) continue;
-      const Vec2 gv = 2 * prob_.pull[v] * (prob_.uv[v] - prob_.target[v]);
-      const Eigen::Matrix2d hv = 2 * prob_.pull[v];
-      const int i = prob_.var[v];
-      if (prob_.dims[v] == 2) {
-        g.segment<2>(i) += gv;
-        for (int r = 0; r < 2; ++r)
-          for (int q = 0; q < 2; ++q) {
-            value[slot_[next++]] += hv(r, q);
-            if (r == q) diag = std::max(diag, hv(r, q));
-          }
-      } else {
-        g[i] += prob_.basis[v].dot(gv);
-        const double x = prob_.basis[v].dot(hv * prob_.basis[v]);
-        value[slot_[next++]] += x;
-        diag = std::max(diag, x);
-      }
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+    if (!analyzed_) {
+      std::vector<Eigen::Triplet<double>> trip;
+      trip.reserve(prob_.faces.size() * 36 + prob_.pull.size() * 4 + n);
+      if (!assemble(g, [&](int row, int col, double x) {
+            trip.emplace_back(row, col, x);
+            if (row == col) diag = std::max(diag, x);
+          }))
+        return false;
+      analyze(trip);
+    } else {
+      double* const value = h_.valuePtr();
+      std::fill(value, value + h_.nonZeros(), 0.0);
+      const std::ptrdiff_t* slot = slot_.data();
+      if (!assemble(g, [&](int row, int col, double x) {
+            value[*slot++] += x;
+            if (row == col) diag = std::max(diag, x);
+          }))
+        return false;
     }
     std::vector<double> plain(n);
-    for (int i = 0; i < n; ++i) plain[i] = value[diag_slot_[i]];
+    for (int i = 0; i < n; ++i) plain[i] = h_.valuePtr()[diag_slot_[i]];
     Eigen::VectorXd d;
     double mu = 1e-10 * std::max(diag, 1e-300);
     for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
-      for (int i = 0; i < n; ++i) value[diag_slot_[i]] = plain[i] + mu;
+      for (int i = 0; i < n; ++i) h_.valuePtr()[diag_slot_[i]] = plain[i] + mu;
       ldlt_.factorize(h_);
       if (ldlt_.info() != Eigen::Success) continue;
       d = ldlt_.solve(-g);
@@ -541,6 +513,50 @@ class PatchSolver {
   PatchProblem& prob_;
   const MetricFn& metric_;
   const LinearizeFn* linearize_;
+  // The gradient into g and every Hessian entry to add(row, col, value), faces then the pose pull,
+  // in the same order at every call; false when a face's energy is not finite.
+  template <class Add>
+  bool assemble(Eigen::VectorXd& g, Add&& add) const {
+    for (size_t t = 0; t < prob_.faces.size(); ++t) {
+      const Eigen::Vector4d j = a_[t] * corner_uv(prob_, t, prob_.uv) + b_[t];
+      Eigen::Matrix2d jm;
+      jm << j[0], j[1], j[2], j[3];
+      Eigen::Vector4d gj;
+      Eigen::Matrix4d hj;
+      if (!std::isfinite(sym_dirichlet(jm, &gj, &hj))) return false;
+      const Eigen::Matrix4d hp = project_hessian(jm, hj);
+      const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
+      const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
+      std::array<std::pair<int, Vec2>, 6> cols;
+      std::array<int, 6> col_corner{};
+      const int ncols = face_columns(t, cols, col_corner);
+      for (int r = 0; r < ncols; ++r) {
+        const int kr = col_corner[r];
+        g[cols[r].first] += cols[r].second.dot(gx.segment<2>(2 * kr));
+        for (int q = 0; q < ncols; ++q) {
+          const int kq = col_corner[q];
+          add(cols[r].first, cols[q].first, cols[r].second.dot(hx.block<2, 2>(2 * kr, 2 * kq) * cols[q].second));
+        }
+      }
+    }
+    // The pose pull: gradient 2 P (uv - target), Hessian 2 P per free vertex.
+    for (size_t v = 0; v < prob_.pull.size(); ++v) {
+      if (prob_.dims[v] == 0) continue;
+      const Vec2 gv = 2 * prob_.pull[v] * (prob_.uv[v] - prob_.target[v]);
+      const Eigen::Matrix2d hv = 2 * prob_.pull[v];
+      const int i = prob_.var[v];
+      if (prob_.dims[v] == 2) {
+        g.segment<2>(i) += gv;
+        for (int r = 0; r < 2; ++r)
+          for (int q = 0; q < 2; ++q) add(i + r, i + q, hv(r, q));
+      } else {
+        g[i] += prob_.basis[v].dot(gv);
+        add(i, i, prob_.basis[v].dot(hv * prob_.basis[v]));
+      }
+    }
+    return true;
+  }
+
   // Face t's unknown columns among its 6 corner coordinates: (unknown, d corner uv / d unknown),
   // and the corner of each; returns their count.
   int face_columns(size_t t, std::array<std::pair<int, Vec2>, 6>& cols, std::array<int, 6>& col_corner) const {
@@ -561,30 +577,11 @@ class PatchSolver {
     return ncols;
   }
 
-  // The Hessian's pattern (the same at every step: the faces' unknown pairs, the pull's blocks
-  // and the whole diagonal, which takes the regularization), ordered once; slot_ is where each
-  // entry step() visits lands in the value array, diag_slot_ each diagonal entry.
-  void analyze() {
+  // The Hessian's pattern, the same at every step: the first step's entries `trip` (summed where
+  // they repeat) and the whole diagonal, which takes the regularization; ordered once. slot_ is
+  // where each entry lands in the value array, diag_slot_ each diagonal entry.
+  void analyze(std::vector<Eigen::Triplet<double>>& trip) {
     const int n = prob_.unknowns;
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(prob_.faces.size() * 36 + n);
-    for (size_t t = 0; t < prob_.faces.size(); ++t) {
-      std::array<std::pair<int, Vec2>, 6> cols;
-      std::array<int, 6> col_corner{};
-      const int ncols = face_columns(t, cols, col_corner);
-      for (int r = 0; r < ncols; ++r)
-        for (int q = 0; q < ncols; ++q) trip.emplace_back(cols[r].first, cols[q].first, 0.0);
-    }
-    for (size_t v = 0; v < prob_.pull.size(); ++v) {
-      if (prob_.dims[v] == 0) continue;
-      const int i = prob_.var[v];
-      if (prob_.dims[v] == 2) {
-        for (int r = 0; r < 2; ++r)
-          for (int q = 0; q < 2; ++q) trip.emplace_back(i + r, i + q, 0.0);
-      } else {
-        trip.emplace_back(i, i, 0.0);
-      }
-    }
     const size_t visited = trip.size();
     for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);
     h_.resize(n, n);
