@@ -212,14 +212,16 @@ TEST(SymDirichlet, TheAnalyticProjectionIsTheEigenProjection) {
                                 (Eigen::Matrix2d() << 0.2, -0.9, 1.7, 0.1).finished(),
                                 (Eigen::Matrix2d() << 3.0, 0.0, 0.0, 0.3).finished(),
                                 (Eigen::Matrix2d() << 1.0, 0.0, 0.0, 1.0).finished(),
-                                (Eigen::Matrix2d() << 0.05, 0.02, -0.01, 0.04).finished()};
+                                (Eigen::Matrix2d() << 0.05, 0.02, -0.01, 0.04).finished(),
+                                (Eigen::Matrix2d() << 0.9, -1.2, 1.2, 0.9).finished(),  // conformal
+                                (Eigen::Matrix2d() << -0.3, 0.05, -0.02, -0.2).finished()};  // turned by about 180 degrees
   for (const auto& j : js) {
     Eigen::Matrix4d h;
     ASSERT_TRUE(std::isfinite(mr::sym_dirichlet(j, nullptr, &h)));
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(h);
     const Eigen::Matrix4d want =
         es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
-    EXPECT_LT((mr::project_hessian(j, h) - want).norm(), 1e-9 * (1 + want.norm())) << j;
+    EXPECT_LT((mr::projected_hessian(j) - want).norm(), 1e-9 * (1 + want.norm())) << j;
   }
 }
 

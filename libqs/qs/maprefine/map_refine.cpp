@@ -319,26 +319,36 @@ double flip_step(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& da, co
 
 }  // namespace
 
-Eigen::Matrix4d project_hessian(const Eigen::Matrix2d& J, const Eigen::Matrix4d& H) {
-  // The Hessian of an isotropic energy is diagonal in the basis U E V^T (J = U S V^T) with E the
-  // two scalings e1 e1^T, e2 e2^T and the twist / flip (e1 e2^T -+ e2 e1^T) / sqrt(2) (Smith,
-  // Goes, Kim 2019): the eigenvalues are the Rayleigh quotients, clamped at 0.
-  const Eigen::JacobiSVD<Eigen::Matrix2d> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix2d& u = svd.matrixU();
-  const Eigen::Matrix2d& v = svd.matrixV();
-  const double r = std::sqrt(0.5);
-  Eigen::Matrix2d e[4];
-  e[0] << 1, 0, 0, 0;
-  e[1] << 0, 0, 0, 1;
-  e[2] << 0, r, -r, 0;
-  e[3] << 0, r, r, 0;
-  Eigen::Matrix4d out = Eigen::Matrix4d::Zero();
-  for (const auto& ek : e) {
-    const Eigen::Matrix2d m = u * ek * v.transpose();
-    const Eigen::Vector4d q(m(0, 0), m(0, 1), m(1, 0), m(1, 1));
-    const double lam = q.dot(H * q);
-    if (lam > 0) out += lam * q * q.transpose();
+Eigen::Matrix4d projected_hessian(const Eigen::Matrix2d& J) {
+  // J = C + A, C = [E -H; H E] conformal, A = [F G; G -F] anticonformal; the singular values are
+  // Q + R and Q - R with Q = |(E, H)|, R = |(F, G)| (positive when det J = Q^2 - R^2 > 0). The
+  // Hessian of an isotropic energy is diagonal in the basis U M V^T (J = U S V^T) with M the two
+  // scalings e1 e1^T, e2 e2^T, the twist and the flip (e1 e2^T -+ e2 e1^T) / sqrt(2) (Smith, Goes,
+  // Kim 2019); in terms of C and A those are (C^ +- A^) / 2, the conformal direction turned by 90
+  // degrees and the anticonformal one turned, ^ meaning divided by Q or R. With
+  // psi = s1^2 + s2^2 + s1^-2 + s2^-2: scalings 2 + 6 / si^4, twist (psi_1 + psi_2) / (s1 + s2) =
+  // 2 - 2 (s1^2 - s1 s2 + s2^2) / (s1 s2)^3, flip (psi_1 - psi_2) / (s1 - s2) =
+  // 2 + 2 (s1^2 + s1 s2 + s2^2) / (s1 s2)^3. Only the twist can be negative; it is clamped at 0.
+  const double e = 0.5 * (J(0, 0) + J(1, 1)), f = 0.5 * (J(0, 0) - J(1, 1));
+  const double g = 0.5 * (J(1, 0) + J(0, 1)), h = 0.5 * (J(1, 0) - J(0, 1));
+  const double q = std::sqrt(e * e + h * h), r = std::sqrt(f * f + g * g);
+  const double s1 = q + r, s2 = q - r;
+  // Unit conformal and anticonformal directions as vec (J00, J01, J10, J11); for R = 0 (s1 = s2)
+  // the two anticonformal eigenvalues equal the scalings' and any unit A will do.
+  const Eigen::Vector4d c = Eigen::Vector4d(e, -h, h, e) / q;
+  const Eigen::Vector4d ct = Eigen::Vector4d(-h, -e, e, -h) / q;
+  Eigen::Vector4d a(1, 0, 0, -1), at(0, 1, 1, 0);
+  if (r > 0) {
+    a = Eigen::Vector4d(f, g, g, -f) / r;
+    at = Eigen::Vector4d(g, -f, -f, -g) / r;
   }
+  const double p = s1 * s2, p3 = p * p * p;
+  const double l1 = 2 + 6 / (s1 * s1 * s1 * s1), l2 = 2 + 6 / (s2 * s2 * s2 * s2);
+  const double twist = 2 - 2 * (s1 * s1 - p + s2 * s2) / p3, flip = 2 + 2 * (s1 * s1 + p + s2 * s2) / p3;
+  // Modes of unit Frobenius norm: (c + a) / 2, (c - a) / 2, ct / sqrt(2), at / sqrt(2).
+  const Eigen::Vector4d m1 = 0.5 * (c + a), m2 = 0.5 * (c - a);
+  Eigen::Matrix4d out = l1 * m1 * m1.transpose() + l2 * m2 * m2.transpose() + 0.5 * flip * at * at.transpose();
+  if (twist > 0) out += 0.5 * twist * ct * ct.transpose();
   return out;
 }
 
@@ -522,9 +532,8 @@ class PatchSolver {
       Eigen::Matrix2d jm;
       jm << j[0], j[1], j[2], j[3];
       Eigen::Vector4d gj;
-      Eigen::Matrix4d hj;
-      if (!std::isfinite(sym_dirichlet(jm, &gj, &hj))) return false;
-      const Eigen::Matrix4d hp = project_hessian(jm, hj);
+      if (!std::isfinite(sym_dirichlet(jm, &gj))) return false;
+      const Eigen::Matrix4d hp = projected_hessian(jm);
       const Vec6 gx = prob_.area[t] * a_[t].transpose() * gj;
       const Mat6 hx = prob_.area[t] * a_[t].transpose() * hp * a_[t];
       std::array<std::pair<int, Vec2>, 6> cols;

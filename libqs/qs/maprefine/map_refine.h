@@ -298,9 +298,9 @@ Vec2 sector_unglue(const Vec2& g, int k, int sector);
 double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient = nullptr,
                      Eigen::Matrix4d* hessian = nullptr);
 
-/// The Hessian of sym_dirichlet (as it returns it) made positive semi-definite: its eigenvalues
-/// clamped at 0, from the analytic eigenvectors of isotropic energies (no eigen-solver). Exposed
-/// for tests. \pre det(J) > 0.
-Eigen::Matrix4d project_hessian(const Eigen::Matrix2d& J, const Eigen::Matrix4d& hessian);
+/// The Hessian of sym_dirichlet at J made positive semi-definite (its eigenvalues clamped at 0), in
+/// closed form from J's conformal and anticonformal parts (no SVD, no eigen-solver). Exposed for
+/// tests. \pre det(J) > 0.
+Eigen::Matrix4d projected_hessian(const Eigen::Matrix2d& J);
 
 }  // namespace qs::maprefine
