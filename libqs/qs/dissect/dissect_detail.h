@@ -19,6 +19,7 @@
 #include "qs/core/context.h"
 #include "qs/dissect/cut_mesh.h"
 #include "qs/dissect/dissection.h"
+#include "qs/dissect/geodesic_loop.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/param/square_param.h"
@@ -152,8 +153,13 @@ class MeshDissector {
   const std::vector<Vec3>& positions() const { return cm_.positions(); }
   const std::vector<int>& feature_vertices() const { return feature_vertex_; }
   TriMesh trimesh() const { return cm_.to_trimesh(); }
-  /// Labels the two seed patches of a traced loop (relaxing it first when asked).
-  std::array<Node, 2> seed(SeedLoop loop);
+  /// Labels the two seed patches of a traced loop (straightened into geodesics and relaxed first
+  /// when the options ask; `straightened`: straighten()'s result for `loop`, made already).
+  std::array<Node, 2> seed(SeedLoop loop, std::optional<GeodesicLoop> straightened = std::nullopt);
+  /// DissectOptions::geodesic_seed_curves: `loop` straightened on this mesh (its features avoided).
+  GeodesicLoop straighten(const SeedLoop& loop) const;
+  /// The four seed curves as seed() cut them into the mesh: 3D points along each path.
+  const std::array<std::vector<Vec3>, 4>& seed_curves() const { return seed_curves_; }
   Param parameterize(const Node& node);
   std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
   /// The same split with its four inner corners given (counter-clockwise from the one of corner
@@ -264,6 +270,7 @@ class MeshDissector {
   void set_leaf_map(size_t leaf, const Param& p, const param::SquareParam& sp, const param::Stretch& st);
   void run_repairs();
   std::array<int, 4> seeds_{};
+  std::array<std::vector<Vec3>, 4> seed_curves_;
   std::array<SeedPlacement, 4> seed_placements_{};
 
  public:
@@ -332,9 +339,14 @@ class SetDissector {
                                        const std::vector<bool>& over);
   // DissectOptions::same_pose: the similarity from mesh 0 to every mesh by their landmarks.
   void fit_poses(const std::vector<SeedLoop>& loops);
-  // DissectOptions::same_pose: mesh i's loop re-routed so that points near mesh 0's loop lie on
-  // the same side of it in mesh i (after the pose); false when that is impossible.
-  bool pose_loop(size_t i, std::vector<SeedLoop>& loops, const std::vector<int>& want) const;
+  // DissectOptions::same_pose: mesh i's loop through its seeds routed along `guide` (curves of
+  // mesh 0, moved into mesh i's pose), with the features on the sides `want`; nullopt when that
+  // is impossible.
+  std::optional<SeedLoop> pose_loop(size_t i, const SeedLoop& own, const std::vector<int>& want,
+                                    const std::array<std::vector<Vec3>, 4>& guide) const;
+  // DissectOptions::same_pose: fits the poses and seeds every mesh (mesh 0 first, then each other
+  // mesh along mesh 0's curves, see pose_loop), pushing the seed patches onto roots.
+  void seed_posed(std::vector<SeedLoop>& loops, std::array<std::vector<Node>, 2>& roots, DissectionSet& out);
   // The inner corners of a split at (peak, w) in every mesh (mesh 0: the common ones; mesh i: its
   // points nearest mesh 0's, see same_pose), or empty when a mesh has none that make a split.
   std::vector<std::array<Vec2, 4>> posed_corners(const std::vector<Param>& ps, const Vec2& peak, double w) const;

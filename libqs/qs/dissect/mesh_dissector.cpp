@@ -183,16 +183,21 @@ std::vector<Vec3> MeshDissector::landmark_points(const std::array<int, 4>& seeds
   return out;
 }
 
-std::array<Node, 2> MeshDissector::seed(SeedLoop loop) {
+GeodesicLoop MeshDissector::straighten(const SeedLoop& loop) const {
+  GeodesicLoopOptions go;
+  go.avoid = feature_vertex_;
+  return straighten_seed_loop(cm_.to_trimesh(), loop, go, ctx_);
+}
+
+std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoop> straightened) {
   const std::array<int, 4> seeds = loop.seeds;
   seeds_ = seeds;
   TriMesh tm = cm_.to_trimesh();
   if (opt_.geodesic_seed_curves) {
     // Issue 17: the four curves become geodesics cut into the mesh, the same curves on the surface
     // for any tessellation. New vertices are appended, so input and feature ids stay valid.
-    GeodesicLoopOptions go;
-    go.avoid = feature_vertex_;
-    GeodesicLoop g = straighten_seed_loop(tm, loop, go, ctx_);
+    if (!straightened) straightened = straighten(loop);
+    GeodesicLoop& g = *straightened;
     for (const std::string& why : g.why)
       if (!why.empty()) ctx_.info(name_ + ": seed " + why);
     if (g.straightened[0] || g.straightened[1] || g.straightened[2] || g.straightened[3]) {
@@ -215,6 +220,10 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop) {
     cm_ = CutMesh(tm);
     grow();
     feature_of_.resize(cm_.num_vertices(), -1);
+  }
+  for (int k = 0; k < 4; ++k) {
+    seed_curves_[k].clear();
+    for (int v : loop.paths[k]) seed_curves_[k].push_back(tm.positions[v]);
   }
   // Seed patches: "0" left of the loop s0->s1->s2->s3, "1" right of it.
   std::array<Node, 2> roots;
