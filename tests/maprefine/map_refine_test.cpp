@@ -213,13 +213,14 @@ TEST(SymDirichlet, GradientAndHessianMatchFiniteDifferences) {
 }
 
 TEST(SymDirichlet, TheAnalyticProjectionIsTheEigenProjection) {
-  const Eigen::Matrix2d js[] = {(Eigen::Matrix2d() << 1.3, 0.4, -0.2, 0.8).finished(),
-                                (Eigen::Matrix2d() << 0.2, -0.9, 1.7, 0.1).finished(),
-                                (Eigen::Matrix2d() << 3.0, 0.0, 0.0, 0.3).finished(),
-                                (Eigen::Matrix2d() << 1.0, 0.0, 0.0, 1.0).finished(),
-                                (Eigen::Matrix2d() << 0.05, 0.02, -0.01, 0.04).finished(),
-                                (Eigen::Matrix2d() << 0.9, -1.2, 1.2, 0.9).finished(),  // conformal
-                                (Eigen::Matrix2d() << -0.3, 0.05, -0.02, -0.2).finished()};  // turned by about 180 degrees
+  const Eigen::Matrix2d js[] = {
+      (Eigen::Matrix2d() << 1.3, 0.4, -0.2, 0.8).finished(),
+      (Eigen::Matrix2d() << 0.2, -0.9, 1.7, 0.1).finished(),
+      (Eigen::Matrix2d() << 3.0, 0.0, 0.0, 0.3).finished(),
+      (Eigen::Matrix2d() << 1.0, 0.0, 0.0, 1.0).finished(),
+      (Eigen::Matrix2d() << 0.05, 0.02, -0.01, 0.04).finished(),
+      (Eigen::Matrix2d() << 0.9, -1.2, 1.2, 0.9).finished(),       // conformal
+      (Eigen::Matrix2d() << -0.3, 0.05, -0.02, -0.2).finished()};  // turned by about 180 degrees
   for (const auto& j : js) {
     Eigen::Matrix4d h;
     ASSERT_TRUE(std::isfinite(mr::sym_dirichlet(j, nullptr, &h)));
