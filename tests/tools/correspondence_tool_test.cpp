@@ -32,6 +32,26 @@ class CorrespondenceTool : public ::testing::Test {
   std::string d() const { return dir_.string(); }
   std::string mesh(int i) const { return d() + "/shape0" + std::to_string(i) + ".obj"; }
   static fs::path shared_meshes() { return qs::testing::shared_meshes_dir(); }
+  static std::string read_text(const std::string& path) {
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  // The shared camel and its re-tessellation (written to `out`_r.obj with its map and landmarks)
+  // with the seeds of the camel tests and `features` (JSON): qs-dissect's arguments for the pair.
+  std::string camel_self_pair(const std::string& out, const std::string& features) const {
+    const std::string src = (shared_meshes() / "camel_4k_fixed.obj").string();
+    std::ofstream(out + ".landmarks.json") << R"({"seeds": [1786, 1627, 47, 1764], "features": )" << features << "}";
+    const std::string args = "retessellate " + src + " --landmarks " + out + ".landmarks.json -o " + out + "_r.obj";
+    EXPECT_EQ(run_tool("qs-family", args + " --quiet").exit, 0);
+    return src + " " + out + "_r.obj --landmarks " + out + ".landmarks.json " + out + "_r.landmarks.json --quiet";
+  }
+  // The dissection `out` of camel_self_pair against the exact map: qs-metro's "dissection" figures.
+  static nlohmann::json camel_error(const std::string& out) {
+    const RunResult r = run_tool("qs-metro", "--correspondence " + out + " --map - " + out +
+                                                 "_r.map.json --samples 20000 --json -o " + out + ".json");
+    EXPECT_EQ(r.exit, 0) << r.out;
+    return nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  }
   fs::path dir_;
 };
 
@@ -300,18 +320,10 @@ TEST_F(CorrespondenceTool, SamePoseTakesEveryNodeMapOverOnRealMeshes) {
 // node maps) whichever maps, and with the new maps whichever corners, but not with both off (each
 // net keeping only the better of its own two tries, this set once ended with exit 4).
 TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBack) {
-  const fs::path shared = shared_meshes();
-  if (!fs::exists(shared / "camel_4k_fixed.obj")) GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
-  const std::string src = (shared / "camel_4k_fixed.obj").string(), out = d() + "/camel";
-  std::ofstream(out + ".landmarks.json") << R"({"seeds": [1786, 1627, 47, 1764], "features": {"fa": 743, "fb": 400}})";
-  const std::string args = "retessellate " + src + " --landmarks " + out + ".landmarks.json -o " + out + "_r.obj";
-  ASSERT_EQ(run_tool("qs-family", args + " --quiet").exit, 0);
-  const std::string pair =
-      src + " " + out + "_r.obj --landmarks " + out + ".landmarks.json " + out + "_r.landmarks.json --quiet";
-  auto report = [&](const std::string& name) {
-    std::ifstream rep(out + name + ".txt");
-    return std::string((std::istreambuf_iterator<char>(rep)), std::istreambuf_iterator<char>());
-  };
+  if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
+    GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
+  const std::string out = d() + "/camel", pair = camel_self_pair(out, R"({"fa": 743, "fb": 400})");
+  auto report = [&](const std::string& name) { return read_text(out + name + ".txt"); };
   // Untangled (the default): the pose holds and the map is close to the identity.
   RunResult r = run_tool("qs-dissect", pair + " -o " + out + " --report " + out + ".txt");
   ASSERT_EQ(r.exit, 0) << r.out;
@@ -320,10 +332,7 @@ TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBa
   EXPECT_THAT(text, HasSubstr("untangled from their own"));
   EXPECT_THAT(text, Not(HasSubstr("after the repair, 0 untangled from their own")));
   EXPECT_THAT(text, Not(HasSubstr("bijective: NO")));
-  r = run_tool("qs-metro", "--correspondence " + out + " --map - " + out + "_r.map.json --samples 20000 --json -o " +
-                               out + ".json");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  const auto e = nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  const auto e = camel_error(out);
   // Measured 0.78% mean, 17.5% max (the tail); 0.51 / 11.5% before the second mesh's seed loop
   // was chosen by its distance to the first's geodesics, which over 10 choices of the two features
   // took the mean from 1.37 to 0.66% (every one keeping the pose, 5 before the safety nets' order).
@@ -346,27 +355,17 @@ TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBa
 // edge+mean-value it does not (0.45% mean), where the common (u,v) with geodesic+cotan, the next
 // net before that order, swapped the legs (4.1% mean, 35% max).
 TEST_F(CorrespondenceTool, SamePoseFallsBackToOldMapsBeforeGivingUpThePose) {
-  const fs::path shared = shared_meshes();
-  if (!fs::exists(shared / "camel_4k_fixed.obj")) GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
-  const std::string src = (shared / "camel_4k_fixed.obj").string(), out = d() + "/camel";
-  std::ofstream(out + ".landmarks.json") << R"({"seeds": [1786, 1627, 47, 1764], "features": {"fa": 743, "fb": 401}})";
-  ASSERT_EQ(run_tool("qs-family",
-                     "retessellate " + src + " --landmarks " + out + ".landmarks.json -o " + out + "_r.obj --quiet")
-                .exit,
-            0);
-  RunResult r = run_tool("qs-dissect", src + " " + out + "_r.obj --landmarks " + out + ".landmarks.json " + out +
-                                           "_r.landmarks.json --quiet -o " + out + " --report " + out + ".txt");
+  if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
+    GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
+  const std::string out = d() + "/camel", pair = camel_self_pair(out, R"({"fa": 743, "fb": 401})");
+  const RunResult r = run_tool("qs-dissect", pair + " -o " + out + " --report " + out + ".txt");
   ASSERT_EQ(r.exit, 0) << r.out;
-  std::ifstream rep(out + ".txt");
-  const std::string text((std::istreambuf_iterator<char>(rep)), std::istreambuf_iterator<char>());
+  const std::string text = read_text(out + ".txt");
   EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
   EXPECT_THAT(text, HasSubstr("maps: edge+mean-value (fallback: "));
   EXPECT_THAT(text, HasSubstr("folded uv faces with geodesic+cotan (patch "));
   EXPECT_THAT(text, Not(HasSubstr("bijective: NO")));
-  r = run_tool("qs-metro", "--correspondence " + out + " --map - " + out + "_r.map.json --samples 20000 --json -o " +
-                               out + ".json");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  const auto e = nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  const auto e = camel_error(out);
   EXPECT_LT(e["mean_percent"].get<double>(), 0.8);
   EXPECT_LT(e["max_percent"].get<double>(), 16.0);
 }
