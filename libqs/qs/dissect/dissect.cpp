@@ -101,8 +101,10 @@ double mean_distance(const TriMesh& mesh, const metro::SurfaceDistance& to) {
 // options' maps, the common (u,v) with edge+mean-value. The first without folds is kept, else
 // the one that folds least (the earlier on a tie). The pose goes before the maps: a camel against
 // its re-tessellation with a hoof as a feature, 10 choices of its landmarks, folded with the pose
-// and geodesic+cotan in 5 of them; with the pose and edge+mean-value 2 of those 5 do not fold
-// (0.45-0.48% mean error), where the common (u,v) gives 3.9-4.1% (legs swapped, 35% max).
+// and geodesic+cotan in 5 of them; with the pose and edge+mean-value 2 of those 5 did not fold
+// (0.45-0.48% mean error), where the common (u,v) gave 4.1% (legs swapped, 35% max). Since the
+// seed loops of one pose follow the first mesh's (SetDissector::seed_posed), 8 of the 10 keep the
+// pose with geodesic+cotan and the other 2 with edge+mean-value.
 DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
                                 const Context& context) {
   auto folded = [&meshes](const DissectionSet& s, std::string& where) {
