@@ -202,45 +202,50 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
   // routed. Each mesh straightens its own loop, and two nearby edge paths can straighten into
   // curves far apart (the cow against its re-tessellation: 0.84% of the diagonal apart on
   // average, 7% at most, from paths 0.26% apart); the candidate whose curves lie nearest mesh 0's
-  // is kept. None routes: the mesh's own loop.
+  // is kept. None routes: the mesh's own loop. The two guides of each mesh are routed and
+  // straightened in parallel (tasks mesh-major, traced first); the choice goes through the
+  // candidates in that order and keeps the first of equal distances.
   struct Choice {
     SeedLoop loop;
     std::optional<GeodesicLoop> straightened;
+    double distance = std::numeric_limits<double>::infinity();
   };
-  std::vector<std::optional<Choice>> chosen(nm);
+  const std::array<const std::array<std::vector<Vec3>, 4>*, 2> guides{&traced, &cut};
+  std::vector<std::vector<Choice>> candidates(2 * (nm - 1));
   parallel_for(
-      nm - 1,
-      [&](size_t k) {
-        const size_t i = k + 1;
+      candidates.size(),
+      [&](size_t task) {
+        const size_t i = task / 2 + 1, g = task % 2;
+        if (g == 1 && !opt_.geodesic_seed_curves) return;  // edge paths: traced and cut are the same curves
+        std::optional<SeedLoop> loop = pose_loop(i, loops[i], want, *guides[g]);
+        if (!loop) return;
         std::array<std::vector<Vec3>, 4> reference;  // mesh 0's cut curves in mesh i's pose
         for (int c = 0; c < 4; ++c)
           for (const Vec3& x : cut[c]) reference[c].push_back((pose_[i] * x.homogeneous()).head<3>());
-        double best = std::numeric_limits<double>::infinity();
-        auto consider = [&](SeedLoop loop, std::optional<GeodesicLoop> g) {
+        auto add = [&](SeedLoop l, std::optional<GeodesicLoop> gl) {
           std::array<std::vector<Vec3>, 4> curves;
           const bool straight =
-              g && (g->straightened[0] || g->straightened[1] || g->straightened[2] || g->straightened[3]);
+              gl && (gl->straightened[0] || gl->straightened[1] || gl->straightened[2] || gl->straightened[3]);
           for (int c = 0; c < 4; ++c)
-            for (int v : straight ? g->loop.paths[c] : loop.paths[c])
-              curves[c].push_back(straight ? g->mesh.positions[v] : meshes_[i].positions()[v]);
+            for (int v : straight ? gl->loop.paths[c] : l.paths[c])
+              curves[c].push_back(straight ? gl->mesh.positions[v] : meshes_[i].positions()[v]);
           const double d = curves_apart(curves, reference);
-          if (d < best) {
-            best = d;
-            chosen[i] = Choice{std::move(loop), std::move(g)};
-          }
+          candidates[task].push_back(Choice{std::move(l), std::move(gl), d});
         };
-        for (const std::array<std::vector<Vec3>, 4>* guide : {&std::as_const(traced), &cut}) {
-          std::optional<SeedLoop> loop = pose_loop(i, loops[i], want, *guide);
-          if (!loop) continue;
-          if (!opt_.geodesic_seed_curves) {
-            consider(std::move(*loop), std::nullopt);
-            break;  // edge paths: mesh 0's traced and cut curves are the same
-          }
-          consider(*loop, meshes_[i].straighten(*loop));
-          if (guide == &cut) consider(std::move(*loop), GeodesicLoop{});  // routed along the geodesics, kept
+        if (!opt_.geodesic_seed_curves) {
+          add(std::move(*loop), std::nullopt);
+          return;
         }
+        add(*loop, meshes_[i].straighten(*loop));
+        if (g == 1) add(std::move(*loop), GeodesicLoop{});  // routed along the geodesics, kept
       },
       true);
+  std::vector<std::optional<Choice>> chosen(nm);
+  for (size_t task = 0; task < candidates.size(); ++task)
+    for (Choice& c : candidates[task]) {
+      auto& best = chosen[task / 2 + 1];
+      if (!best || c.distance < best->distance) best = std::move(c);
+    }
   for (size_t i = 1; i < nm; ++i) {
     out.same_pose_loops += chosen[i].has_value();
     const auto ri = chosen[i] ? meshes_[i].seed(std::move(chosen[i]->loop), std::move(chosen[i]->straightened))
