@@ -339,6 +339,8 @@ class SetDissector {
                                        const std::vector<bool>& over);
   // DissectOptions::same_pose: the similarity from mesh 0 to every mesh by their landmarks.
   void fit_poses(const std::vector<SeedLoop>& loops);
+  // DissectOptions::same_pose: four curves of mesh 0 moved into mesh i's pose.
+  std::array<std::vector<Vec3>, 4> in_pose(size_t i, const std::array<std::vector<Vec3>, 4>& curves) const;
   // DissectOptions::same_pose: mesh i's loop through its seeds routed along `guide` (curves of
   // mesh 0, moved into mesh i's pose), with the features on the sides `want`; nullopt when that
   // is impossible.

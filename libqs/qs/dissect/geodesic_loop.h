@@ -34,6 +34,8 @@ struct GeodesicLoop {
   std::array<std::string, 4> why;        ///< when not straightened: a sentence saying why
   std::array<double, 4> length_before{}, length_after{};  ///< 3D lengths
   int inserted_vertices = 0;
+  /// Whether any curve was straightened (else `mesh` and `loop` are the input's).
+  bool any_straightened() const { return straightened[0] || straightened[1] || straightened[2] || straightened[3]; }
 };
 
 /// Straightens each curve of `loop` in turn (0, 1, 2, 3) into the shortest curve on the surface

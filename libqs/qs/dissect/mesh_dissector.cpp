@@ -200,7 +200,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
     GeodesicLoop& g = *straightened;
     for (const std::string& why : g.why)
       if (!why.empty()) ctx_.info(name_ + ": seed " + why);
-    if (g.straightened[0] || g.straightened[1] || g.straightened[2] || g.straightened[3]) {
+    if (g.any_straightened()) {
       tm = std::move(g.mesh);
       loop = std::move(g.loop);
       cm_ = CutMesh(tm);

@@ -142,11 +142,16 @@ void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
   }
 }
 
-std::optional<SeedLoop> SetDissector::pose_loop(size_t i, const SeedLoop& own, const std::vector<int>& want,
-                                                const std::array<std::vector<Vec3>, 4>& guide) const {
+std::array<std::vector<Vec3>, 4> SetDissector::in_pose(size_t i, const std::array<std::vector<Vec3>, 4>& curves) const {
   std::array<std::vector<Vec3>, 4> moved;
   for (int k = 0; k < 4; ++k)
-    for (const Vec3& x : guide[k]) moved[k].push_back((pose_[i] * x.homogeneous()).head<3>());
+    for (const Vec3& x : curves[k]) moved[k].push_back((pose_[i] * x.homogeneous()).head<3>());
+  return moved;
+}
+
+std::optional<SeedLoop> SetDissector::pose_loop(size_t i, const SeedLoop& own, const std::vector<int>& want,
+                                                const std::array<std::vector<Vec3>, 4>& guide) const {
+  const std::array<std::vector<Vec3>, 4> moved = in_pose(i, guide);
   const TriMesh mi = meshes_[i].trimesh();
   try {
     SeedLoop guided =
@@ -211,6 +216,8 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
     double distance = std::numeric_limits<double>::infinity();
   };
   const std::array<const std::array<std::vector<Vec3>, 4>*, 2> guides{&traced, &cut};
+  std::vector<std::array<std::vector<Vec3>, 4>> reference(nm);  // mesh 0's cut curves in mesh i's pose
+  for (size_t i = 1; i < nm; ++i) reference[i] = in_pose(i, cut);
   std::vector<std::vector<Choice>> candidates(2 * (nm - 1));
   parallel_for(
       candidates.size(),
@@ -219,17 +226,13 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
         if (g == 1 && !opt_.geodesic_seed_curves) return;  // edge paths: traced and cut are the same curves
         std::optional<SeedLoop> loop = pose_loop(i, loops[i], want, *guides[g]);
         if (!loop) return;
-        std::array<std::vector<Vec3>, 4> reference;  // mesh 0's cut curves in mesh i's pose
-        for (int c = 0; c < 4; ++c)
-          for (const Vec3& x : cut[c]) reference[c].push_back((pose_[i] * x.homogeneous()).head<3>());
         auto add = [&](SeedLoop l, std::optional<GeodesicLoop> gl) {
           std::array<std::vector<Vec3>, 4> curves;
-          const bool straight =
-              gl && (gl->straightened[0] || gl->straightened[1] || gl->straightened[2] || gl->straightened[3]);
+          const bool straight = gl && gl->any_straightened();
           for (int c = 0; c < 4; ++c)
             for (int v : straight ? gl->loop.paths[c] : l.paths[c])
               curves[c].push_back(straight ? gl->mesh.positions[v] : meshes_[i].positions()[v]);
-          const double d = curves_apart(curves, reference);
+          const double d = curves_apart(curves, reference[i]);
           candidates[task].push_back(Choice{std::move(l), std::move(gl), d});
         };
         if (!opt_.geodesic_seed_curves) {
