@@ -16,6 +16,8 @@
 #   self-gen      a generated shape against its own re-tessellation (ideal: the identity)
 #   self-smpl-*   smpl_man_14k / smpl_woman_14k against its own re-tessellation (ideal: the identity)
 #   human-retess  smpl_man_14k against smpl_woman_14k re-tessellated (same pose, registered)
+#                 (re-tessellated by qs-family retessellate --keep-shape; the rows "(isotropic
+#                 re-tessellation)" again with the default isotropic one, which cuts fingers and toes)
 #   human-same    smpl_man_14k against smpl_woman_14k as shipped (identical connectivity)
 #   ... --no-same-pose  the same-pose pairs again with qs-dissect --no-same-pose (qs-dissect finds
 #                 that they share a pose and treats them so by default; this row is without it)
@@ -106,19 +108,30 @@ EXTRA=("${BASE_EXTRA[@]}")
 if [ -f "$MESHES/smpl_man_14k.obj" ] && [ -f "$MESHES/smpl_woman_14k.obj" ]; then
   h="$OUT/human"
   mkdir -p "$h"
-  "$TOOLS/qs-family" retessellate "$MESHES/smpl_man_14k.obj" --landmarks "$LM" -o "$h/smpl_man_14k_r.obj" --quiet || exit 1
-  "$TOOLS/qs-family" retessellate "$MESHES/smpl_woman_14k.obj" --landmarks "$LM" -o "$h/smpl_woman_14k_r.obj" --quiet || exit 1
-  # human_pairs LABEL_SUFFIX DIR_SUFFIX: the four body pairs with the current EXTRA options.
+  # The bodies re-tessellated keeping their shape (fingers and toes kept; the surfaces at most
+  # 0.18% of the diagonal apart), and isotropically at the body's face count (which cuts the
+  # fingers and toes: 0.65% apart, the hands losing 14-27% of their area), in iso/.
+  mkdir -p "$h/iso"
+  for body in smpl_man_14k smpl_woman_14k; do
+    "$TOOLS/qs-family" retessellate "$MESHES/$body.obj" --landmarks "$LM" --keep-shape -o "$h/${body}_r.obj" --quiet ||
+      exit 1
+    "$TOOLS/qs-family" retessellate "$MESHES/$body.obj" --landmarks "$LM" -o "$h/iso/${body}_r.obj" --quiet || exit 1
+  done
+  # human_pairs LABEL_SUFFIX DIR_SUFFIX [RETESS_DIR]: the body pairs with the current EXTRA options
+  # (the three with a re-tessellation only when RETESS_DIR is given; human-same otherwise).
   human_pairs() {
-    run_pair "self-smpl-man$1" "$h/self-man$2" "$MESHES/smpl_man_14k.obj" "$h/smpl_man_14k_r.obj" -- \
-        "$LM" "$h/smpl_man_14k_r.landmarks.json" -- - "$h/smpl_man_14k_r.map.json"
-    run_pair "self-smpl-woman$1" "$h/self-woman$2" "$MESHES/smpl_woman_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
-        "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
-    run_pair "human-retess$1" "$h/retess$2" "$MESHES/smpl_man_14k.obj" "$h/smpl_woman_14k_r.obj" -- \
-        "$LM" "$h/smpl_woman_14k_r.landmarks.json" -- - "$h/smpl_woman_14k_r.map.json"
+    local r=${3:-$h}
+    run_pair "self-smpl-man$1" "$h/self-man$2" "$MESHES/smpl_man_14k.obj" "$r/smpl_man_14k_r.obj" -- \
+        "$LM" "$r/smpl_man_14k_r.landmarks.json" -- - "$r/smpl_man_14k_r.map.json"
+    run_pair "self-smpl-woman$1" "$h/self-woman$2" "$MESHES/smpl_woman_14k.obj" "$r/smpl_woman_14k_r.obj" -- \
+        "$LM" "$r/smpl_woman_14k_r.landmarks.json" -- - "$r/smpl_woman_14k_r.map.json"
+    run_pair "human-retess$1" "$h/retess$2" "$MESHES/smpl_man_14k.obj" "$r/smpl_woman_14k_r.obj" -- \
+        "$LM" "$r/smpl_woman_14k_r.landmarks.json" -- - "$r/smpl_woman_14k_r.map.json"
+    [ -n "${3:-}" ] && return
     run_pair "human-same$1" "$h/same$2" "$MESHES/smpl_man_14k.obj" "$MESHES/smpl_woman_14k.obj" -- "$LM" "$LM" -- - -
   }
   human_pairs "" ""
+  human_pairs " (isotropic re-tessellation)" "-iso" "$h/iso"
   # The same-pose pairs again with qs-dissect --no-same-pose (found to share a pose by default).
   BASE_EXTRA=("${EXTRA[@]}")
   EXTRA=("${BASE_EXTRA[@]}" --no-same-pose)

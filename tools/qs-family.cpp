@@ -140,14 +140,18 @@ int run_retessellate(const std::string& input, const std::optional<std::string>&
   if (!landmarks_text.empty()) qs::write_file_atomically(base.string() + ".landmarks.json", landmarks_text);
   if (!quiet) {
     // The new surface is the input's only at the vertices: its faces are chords, so fine detail
-    // (fingers, say) loses area. Said, since a map between the two is then not an isometry.
+    // (fingers, say) loses area and shape. Said, since a map between the two is then not an
+    // isometry, and the ground truth between the vertices is only as good as the chords.
     const double in_area = qs::surface_area(in.valid.mesh);
     char change[64];
     std::snprintf(change, sizeof change, "%+.2f%%", in_area > 0 ? 100 * (qs::surface_area(r.mesh) / in_area - 1) : 0.0);
-    std::cout << output << ": " << r.mesh.num_vertices() << " vertices, " << r.mesh.num_faces()
-              << " faces, area " << change << " against the input; origins on " << input << " in " << base.string()
-              << ".map.json" << (landmarks_text.empty() ? "" : "; landmarks in " + base.string() + ".landmarks.json")
-              << "\n";
+    const qs::metro::MetroResult gap = qs::metro::metro(in.valid.mesh, r.mesh);
+    char hausdorff[64];
+    std::snprintf(hausdorff, sizeof hausdorff, "%.3f%%", gap.diagonal > 0 ? 100 * gap.max / gap.diagonal : 0.0);
+    std::cout << output << ": " << r.mesh.num_vertices() << " vertices, " << r.mesh.num_faces() << " faces, area "
+              << change << " against the input, surfaces at most " << hausdorff << " of the diagonal apart; origins on "
+              << input << " in " << base.string() << ".map.json"
+              << (landmarks_text.empty() ? "" : "; landmarks in " + base.string() + ".landmarks.json") << "\n";
   }
   return 0;
 }
@@ -188,6 +192,9 @@ int main(int argc, char** argv) {
   ret->add_option("--landmarks", landmark_file, "Landmarks of MESH (default: found beside it) to transfer");
   ret->add_option("--faces", ropt.faces, "Target face count (about; 0: the input's)")->capture_default_str();
   ret->add_option("--iterations", ropt.iterations, "Rounds of isotropic remeshing (1..20)")->capture_default_str();
+  ret->add_flag("--keep-shape", ropt.keep_shape,
+                "Keep the shape: remesh 3x finer, then simplify back to the face count (triangles crowd where the "
+                "surface bends, so fingers and toes keep their shape; slower)");
   ret->add_option("-o,--output", output, "Output mesh (.obj .off .ply); OUT.map.json and OUT.landmarks.json beside it")
       ->required();
   ret->add_flag("--quiet", quiet, "Print nothing on success");

@@ -244,6 +244,27 @@ TEST(Retessellate, NewVerticesLieExactlyAtTheirOrigins) {
   EXPECT_EQ(again.mesh.faces, r.mesh.faces);
 }
 
+// Thin arms re-tessellated coarser than they were made: the isotropic chords cut the arms' tips,
+// the shape-keeping one crowds its triangles there and stays much closer to the surface, with the
+// same face count, exact origins and the same bytes on a second run.
+TEST(Retessellate, KeepShapeStaysCloserToTheSurfaceThanIsotropic) {
+  const qs::TriMesh in = qs::mesh::validate(qs::shapes::star_blob(6, 1.2, 5)).mesh;
+  qs::family::RetessellateOptions o;
+  o.faces = 1500;
+  const auto iso = qs::family::retessellate(in, o);
+  o.keep_shape = true;
+  const auto keep = qs::family::retessellate(in, o);
+  const auto v = qs::mesh::validate(keep.mesh);
+  EXPECT_TRUE(v.report.accepted) << qs::mesh::format_report("keep", v.report);
+  EXPECT_NEAR(keep.mesh.num_faces(), 1500, 20);
+  ASSERT_EQ(keep.origins.size(), keep.mesh.positions.size());
+  for (int i = 0; i < keep.mesh.num_vertices(); ++i)
+    EXPECT_EQ(qs::landmarks::position_of(in, keep.origins[i]), keep.mesh.positions[i]);
+  const double gap_iso = qs::metro::metro(in, iso.mesh).max, gap_keep = qs::metro::metro(in, keep.mesh).max;
+  EXPECT_LT(gap_keep, 0.5 * gap_iso) << "isotropic " << gap_iso << ", keep-shape " << gap_keep;
+  EXPECT_EQ(qs::family::retessellate(in, o).mesh.faces, keep.mesh.faces);
+}
+
 TEST(Retessellate, OptionsOutOfRange) {
   const qs::TriMesh in = qs::shapes::icosphere(2);
   qs::family::RetessellateOptions o;

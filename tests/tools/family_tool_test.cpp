@@ -93,6 +93,7 @@ TEST_F(FamilyTool, RetessellateWritesOriginsAndTransfersLandmarks) {
   ASSERT_EQ(r.exit, 0) << r.out;
   // Chords of a convex bumpy ball: a little less area, said as a signed percentage.
   EXPECT_THAT(r.out, ::testing::ContainsRegex(" faces, area -0\\.[0-9]{2}% against the input"));
+  EXPECT_THAT(r.out, ::testing::ContainsRegex("surfaces at most 0\\.[0-9]{3}% of the diagonal apart"));
   const auto map = nlohmann::json::parse(slurp(dir_ / "out" / "ball_r.map.json"));
   EXPECT_EQ(map["domain"], "surface");
   EXPECT_EQ(map["reference"], "../ball.obj");
@@ -100,4 +101,17 @@ TEST_F(FamilyTool, RetessellateWritesOriginsAndTransfersLandmarks) {
   const RunResult i = run_tool("qs-inspect", (dir_ / "out" / "ball_r.obj").string());
   EXPECT_EQ(i.exit, 0) << i.out;
   EXPECT_THAT(i.out, HasSubstr("4 seeds, 1 features"));
+  // --keep-shape: the same files, a surface no farther from the input (the ball has no thin parts).
+  const RunResult k =
+      run_tool("qs-family", "retessellate " + (dir_ / "ball.obj").string() + " --faces 3000 --keep-shape -o " +
+                                (dir_ / "out" / "ball_k.obj").string());
+  ASSERT_EQ(k.exit, 0) << k.out;
+  auto gap = [](const std::string& out) {
+    const auto at = out.find("surfaces at most ");
+    return at == std::string::npos ? -1.0 : std::stod(out.substr(at + 17));
+  };
+  EXPECT_GT(gap(k.out), 0);
+  EXPECT_LE(gap(k.out), gap(r.out));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "ball_k.map.json"));
+  EXPECT_EQ(run_tool("qs-inspect", (dir_ / "out" / "ball_k.obj").string()).exit, 0);
 }

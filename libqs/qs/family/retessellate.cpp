@@ -3,6 +3,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Count_stop_predicate.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_cost.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_placement.h>
+#include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
 #include <algorithm>
 #include <cmath>
@@ -42,7 +46,20 @@ Retessellation retessellate(const TriMesh& mesh, const RetessellateOptions& opti
   const int target = options.faces != 0 ? options.faces : mesh.num_faces();
   const double edge = std::sqrt(4 * area / (std::sqrt(3.0) * target));
   context.report("retessellate", 0);
-  PMP::isotropic_remeshing(faces(sm), edge, sm, CGAL::parameters::number_of_iterations(options.iterations));
+  if (options.keep_shape) {
+    // 9 times the faces, then back to the count: the collapses go first where they change the
+    // volume and shape least (flat parts), which leaves the triangles where the surface bends.
+    namespace SMS = CGAL::Surface_mesh_simplification;
+    PMP::isotropic_remeshing(faces(sm), edge / 3, sm, CGAL::parameters::number_of_iterations(options.iterations));
+    sm.collect_garbage();
+    context.report("retessellate", 0.5);
+    SMS::Count_stop_predicate<SM> stop(static_cast<std::size_t>(1.5 * target));  // edges = 1.5 faces
+    SMS::edge_collapse(
+        sm, stop,
+        CGAL::parameters::get_cost(SMS::LindstromTurk_cost<SM>()).get_placement(SMS::LindstromTurk_placement<SM>()));
+  } else {
+    PMP::isotropic_remeshing(faces(sm), edge, sm, CGAL::parameters::number_of_iterations(options.iterations));
+  }
   sm.collect_garbage();
   context.report("retessellate", 0.8);
 

@@ -14,6 +14,11 @@ namespace qs::family {
 struct RetessellateOptions {
   int faces = 0;        ///< target face count (about); 0: the input's. \pre 0 or >= 100
   int iterations = 3;   ///< rounds of isotropic remeshing. \pre 1..20
+  /// Keep the shape: remesh isotropically 3 times finer, then collapse edges back to the face
+  /// count at the least Lindstrom-Turk cost, so that triangles crowd where the surface bends and
+  /// thin parts (fingers, toes) keep their shape. Off: isotropic at the face count, whose chords
+  /// cut such parts.
+  bool keep_shape = false;
 };
 
 struct Retessellation {
@@ -23,7 +28,8 @@ struct Retessellation {
 };
 
 /// Isotropic remeshing (CGAL Polygon_mesh_processing, target edge length from the face count,
-/// vertices projected onto the input), then every vertex is placed exactly at its closest point
+/// vertices projected onto the input; with keep_shape finer, then simplified back by CGAL
+/// Surface_mesh_simplification), then every vertex is placed exactly at its closest point
 /// of the input, recorded as (face, barycentric weights). \pre `mesh` is validated (closed,
 /// manifold, genus 0). \throws InvalidInput for an option out of range, SolverError when the
 /// result is not a closed genus-0 mesh without zero-area faces.
