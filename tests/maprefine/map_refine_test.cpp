@@ -744,8 +744,9 @@ TEST(SamePoseMaps, TakeTheFirstMeshsNodeMapsOver) {
   const cr::GroundTruth truth({ta, tb});
   const auto e_taken = measure(truth, taken.meshes);
   const auto e_own = measure(truth, own.meshes);
-  // Measured: mean 1.21% -> 0.41% of the diagonal.
-  EXPECT_LT(e_taken.mean, 0.6 * e_own.mean) << e_own.mean << " -> " << e_taken.mean;
+  // Measured: mean 0.68% -> 0.41% of the diagonal (1.21% with the own maps before the posed
+  // corners were taken from node maps folded here and there too).
+  EXPECT_LT(e_taken.mean, 0.75 * e_own.mean) << e_own.mean << " -> " << e_taken.mean;
 }
 
 // pose_distance: 0 for a mesh and a copy moved by a similarity, small for one surface

@@ -316,9 +316,12 @@ TEST_F(CorrespondenceTool, SamePoseTakesEveryNodeMapOverOnRealMeshes) {
 // squeezed (in either mesh), and the untangler (the own map pulled toward the take-over under an
 // injectivity barrier) mends them; before it, nodes kept their own maps, a hoof ended in another
 // leg's patch, the pose folded and the set fell back to the common (u, v): 3.85% mean, 35% max.
-// Without the untangler the safety nets still work: the set folds with the pose (posed corners,
-// node maps) whichever maps, and with the new maps whichever corners, but not with both off (each
-// net keeping only the better of its own two tries, this set once ended with exit 4).
+// Without the untangler the safety nets still work: the set folds with the pose and the new maps
+// (6957 uv faces), not with the pose and the old maps, which are kept. Without the maps' net as
+// well, the pose's net gives the pose up for the common (u, v), which folds less (73 faces), and
+// the run ends with exit 4 naming the folded leaves. (Before posed corners were taken from node
+// maps folded here and there, the pose folded with either maps and the common (u, v) with the
+// new maps, so that both nets were needed: none folded with both off.)
 TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBack) {
   if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
     GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
@@ -339,15 +342,22 @@ TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBa
   EXPECT_LT(e["mean_percent"].get<double>(), 1.0);
   EXPECT_LT(e["max_percent"].get<double>(), 20.0);
   EXPECT_TRUE(nlohmann::json::parse(std::ifstream(out + "/dissection.json"))["options"].contains("same_pose"));
-  // Without the untangler: both safety nets.
+  // Without the untangler: the maps' net.
   r = run_tool("qs-dissect", pair + " --no-same-pose-untangle -o " + out + "_n --report " + out + "_n.txt");
   ASSERT_EQ(r.exit, 0) << r.out;
   text = report("_n");
   EXPECT_THAT(text, HasSubstr("one pose (as --same-pose)"));
-  EXPECT_THAT(text, HasSubstr("same pose: not used ("));
+  EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
   EXPECT_THAT(text, HasSubstr("maps: edge+mean-value (fallback: "));
   EXPECT_THAT(text, Not(HasSubstr("bijective: NO")));
-  EXPECT_FALSE(nlohmann::json::parse(std::ifstream(out + "_n/dissection.json"))["options"].contains("same_pose"));
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(out + "_n/dissection.json"))["options"].contains("same_pose"));
+  // Without the maps' net too: the pose's net, and folded leaves named with exit 4.
+  r = run_tool("qs-dissect",
+               pair + " --no-same-pose-untangle --no-fallback-maps -o " + out + "_m --report " + out + "_m.txt");
+  EXPECT_EQ(r.exit, 4) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("uv faces stay flipped or of zero area"));
+  EXPECT_THAT(report("_m"), HasSubstr("same pose: not used ("));
+  EXPECT_THAT(report("_m"), HasSubstr("the common (u,v) fold less"));
 }
 
 // The safety nets keep the pose before the maps: with a hoof one vertex over (401 for 400 above),

@@ -283,7 +283,9 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     // node; its (u, v) by mesh i's map.
     const param::PatchMesh& pm = ps[i].ex.pm;
     const std::vector<Vec2>& uv = ps[i].sp.uv;
-    if (!ps[i].sp.bijective()) continue;
+    // A map folded here and there (a face by a feature the alignment moved) still places the
+    // corners by its other faces; a split that its folds spoil (cuts that cross) falls back to the
+    // common (u, v) as any failed posed split does.
     std::array<Vec2, 4> posed;
     std::vector<Vec3> normal(pm.faces.size());  // unnormalized: the test below scales by the length
     for (size_t k = 0; k < pm.faces.size(); ++k) {

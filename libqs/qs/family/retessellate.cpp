@@ -3,6 +3,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Bounded_normal_change_filter.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Count_stop_predicate.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_cost.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_placement.h>
@@ -21,6 +22,37 @@ namespace qs::family {
 
 namespace {
 
+// 4 sqrt(3) area / (sum of squared edges): 1 for an equilateral triangle, 0 for a flat one.
+template <class P>
+double triangle_quality(const P& a, const P& b, const P& c) {
+  const Vec3 x(a.x(), a.y(), a.z()), y(b.x(), b.y(), b.z()), z(c.x(), c.y(), c.z());
+  const double e = (y - x).squaredNorm() + (z - y).squaredNorm() + (x - z).squaredNorm();
+  return e > 0 ? 2 * std::sqrt(3.0) * (y - x).cross(z - x).norm() / e : 0;
+}
+
+// Refuses a collapse whose new triangles would be worse than kMinQuality and than the worst of
+// those it replaces (Lindstrom-Turk alone leaves needles and caps along ridges).
+struct ShapeFilter {
+  static constexpr double kMinQuality = 0.2;
+  template <typename Profile>
+  boost::optional<typename Profile::Point> operator()(const Profile& profile,
+                                                      boost::optional<typename Profile::Point> op) const {
+    if (!op) return op;
+    const auto& vpm = profile.vertex_point_map();
+    const auto& triangles = profile.triangles();
+    auto it = triangles.begin();
+    double before = 1, after = 1;
+    for (int k = 0; it != triangles.end(); ++it, ++k) {
+      const auto& t = *it;
+      before = std::min(before, triangle_quality(get(vpm, t.v0), get(vpm, t.v1), get(vpm, t.v2)));
+      const bool removed = (k == 0 && profile.left_face_exists()) ||
+                           (k == (profile.left_face_exists() ? 1 : 0) && profile.right_face_exists());
+      if (!removed) after = std::min(after, triangle_quality(get(vpm, t.v0), *op, get(vpm, t.v2)));
+    }
+    if (after < kMinQuality && after < before) return boost::none;
+    return op;
+  }
+};
 
 }  // namespace
 
@@ -54,9 +86,11 @@ Retessellation retessellate(const TriMesh& mesh, const RetessellateOptions& opti
     sm.collect_garbage();
     context.report("retessellate", 0.5);
     SMS::Count_stop_predicate<SM> stop(static_cast<std::size_t>(1.5 * target));  // edges = 1.5 faces
-    SMS::edge_collapse(
-        sm, stop,
-        CGAL::parameters::get_cost(SMS::LindstromTurk_cost<SM>()).get_placement(SMS::LindstromTurk_placement<SM>()));
+    SMS::Bounded_normal_change_filter<ShapeFilter> filter;
+    SMS::edge_collapse(sm, stop,
+                       CGAL::parameters::get_cost(SMS::LindstromTurk_cost<SM>())
+                           .get_placement(SMS::LindstromTurk_placement<SM>())
+                           .filter(filter));
   } else {
     PMP::isotropic_remeshing(faces(sm), edge, sm, CGAL::parameters::number_of_iterations(options.iterations));
   }
