@@ -319,6 +319,7 @@ int main(int argc, char** argv) {
     // One pose (told or found): posed splits (unless they fell back) and the refinement's pull.
     const bool one_pose = opt.same_pose || result.same_pose_detected;
     used.same_pose = one_pose && result.same_pose_fallback.empty();
+    used.same_pose_folded_maps = result.posed_corners_fallback.empty();
     refine_opt.pose_pull = !one_pose ? 0 : pose_pull >= 0 ? pose_pull : qs::maprefine::kDefaultPosePull;
     if (refine_opt.pose_pull > 0 && app.count("--refine-border-iterations") == 0)
       refine_opt.border_iterations = qs::maprefine::kPoseBorderIterations;
@@ -432,7 +433,11 @@ int main(int argc, char** argv) {
              << " at the common (u,v); " << result.same_pose_maps
              << " node maps taken over from the first mesh by nearest points, " << result.same_pose_own_maps
              << " kept their own (folded); of those taken over " << result.same_pose_polished
-             << " polished after the repair, " << result.same_pose_untangled << " untangled from their own\n";
+             << " polished after the repair, " << result.same_pose_untangled << " untangled from their own"
+             << (result.posed_corners_fallback.empty()
+                     ? std::string()
+                     : "; posed corners from unfolded node maps only (" + result.posed_corners_fallback + ")")
+             << "\n";
       else
         text << "same pose: not used (" << result.same_pose_fallback << "; the common (u,v) fold less)\n";
     }

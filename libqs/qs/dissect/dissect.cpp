@@ -97,14 +97,18 @@ double mean_distance(const TriMesh& mesh, const metro::SurfaceDistance& to) {
 
 // dissect_set after its checks and the pose detection: the dissection and its safety nets. A
 // result with folded leaves is dissected again with safer options, in this order of preference:
-// the pose with the options' maps, the pose with edge+mean-value, the common (u,v) with the
-// options' maps, the common (u,v) with edge+mean-value. The first without folds is kept, else
-// the one that folds least (the earlier on a tie). The pose goes before the maps: a camel against
-// its re-tessellation with a hoof as a feature, 10 choices of its landmarks, folded with the pose
-// and geodesic+cotan in 5 of them; with the pose and edge+mean-value 2 of those 5 did not fold
-// (0.45-0.48% mean error), where the common (u,v) gave 4.1% (legs swapped, 35% max). Since the
-// seed loops of one pose follow the first mesh's (SetDissector::seed_posed), 8 of the 10 keep the
-// pose with geodesic+cotan and the other 2 with edge+mean-value.
+// the pose with the options' maps, the pose with edge+mean-value, the same two with posed corners
+// from unfolded node maps only, the common (u,v) with the options' maps, the common (u,v) with
+// edge+mean-value. The first without folds is kept, else the one that folds least (the
+// earlier on a tie). The pose goes before the maps: a camel against its re-tessellation with a
+// hoof as a feature, 10 choices of its landmarks, folded with the pose and geodesic+cotan in 5 of
+// them; with the pose and edge+mean-value 2 of those 5 did not fold (0.45-0.48% mean error), where
+// the common (u,v) gave 4.1% (legs swapped, 35% max). Since the seed loops of one pose follow the
+// first mesh's (SetDissector::seed_posed), 8 of the 10 keep the pose with geodesic+cotan and the
+// other 2 with edge+mean-value. Posed corners from folded node maps lower the error on most sets
+// (DissectOptions::same_pose_folded_maps) but folded one of those 10 choices of the camel with
+// either maps (250 and 1444 uv faces; the common (u,v) then swapped legs: 4.3% mean), which does
+// not fold without them (0.46%).
 DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
                                 const Context& context) {
   auto folded = [&meshes](const DissectionSet& s, std::string& where) {
@@ -120,20 +124,27 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
   };
   struct Attempt {
     bool pose, options_maps;  // options_maps false: edge paths and mean-value weights
+    bool folded_maps;         // posed corners from folded node maps too (with pose)
     long folded = 0;
     std::string where;
   };
   const bool pose = options.same_pose && meshes.size() > 1;
   const bool maps_net = options.fallback_maps && (options.geodesic_seed_curves || options.intrinsic_cotan);
-  std::vector<Attempt> plan{{pose, true, 0, {}}};
-  if (maps_net) plan.push_back({pose, false, 0, {}});
-  if (pose) plan.push_back({false, true, 0, {}});
-  if (pose && maps_net) plan.push_back({false, false, 0, {}});
+  const bool corners_net = pose && options.same_pose_folded_maps;
+  std::vector<Attempt> plan{{pose, true, options.same_pose_folded_maps}};
+  if (maps_net) plan.push_back({pose, false, options.same_pose_folded_maps});
+  if (corners_net) plan.push_back({pose, true, false});
+  if (corners_net && maps_net) plan.push_back({pose, false, false});
+  if (pose) plan.push_back({false, true, false});
+  if (pose && maps_net) plan.push_back({false, false, false});
   const std::string options_maps = maps_name(options.geodesic_seed_curves, options.intrinsic_cotan);
   auto describe = [&](const Attempt& a) {
     const std::string maps = a.options_maps ? options_maps : "edge+mean-value";
     if (!pose) return maps;
-    return (a.pose ? "the pose (posed corners, node maps)" : std::string("the common (u,v)")) + " and " + maps;
+    if (!a.pose) return "the common (u,v) and " + maps;
+    return std::string(a.folded_maps || !corners_net ? "the pose (posed corners, node maps)"
+                                                     : "the pose with corners from unfolded node maps") +
+           " and " + maps;
   };
   DissectionSet out;
   size_t best = 0;
@@ -141,6 +152,7 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
     Attempt& a = plan[k];
     DissectOptions o = options;
     o.same_pose = a.pose && options.same_pose;
+    o.same_pose_folded_maps = a.folded_maps;
     if (!a.options_maps) o.geodesic_seed_curves = o.intrinsic_cotan = false;
     if (k > 0)
       context.info("dissection: " + std::to_string(plan[best].folded) + " folded uv faces with " +
@@ -159,13 +171,25 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
   auto folds = [](const Attempt& a) { return std::to_string(a.folded) + " folded uv faces"; };
   const Attempt& used = plan[best];
   if (pose && !used.pose) {
-    out.same_pose_fallback = folds(plan[0]) + " with the pose (posed corners, node maps) (" + plan[0].where + ")";
-    if (maps_net) out.same_pose_fallback += ", " + folds(plan[1]) + " with the pose and edge+mean-value";
+    std::string why;
+    for (const Attempt& a : plan)
+      if (a.pose)
+        why +=
+            (why.empty() ? "" : ", ") + folds(a) + " with " + describe(a) + (why.empty() ? " (" + a.where + ")" : "");
+    out.same_pose_fallback = why;
   }
-  if (!used.options_maps) {
-    const Attempt& with_maps = plan[best - 1];  // the same pose, the options' maps
-    out.maps_fallback = folds(with_maps) + " with " + options_maps + " (" + with_maps.where + ")";
-  }
+  // The tries that differ from the result in one option only, in the plan's order.
+  auto find = [&](bool options_maps, bool folded_maps) -> const Attempt* {
+    for (const Attempt& a : plan)
+      if (a.pose == used.pose && a.options_maps == options_maps && a.folded_maps == folded_maps) return &a;
+    return nullptr;
+  };
+  if (!used.options_maps)
+    if (const Attempt* with_maps = find(true, used.folded_maps))
+      out.maps_fallback = folds(*with_maps) + " with " + options_maps + " (" + with_maps->where + ")";
+  if (used.pose && corners_net && !used.folded_maps)
+    if (const Attempt* relaxed = find(used.options_maps, true))
+      out.posed_corners_fallback = folds(*relaxed) + " with corners from folded node maps too (" + relaxed->where + ")";
   return out;
 }
 

@@ -155,6 +155,11 @@ struct DissectOptions {
   /// own map. On by default (README, "Same pose": the bodies against their own re-tessellation
   /// 0.19 / 0.17% -> 0.17 / 0.15% mean).
   bool same_pose_maps = true;
+  /// With same_pose: a mesh whose node map folds here and there (a face by a feature the
+  /// alignment moved) still places its posed corners by its other faces. false: such a node keeps
+  /// the common (u, v) for its split, as before 2026-11-25; the safety nets try that when the
+  /// set ends with folded leaves (DissectionSet::posed_corners_fallback).
+  bool same_pose_folded_maps = true;
   /// With same_pose_maps: a node whose taken-over map still folds after the repair is untangled
   /// by this function instead of keeping its own map (qs::maprefine::untangler(); qs-dissect's
   /// default): from the own map (stretch-minimized when it folds), every free vertex pulled toward
@@ -321,6 +326,10 @@ struct DissectionSet {
   /// Empty, or why the set was dissected again with the common (u, v) (DissectOptions::same_pose:
   /// the posed result ended with folded leaves, the common one folds less).
   std::string same_pose_fallback;
+  /// Empty, or why the posed corners were taken from unfolded node maps only
+  /// (DissectOptions::same_pose_folded_maps off by the safety nets): e.g. "250 folded uv faces
+  /// with corners from folded node maps too (patch 1.4.4.3.0.0.1 of camel_r.obj)".
+  std::string posed_corners_fallback;
   /// DissectOptions::same_pose_detect: the set's pose_distance (-1: not measured) and whether it
   /// turned same_pose on.
   double pose_distance = -1;

@@ -40,6 +40,8 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
                     {"area_extra_depth", options.area_extra_depth},
                     {"protrusion_stretch", options.protrusion_stretch}};
   if (options.same_pose) doc["options"]["same_pose"] = true;  // written only when on
+  // Written only when the safety nets turned it off (DissectionSet::posed_corners_fallback).
+  if (options.same_pose && !options.same_pose_folded_maps) doc["options"]["same_pose_folded_maps"] = false;
   if (meshes.empty()) return json_strict::dump(doc, 2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();

@@ -286,6 +286,7 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     // A map folded here and there (a face by a feature the alignment moved) still places the
     // corners by its other faces; a split that its folds spoil (cuts that cross) falls back to the
     // common (u, v) as any failed posed split does.
+    if (!opt_.same_pose_folded_maps && !ps[i].sp.bijective()) continue;
     std::array<Vec2, 4> posed;
     std::vector<Vec3> normal(pm.faces.size());  // unnormalized: the test below scales by the length
     for (size_t k = 0; k < pm.faces.size(); ++k) {
