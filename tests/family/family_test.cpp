@@ -270,6 +270,8 @@ TEST(Retessellate, OptionsOutOfRange) {
   qs::family::RetessellateOptions o;
   o.faces = 10;
   EXPECT_THROW(qs::family::retessellate(in, o), qs::InvalidInput);
+  o.faces = qs::family::kMaxFaces + 2;
+  EXPECT_THROW(qs::family::retessellate(in, o), qs::InvalidInput);
   o.faces = 0;
   o.iterations = 0;
   EXPECT_THROW(qs::family::retessellate(in, o), qs::InvalidInput);

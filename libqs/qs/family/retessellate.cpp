@@ -57,8 +57,12 @@ struct ShapeFilter {
 }  // namespace
 
 Retessellation retessellate(const TriMesh& mesh, const RetessellateOptions& options, const Context& context) {
-  if (options.faces != 0 && options.faces < 100)
-    throw InvalidInput("retessellate: faces = " + std::to_string(options.faces) + " (expected 0 or at least 100)");
+  if (options.faces != 0 && (options.faces < 100 || options.faces > kMaxFaces))
+    throw InvalidInput("retessellate: faces = " + std::to_string(options.faces) + " (expected 0 or 100.." +
+                       std::to_string(kMaxFaces) + ")");
+  if (options.faces == 0 && mesh.num_faces() > kMaxFaces)
+    throw InvalidInput("retessellate: the mesh has " + std::to_string(mesh.num_faces()) +
+                       " faces; give --faces (at most " + std::to_string(kMaxFaces) + ")");
   if (options.iterations < 1 || options.iterations > 20)
     throw InvalidInput("retessellate: iterations = " + std::to_string(options.iterations) + " is outside [1, 20]");
   using K = CGAL::Exact_predicates_inexact_constructions_kernel;
