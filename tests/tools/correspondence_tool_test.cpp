@@ -45,6 +45,13 @@ class CorrespondenceTool : public ::testing::Test {
     EXPECT_EQ(run_tool("qs-family", args + " --quiet").exit, 0);
     return src + " " + out + "_r.obj --landmarks " + out + ".landmarks.json " + out + "_r.landmarks.json --quiet";
   }
+  // camel_self_pair dissected at the defaults into `out` (exit 0 expected): its report.
+  std::string dissect_camel(const std::string& out, const std::string& features) const {
+    const RunResult r =
+        run_tool("qs-dissect", camel_self_pair(out, features) + " -o " + out + " --report " + out + ".txt");
+    EXPECT_EQ(r.exit, 0) << r.out;
+    return read_text(out + ".txt");
+  }
   // The dissection `out` of camel_self_pair against the exact map: qs-metro's "dissection" figures.
   static nlohmann::json camel_error(const std::string& out) {
     const RunResult r = run_tool("qs-metro", "--correspondence " + out + " --map - " + out +
@@ -367,10 +374,7 @@ TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBa
 TEST_F(CorrespondenceTool, SamePoseTriesCornersFromUnfoldedMapsBeforeGivingUpThePose) {
   if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
     GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
-  const std::string out = d() + "/camel", pair = camel_self_pair(out, R"({"fa": 744, "fb": 402})");
-  const RunResult r = run_tool("qs-dissect", pair + " -o " + out + " --report " + out + ".txt");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  const std::string text = read_text(out + ".txt");
+  const std::string out = d() + "/camel", text = dissect_camel(out, R"({"fa": 744, "fb": 402})");
   EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
   EXPECT_THAT(text, HasSubstr("; posed corners from unfolded node maps only ("));
   EXPECT_THAT(text, HasSubstr("maps: geodesic+cotan\n"));
@@ -388,10 +392,7 @@ TEST_F(CorrespondenceTool, SamePoseTriesCornersFromUnfoldedMapsBeforeGivingUpThe
 TEST_F(CorrespondenceTool, SamePoseFallsBackToOldMapsBeforeGivingUpThePose) {
   if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
     GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
-  const std::string out = d() + "/camel", pair = camel_self_pair(out, R"({"fa": 743, "fb": 401})");
-  const RunResult r = run_tool("qs-dissect", pair + " -o " + out + " --report " + out + ".txt");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  const std::string text = read_text(out + ".txt");
+  const std::string out = d() + "/camel", text = dissect_camel(out, R"({"fa": 743, "fb": 401})");
   EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
   EXPECT_THAT(text, HasSubstr("maps: edge+mean-value (fallback: "));
   EXPECT_THAT(text, HasSubstr("folded uv faces with geodesic+cotan (patch "));
