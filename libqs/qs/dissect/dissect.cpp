@@ -131,12 +131,12 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
   const bool pose = options.same_pose && meshes.size() > 1;
   const bool maps_net = options.fallback_maps && (options.geodesic_seed_curves || options.intrinsic_cotan);
   const bool corners_net = pose && options.same_pose_folded_maps;
-  std::vector<Attempt> plan{{pose, true, options.same_pose_folded_maps}};
-  if (maps_net) plan.push_back({pose, false, options.same_pose_folded_maps});
-  if (corners_net) plan.push_back({pose, true, false});
-  if (corners_net && maps_net) plan.push_back({pose, false, false});
-  if (pose) plan.push_back({false, true, false});
-  if (pose && maps_net) plan.push_back({false, false, false});
+  std::vector<Attempt> plan{{pose, true, options.same_pose_folded_maps, 0, {}}};
+  if (maps_net) plan.push_back({pose, false, options.same_pose_folded_maps, 0, {}});
+  if (corners_net) plan.push_back({pose, true, false, 0, {}});
+  if (corners_net && maps_net) plan.push_back({pose, false, false, 0, {}});
+  if (pose) plan.push_back({false, true, false, 0, {}});
+  if (pose && maps_net) plan.push_back({false, false, false, 0, {}});
   const std::string options_maps = maps_name(options.geodesic_seed_curves, options.intrinsic_cotan);
   auto describe = [&](const Attempt& a) {
     const std::string maps = a.options_maps ? options_maps : "edge+mean-value";

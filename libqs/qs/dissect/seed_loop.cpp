@@ -894,6 +894,16 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
   return cur;
 }
 
+double polyline_distance(const Vec3& p, const std::vector<Vec3>& line) {
+  double best = (line.front() - p).squaredNorm();
+  for (size_t k = 0; k + 1 < line.size(); ++k) {
+    const Vec3 d = line[k + 1] - line[k];
+    const double t = std::clamp((p - line[k]).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+    best = std::min(best, (line[k] + t * d - p).squaredNorm());
+  }
+  return std::sqrt(best);
+}
+
 SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
                            const std::array<std::vector<Vec3>, 4>& guides, double sigma,
                            const std::vector<int>& avoid) {
@@ -912,16 +922,7 @@ SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
   for (int i = 0; i < 4; ++i) {
     const std::vector<Vec3>& guide = guides[i];
     if (guide.empty()) throw InvalidInput("trace_guided_loop: guide " + std::to_string(i) + " is empty");
-    auto to_guide = [&](const Vec3& p) {
-      double best = kInf;
-      for (size_t k = 0; k + 1 < guide.size(); ++k) {
-        const Vec3 d = guide[k + 1] - guide[k];
-        const double t = std::clamp((p - guide[k]).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-        best = std::min(best, (guide[k] + t * d - p).squaredNorm());
-      }
-      if (guide.size() == 1) best = (guide[0] - p).squaredNorm();
-      return std::sqrt(best);
-    };
+    auto to_guide = [&](const Vec3& p) { return polyline_distance(p, guide); };
     // Dijkstra from seeds[i] to seeds[i+1] (ties by vertex id: deterministic).
     const int a = seeds[i], b = seeds[(i + 1) % 4];
     std::fill(dist.begin(), dist.end(), kInf);

@@ -54,6 +54,10 @@ struct SideConstraint {
 SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& avoid,
                            const std::vector<SideConstraint>& sides, const Context& context = {});
 
+/// The distance from `p` to the polyline `line` (its segments; one point: that point).
+/// \pre line not empty.
+double polyline_distance(const Vec3& p, const std::vector<Vec3>& line);
+
 /// A seed loop that follows four guide curves (DissectOptions::same_pose: another mesh's loop,
 /// moved into this mesh's pose): path i runs from seeds[i] to seeds[(i+1)%4] along mesh edges,
 /// the shortest under edge costs length x (1 + (d / sigma)^2), d the distance from the edge's

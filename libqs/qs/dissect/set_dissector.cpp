@@ -168,21 +168,12 @@ namespace {
 // The mean distance between two sets of four curves (3D polylines, curve k against curve k),
 // both ways: how far one seed loop runs from another.
 double curves_apart(const std::array<std::vector<Vec3>, 4>& a, const std::array<std::vector<Vec3>, 4>& b) {
-  auto to_polyline = [](const Vec3& p, const std::vector<Vec3>& line) {
-    double best = (line.front() - p).squaredNorm();
-    for (size_t k = 0; k + 1 < line.size(); ++k) {
-      const Vec3 d = line[k + 1] - line[k];
-      const double t = std::clamp((p - line[k]).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-      best = std::min(best, (line[k] + t * d - p).squaredNorm());
-    }
-    return std::sqrt(best);
-  };
   double sum = 0;
   int n = 0;
   for (int k = 0; k < 4; ++k) {
     if (a[k].empty() || b[k].empty()) return std::numeric_limits<double>::infinity();
-    for (const Vec3& p : a[k]) sum += to_polyline(p, b[k]), ++n;
-    for (const Vec3& p : b[k]) sum += to_polyline(p, a[k]), ++n;
+    for (const Vec3& p : a[k]) sum += polyline_distance(p, b[k]), ++n;
+    for (const Vec3& p : b[k]) sum += polyline_distance(p, a[k]), ++n;
   }
   return sum / n;
 }
