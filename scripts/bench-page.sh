@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# Runs the benchmarks and regenerates docs/benchmarks.md from what they print.
+#
+#   usage: scripts/bench-page.sh [--quick] [--no-build] [MESH_DIR]   (default MESH_DIR ../shared/meshes)
+#
+#   --quick     the fast set (a few minutes on 2 cores): reading, dissection (single meshes, sets,
+#               one generated family), remesh, bake, morph and merge. Without it the page also gets
+#               the defaults over every shared mesh, the correspondence benchmarks and the DFI
+#               benchmark (much longer: about an hour on 2 cores).
+#   --no-build  use the programs already in ./build (default: build the targets it needs first).
+#
+# Each benchmark's full output is kept in out/bench-page/<name>.txt; the page shows every line that
+# states a target, and each output in full. A benchmark that fails is listed as failed, with the
+# tail of its output, and the script exits 1 after writing the page.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+
+quick=0
+build=1
+meshes=../shared/meshes
+for a in "$@"; do
+  case "$a" in
+    --quick) quick=1 ;;
+    --no-build) build=0 ;;
+    -h|--help) sed -n 2,15p "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -*) echo "bench-page.sh: unknown option $a (try --help)" >&2; exit 1 ;;
+    *) meshes=$a ;;
+  esac
+done
+[ -d "$meshes" ] || { echo "bench-page.sh: $meshes is not a folder of meshes" >&2; exit 3; }
+
+out=out/bench-page
+page=docs/benchmarks.md
+bench=build/bench
+mkdir -p "$out"
+
+quick_targets=(qs-bench-io qs-bench-dissect qs-bench-dissect-set qs-bench-family-sets qs-bench-remesh
+               qs-bench-bake qs-bench-morph qs-bench-merge qs-dissect)
+full_targets=(qs-bench-defaults qs-bench-dfi qs-family qs-metro qs-remesh)
+targets=("${quick_targets[@]}")
+[ "$quick" = 1 ] || targets+=("${full_targets[@]}")
+if [ "$build" = 1 ]; then
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null || exit 1
+  cmake --build build -j"$(nproc)" --target "${targets[@]}" || exit 1
+fi
+
+# name|title|what it measures|command (run from the repository root)
+runs=(
+  "io|Reading and validation|Read + validate every shared mesh, best of 5 runs.|$bench/qs-bench-io $meshes"
+  "dissect|Dissection of single meshes|The default dissection of every shared mesh, against one sparse solve of the whole mesh (the floor: every tree level solves about the whole mesh once).|$bench/qs-bench-dissect $meshes"
+  "dissect-set|Dissection of sets|Meshes dissected together (union quinary tree, feature alignment); one mesh repeated 1, 2, 4, 8 times.|$bench/qs-bench-dissect-set $meshes"
+  "family-sets|Generated families|Families of 1-16 generated shapes (8000 faces each) dissected together, best of 3; t(N)/(N t(1)) = 1 is linear.|$bench/qs-bench-family-sets 1"
+  "remesh|Remesh|Uniform levels 3-6, adaptive, and the default even level 5 of six meshes (area cap 0.15); error = Metro two-sided mean and max, % of the bounding-box diagonal.|$bench/qs-bench-remesh $meshes"
+  "bake|Normal maps|Bake time per tile size (max_planck_11k, 34 patches), and the shading check on the heads: mean angle between the shaded and the original normal with and without the map.|$bench/qs-bench-bake $meshes"
+  "morph|Morph output|100 frames of a 49,688-vertex morph written as OBJ and as binary PLY; a GLB with 8 morph targets; a 4096² frame normal map.|$bench/qs-bench-morph"
+  "merge|Exact merge|The four pairs dissected at the defaults, then merged (qs-merge): sizes, crossings, slivers, time on 1 and 2 threads, exactness checks.|bash bench/merge_pairs.sh $meshes out/bench-page/merge"
+)
+if [ "$quick" = 0 ]; then
+  runs+=(
+    "defaults|Defaults on every shared mesh|The default dissection, then the default remesh at levels 4 and 5 and area-sized tiles: patches, level-5 error, small angles, vertex and texel spreads.|$bench/qs-bench-defaults $meshes default"
+    "correspondence|Correspondence|Every pair dissected with qs-dissect as a user would, measured by qs-metro --correspondence against exact ground truth (% of B's diagonal), beside the similarity + nearest-point baseline.|bash bench/correspondence.sh $meshes out/bench-page/correspondence"
+    "real-self-pairs|Real meshes against their own re-tessellation|18 shared meshes re-tessellated keeping their shape, landmarks at the principal axes' extremes; the ideal map is the identity.|env RETESS_ARGS=--keep-shape bash bench/real_self_pairs.sh $meshes out/bench-page/real-self-pairs"
+    "dfi|Distance-field morph|qs-dfi's correspondence and frames at grid 150 on six pairs of any genus.|$bench/qs-bench-dfi --methods warp,blend"
+  )
+fi
+
+failed=()
+for r in "${runs[@]}"; do
+  IFS='|' read -r name title what cmd <<< "$r"
+  echo "bench-page: $name: $cmd" >&2
+  start=$(date +%s)
+  # shellcheck disable=SC2086
+  if $cmd > "$out/$name.txt" 2>&1; then
+    echo "$(( $(date +%s) - start ))" > "$out/$name.seconds"
+  else
+    echo "failed" > "$out/$name.seconds"
+    failed+=("$name")
+  fi
+done
+
+cpu=$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | sed 's/.*: //')
+mode=$([ "$quick" = 1 ] && echo "the quick set (\`--quick\`)" || echo "the full set")
+{
+  echo "# Benchmarks"
+  echo
+  echo "<!-- Generated by scripts/bench-page.sh; edit the script, not this page. -->"
+  echo "This page is generated by \`bash scripts/bench-page.sh\` from what the benchmark programs print"
+  echo "($mode; \`--quick\` runs the fast part). Release build, ${cpu:-unknown CPU}, $(nproc) cores;"
+  echo "times are wall clock and vary with the machine's load. Programs and scripts:"
+  echo "[developers](developers.md#benchmarks)."
+  echo
+  echo "## Targets"
+  echo
+  echo "Every line of the outputs below that states a target:"
+  echo
+  echo '```'
+  for r in "${runs[@]}"; do
+    IFS='|' read -r name title what cmd <<< "$r"
+    grep -i 'target' "$out/$name.txt" 2>/dev/null | grep -v '^ *$' | sed "s/^ */$name: /"
+  done
+  echo '```'
+  for r in "${runs[@]}"; do
+    IFS='|' read -r name title what cmd <<< "$r"
+    echo
+    echo "## $title"
+    echo
+    echo "$what"
+    echo
+    secs=$(cat "$out/$name.seconds")
+    if [ "$secs" = failed ]; then
+      echo "**Failed** (\`$cmd\`); the end of its output:"
+      echo
+      echo '```'
+      tail -n 20 "$out/$name.txt"
+      echo '```'
+    else
+      echo "\`$cmd\` ($secs s):"
+      echo
+      echo '```'
+      # Progress lines of the tools the scripts run are left out; the figures stay.
+      grep -v -E '^(== |bench-page:)' "$out/$name.txt"
+      echo '```'
+    fi
+  done
+} > "$page.tmp" && mv "$page.tmp" "$page"
+
+echo "bench-page: wrote $page (outputs in $out)" >&2
+if [ "${#failed[@]}" -gt 0 ]; then
+  echo "bench-page: failed: ${failed[*]}" >&2
+  exit 1
+fi
