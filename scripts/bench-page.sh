@@ -153,10 +153,18 @@ fi
     else
       echo "\`$cmd\` ($secs s):"
       echo
-      echo '```'
-      # Progress lines of the tools the scripts run are left out; the figures stay.
-      grep -v -E '^(== |bench-page:)' "$out/$name.txt"
-      echo '```'
+      # Progress lines of the tools the scripts run are left out; the figures stay. Markdown
+      # tables that a script prints are shown as tables, the other lines as printed.
+      text=$(grep -v -E '^(== |bench-page:)' "$out/$name.txt" | grep -v '^|')
+      if [ -n "$text" ]; then
+        echo '```'
+        echo "$text"
+        echo '```'
+      fi
+      if grep -q '^|' "$out/$name.txt"; then
+        echo
+        grep '^|' "$out/$name.txt"
+      fi
     fi
   done
 } > "$page.tmp" && mv "$page.tmp" "$page"
