@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/mesh/connectivity.h"
 #include "qs/remesh/chart_sampler.h"
 #include "qs/remesh/quality.h"
@@ -410,8 +411,6 @@ double sin_min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   const double denom2 = lab <= lbc && lab <= lca ? lbc * lca : lbc <= lca ? lab * lca : lab * lbc;
   return denom2 > 0 ? twice_area / std::sqrt(denom2) : 0.0;
 }
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // A remesh vertex strictly inside its patch's square (not a base vertex, not on a side).
 bool patch_interior(const SemiRegularConnectivity& c, int v) {
