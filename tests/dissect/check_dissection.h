@@ -7,14 +7,13 @@
 #include <map>
 #include <set>
 
+#include "qs/core/geometry2d.h"
 #include "qs/dissect/dissection.h"
 #include "qs/mesh/validate.h"
 
 namespace qs::testing {
 
 using qs::dissect::Dissection;
-
-inline double cross2(const qs::Vec2& a, const qs::Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // Checks every invariant of a dissection, computed independently of the implementation.
 inline void check_dissection(const Dissection& d, int input_faces) {

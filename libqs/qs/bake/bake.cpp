@@ -1,15 +1,13 @@
 #include "qs/bake/bake.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
-#include <mutex>
 #include <random>
 #include <string>
-#include <thread>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
+#include "qs/core/parallel.h"
 
 namespace qs::bake {
 
@@ -70,8 +68,6 @@ Vec3 OriginalNormals::at(const ChartSampler::Location& where) const {
 }
 
 namespace {
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // Barycentric weights of q in triangle (a, b, c) (twice-signed-area form).
 Vec3 barycentric(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& q) {
@@ -165,7 +161,8 @@ BakeResult bake_normal_map(const ChartSampler& sampler, const remesh::SemiRegula
       }
     }
   };
-  auto bake_patch = [&](int p, std::vector<char>& covered) {
+  auto bake_patch = [&](int p) {
+    std::vector<char> covered;
     const int S = L.tile_side(p);
     const double d = S - 1;
     const int x0 = L.tile_x(p), y0 = L.tile_y(p);
@@ -248,35 +245,8 @@ BakeResult bake_normal_map(const ChartSampler& sampler, const remesh::SemiRegula
     fill_gutter(p);
   };
 
-  // Patches in parallel; the calling thread is worker 0 and the only one that reports.
-  int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::max(1, std::min(threads, np));
-  std::atomic<int> next{0}, done{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto worker = [&](int id) {
-    std::vector<char> covered;
-    try {
-      for (int p; !failed && (p = next++) < np;) {
-        if (id == 0) context.check_cancel();
-        bake_patch(p, covered);
-        const int k = ++done;
-        if (id == 0) context.report("bake", static_cast<double>(k) / np);
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(worker, i);
-  worker(0);
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-
-  context.report("bake", 1.0);
+  // Patches in parallel; the calling thread reports.
+  parallel_for(np, options.threads, context, bake_patch, "bake");
   return r;
 }
 

@@ -37,7 +37,7 @@ struct BakeOptions {
   int gutter = 4;          ///< texels around each tile, filled by extending the tile's edge texels
   NormalSpace space = NormalSpace::Tangent;
   GreenChannel green = GreenChannel::OpenGL;  ///< tangent space only
-  int threads = 0;         ///< 0: std::thread::hardware_concurrency()
+  int threads = 0;         ///< 0: Context::threads
   /// Chart vertices [0, original_vertices) are the input mesh's own, the others were inserted by
   /// the cuts (qs-dissect keeps the input's vertices first: DissectedMesh::input_vertices). See
   /// OriginalNormals. -1: every chart vertex keeps its angle-weighted normal.

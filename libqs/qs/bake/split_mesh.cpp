@@ -4,6 +4,7 @@
 #include <string>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 
 namespace qs::bake {
 
@@ -25,8 +26,6 @@ Vec2 side_point(int k, double t) {
 }
 
 const Vec2 kCorner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 }  // namespace
 

@@ -6,6 +6,7 @@
 #include <limits>
 #include <vector>
 
+#include "qs/core/parallel.h"
 #include "qs/dfi/sdf.h"
 
 namespace qs::dfi {
@@ -110,7 +111,7 @@ Displacement bone_displacement(const std::vector<Bone>& bones, const Grid& geome
   frames.reserve(bones.size());
   for (const Bone& b : bones) frames.push_back(frame_of(b, s));
   const int nx = geometry.dims[0], ny = geometry.dims[1], nz = geometry.dims[2];
-  parallel_chunks(nz, threads, [&](int k) {
+  parallel_for(nz, threads, Context{}, [&](int k) {
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         const Vec3 x = geometry.point(i, j, k);

@@ -1,43 +1,16 @@
 #include "qs/dfi/sdf.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
-#include <thread>
 #include <tuple>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/metro/metro.h"
 
 namespace qs::dfi {
-
-void parallel_chunks(int chunks, int threads, const std::function<void(int)>& body) {
-  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  threads = std::max(1, std::min(threads, chunks));
-  if (threads == 1) {
-    for (int c = 0; c < chunks; ++c) body(c);
-    return;
-  }
-  std::atomic<int> next{0};
-  std::exception_ptr error;
-  std::atomic<bool> failed{false};
-  auto worker = [&] {
-    for (int c; !failed && (c = next++) < chunks;) {
-      try {
-        body(c);
-      } catch (...) {
-        if (!failed.exchange(true)) error = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-}
 
 namespace {
 
@@ -141,7 +114,7 @@ Grid signed_distance(const TriMesh& mesh, const Grid& domain, const SdfOptions& 
   // Exact closest points, in parallel over z-slabs (each sample written once).
   std::vector<Eigen::Vector3f> closest(n, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   std::vector<float> dist(n, std::numeric_limits<float>::infinity());
-  parallel_chunks(nz, options.threads, [&](int k) {
+  parallel_for(nz, options.threads, ctx, [&](int k) {
     ctx.check_cancel();
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {

@@ -22,7 +22,7 @@ namespace qs::dfi {
 
 struct SdfOptions {
   int band = 3;     ///< cells around each triangle with exact distances; 0: exact everywhere
-  int threads = 0;  ///< 0: hardware concurrency; the result does not depend on it
+  int threads = 0;  ///< 0: Context::threads; the result does not depend on it
 };
 
 /// Samples the signed distance of `mesh` on `domain`'s samples (domain.values is ignored).
@@ -34,9 +34,5 @@ Grid signed_distance(const TriMesh& mesh, const Grid& domain, const SdfOptions& 
 
 /// The inside/outside classification alone (true = inside), as used by signed_distance().
 std::vector<char> inside_mask(const TriMesh& mesh, const Grid& domain);
-
-/// Runs body(chunk) for chunk in [0, chunks) on up to `threads` threads (0: hardware concurrency).
-/// Work must write disjoint outputs per chunk, so the result never depends on the thread count.
-void parallel_chunks(int chunks, int threads, const std::function<void(int)>& body);
 
 }  // namespace qs::dfi

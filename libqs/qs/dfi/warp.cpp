@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/dfi/sdf.h"
 
 namespace qs::dfi {
@@ -178,7 +179,7 @@ Grid warped_field_newton(const Grid& sdf, const Displacement& d, int threads) {
   Grid out = sdf;
   const int nx = sdf.dims[0], ny = sdf.dims[1], nz = sdf.dims[2];
   const double tol2 = 1e-8 * sdf.spacing * sdf.spacing;
-  parallel_chunks(nz, threads, [&](int k) {
+  parallel_for(nz, threads, Context{}, [&](int k) {
     Eigen::Matrix3d grad;
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
@@ -201,7 +202,7 @@ Grid warped_field(const Grid& sdf, const Displacement& d, double s, int threads)
   Grid out = sdf;
   if (s == 0) return out;
   const int nx = sdf.dims[0], ny = sdf.dims[1], nz = sdf.dims[2];
-  parallel_chunks(nz, threads, [&](int k) {
+  parallel_for(nz, threads, Context{}, [&](int k) {
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         const Vec3 y = sdf.point(i, j, k);

@@ -4,19 +4,18 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cstdint>
-#include <exception>
 #include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <unordered_set>
 #include <utility>
 #include <vector>
 
 #include "qs/core/context.h"
+#include "qs/core/geometry2d.h"
+#include "qs/core/parallel.h"
 #include "qs/dissect/cut_mesh.h"
 #include "qs/dissect/dissection.h"
 #include "qs/dissect/geodesic_loop.h"
@@ -39,7 +38,6 @@ inline std::uint64_t edge_key(int a, int b) {
   return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint64_t>(std::max(a, b));
 }
 
-inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 inline double signed_area(const Vec2& a, const Vec2& b, const Vec2& c) { return 0.5 * cross2(b - a, c - a); }
 
 /// Among n triangles with uv corners uv_of(i) (a std::array<Vec2, 3>), the positive one that holds
@@ -52,15 +50,7 @@ std::pair<int, Vec3> best_uv_face(const Vec2& q, size_t n, UvOf&& uv_of) {
   double best_min = -std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < n; ++i) {
     const std::array<Vec2, 3> t = uv_of(i);
-    const Vec2 &a = t[0], &b = t[1], &c = t[2];
-    const double area = cross2(b - a, c - a);
-    if (!(area > 0)) continue;
-    const Vec3 bary(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
-    if (bary.minCoeff() > best_min) {
-      best_min = bary.minCoeff();
-      best_bary = bary;
-      best = static_cast<int>(i);
-    }
+    try_uv_triangle(t[0], t[1], t[2], q, static_cast<int>(i), best, best_bary, best_min);
   }
   return {best, best_bary};
 }
@@ -90,31 +80,6 @@ enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature 
 constexpr size_t kParallelFaces = 8000;
 /// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
 constexpr int kRepairRounds = 12;
-
-/// Runs f(i) for i in [0, n) on up to hardware_concurrency() threads (one thread when !parallel:
-/// starting threads costs more than small work). Every i runs; then the exception of the lowest i
-/// that threw is rethrown, so errors do not depend on timing.
-template <class F>
-void parallel_for(size_t n, F&& f, bool parallel = true) {
-  std::vector<std::exception_ptr> errors(n);
-  std::atomic<size_t> next{0};
-  auto work = [&] {
-    for (size_t i; (i = next++) < n;) {
-      try {
-        f(i);
-      } catch (...) {
-        errors[i] = std::current_exception();
-      }
-    }
-  };
-  const size_t threads = parallel ? std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), n) : 1;
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  for (const auto& e : errors)
-    if (e) std::rethrow_exception(e);
-}
 
 // The per-node result of one mesh: its patch extracted and parameterized (after alignment).
 struct Param {
@@ -288,9 +253,6 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
                             int rounds);
 /// A stretch-minimized, bijective map of a leaf, or an empty map when none is better (leaf_repair.cpp).
 param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& context);
-
-/// Distance from q to the segment ab (split_choice.cpp).
-double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b);
 
 /// Whether four inner corners make a quinary split: inside the unit square by at least `margin`,
 /// a convex counter-clockwise quad, and no two of the 8 cuts (outer corner i to inner corner i,

@@ -86,7 +86,7 @@ void SetDissector::align(const std::vector<Node>& nodes, std::vector<Param>& ps,
   for (size_t g : moving)
     for (size_t k = 0; k < nf && singletons; ++k)
       singletons = k == static_cast<size_t>(roots[g]) || find(static_cast<int>(k)) != roots[g];
-  parallel_for(nm, [&](size_t i) {
+  parallel_for(nm, faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t i) {
     Param& p = ps[i];
     std::vector<Vec2> from;
     for (size_t g : moving) from.push_back(rep[i][g]);
@@ -171,7 +171,7 @@ void SetDissector::align(const std::vector<Node>& nodes, std::vector<Param>& ps,
     }
     p.sp = std::move(warped);
     p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
-  }, faces >= kParallelFaces);
+  });
   for (size_t i = 0; i < nm; ++i) {
     tn.warp_events += events[i];
     tn.pinned_solves += pinned_solves[i];

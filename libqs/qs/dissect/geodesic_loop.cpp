@@ -10,12 +10,11 @@
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/dissect/cut_mesh.h"
 
 namespace qs::dissect {
 namespace {
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 int rotate_cw(const CutMesh& cm, int h) { return CutMesh::next(cm.opposite(h)); }
 

@@ -119,8 +119,8 @@ void MeshDissector::run_repairs() {
   size_t faces = 0;
   for (const auto& r : repairs_) faces += r.param.ex.faces.size();
   parallel_for(
-      repairs_.size(), [&](size_t r) { result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet); },
-      faces >= kParallelFaces / 8);
+      repairs_.size(), faces >= kParallelFaces / 8 ? 0 : 1, ctx_,
+      [&](size_t r) { result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet); });
   for (size_t r = 0; r < repairs_.size(); ++r) {
     const Param& p = repairs_[r].param;
     if (result[r].uv.empty()) continue;

@@ -27,14 +27,13 @@
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/dissect/cut_mesh.h"
 #include "qs/param/square_param.h"
 
 namespace qs::dissect {
 
 namespace {
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 std::uint64_t edge_key(int a, int b) {
   return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint64_t>(std::max(a, b));

@@ -1,6 +1,6 @@
 #pragma once
 // The seed loop (paper 3.3): four seeds joined by shortest edge paths s0->s1->s2->s3->s0 that
-// cut a closed genus-0 mesh into two quad patches.
+// cut a closed genus-0 mesh into two quad patches. The rules in full: docs/algorithms.md.
 
 #include <array>
 #include <string>
@@ -30,7 +30,7 @@ struct SeedLoop {
 /// when the faces flooded across non-loop edges form exactly two parts and every loop edge has
 /// one part on each side (an edge joining two loop vertices off the loop, a chord, is allowed).
 /// Also \throws InvalidInput for a seed out of range, two equal seeds, or an edge with one face
-/// or more than two. O(F log F) per path; ~20 ms for 50k vertices.
+/// or more than two. O(F log F) per path.
 SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const Context& context = {});
 /// The same, with paths that also avoid the vertices in `avoid` (feature points, which must lie
 /// inside a seed patch). Loops found by the unobstructed search are kept when they avoid them.
@@ -50,13 +50,9 @@ struct SideConstraint {
 /// of it, at 1, 1.5 or 2.5 times its distance to the path); among the loops that cut the mesh in
 /// two and leave fewer vertices on the wrong side, the shortest is kept. Every path still avoids
 /// `avoid`. Returns the loop unchanged when all sides already hold.
-/// 	hrows InvalidInput naming the vertices whose side cannot be met.
+/// \throws InvalidInput naming the vertices whose side cannot be met.
 SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& avoid,
                            const std::vector<SideConstraint>& sides, const Context& context = {});
-
-/// The distance from `p` to the polyline `line` (its segments; one point: that point).
-/// \pre line not empty.
-double polyline_distance(const Vec3& p, const std::vector<Vec3>& line);
 
 /// A seed loop that follows four guide curves (DissectOptions::same_pose: another mesh's loop,
 /// moved into this mesh's pose): path i runs from seeds[i] to seeds[(i+1)%4] along mesh edges,
@@ -78,7 +74,7 @@ std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, co
 /// not joined edge paths between the seeds or do not cut the mesh into exactly two parts.
 std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop);
 
-/// Four seeds chosen automatically (the rule is in the README): with e1, e2, e3 the principal
+/// Four seeds chosen automatically (the rule in full: docs/algorithms.md): with e1, e2, e3 the principal
 /// axes of the area-weighted vertices, the candidates are the ray seeds (where rays from the
 /// centroid first meet the surface, 4 rays 90 degrees apart) in each principal plane, also turned
 /// by 45 degrees, then the axis-extreme and the geodesically farthest vertices, then two slab

@@ -97,7 +97,8 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   std::vector<Param> ps(meshes_.size());
   size_t faces = 0;
   for (size_t i = 0; i < meshes_.size(); ++i) faces += meshes_[i].node_faces(nodes[i]);
-  parallel_for(meshes_.size(), [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i]); }, faces >= kParallelFaces);
+  parallel_for(meshes_.size(), faces >= kParallelFaces ? 0 : 1, ctx_,
+               [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i]); });
   // The same features must lie inside the node in every mesh: they are aligned before every split,
   // so only the seed loops (traced on each mesh independently) can separate them.
   for (size_t i = 1; i < ps.size(); ++i) {
@@ -211,7 +212,7 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
   for (size_t i = 1; i < nm; ++i) reference[i] = in_pose(i, cut);
   std::vector<std::vector<Choice>> candidates(2 * (nm - 1));
   parallel_for(
-      candidates.size(),
+      candidates.size(), ctx_,
       [&](size_t task) {
         const size_t i = task / 2 + 1, g = task % 2;
         if (g == 1 && !opt_.geodesic_seed_curves) return;  // edge paths: traced and cut are the same curves
@@ -232,8 +233,7 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
         }
         add(*loop, meshes_[i].straighten(*loop));
         if (g == 1) add(std::move(*loop), GeodesicLoop{});  // routed along the geodesics, kept
-      },
-      true);
+      });
   std::vector<std::optional<Choice>> chosen(nm);
   for (size_t task = 0; task < candidates.size(); ++task)
     for (Choice& c : candidates[task]) {
@@ -326,18 +326,18 @@ DissectionSet SetDissector::run() {
   const size_t nm = meshes_.size();
   // The shortest loop of every mesh (in parallel: the meshes are independent here).
   std::vector<SeedLoop> loops(nm);
-  parallel_for(nm, [&](size_t i) {
+  parallel_for(nm, ctx_, [&](size_t i) {
     const std::array<int, 4> s = meshes_[i].inserted_seeds ? *meshes_[i].inserted_seeds
                                  : in_[i].seeds      ? *in_[i].seeds
                                                      : choose_seeds(*in_[i].mesh);
     loops[i] = meshes_[i].trace_loop(s);
-  }, nm > 1);
+  });
   // Consistent loops: every feature on the same side in every mesh. The side each feature takes
   // in most meshes (ties: the first mesh's) is required of all; a mesh whose shortest loop puts a
   // feature on the other side is routed again around it.
   if (nm > 1 && !feature_names_.empty()) {
     std::vector<std::vector<int>> sides(nm);
-    parallel_for(nm, [&](size_t i) { sides[i] = meshes_[i].feature_sides(loops[i]); }, true);
+    parallel_for(nm, ctx_, [&](size_t i) { sides[i] = meshes_[i].feature_sides(loops[i]); });
     const size_t nf = feature_names_.size();
     std::vector<int> want(nf);
     for (size_t k = 0; k < nf; ++k) {
@@ -345,7 +345,7 @@ DissectionSet SetDissector::run() {
       for (size_t i = 0; i < nm; ++i) zeros += sides[i][k] == 0;
       want[k] = 2 * zeros > nm ? 0 : 2 * zeros < nm ? 1 : sides[0][k];
     }
-    parallel_for(nm, [&](size_t i) {
+    parallel_for(nm, ctx_, [&](size_t i) {
       if (sides[i] == want) return;
       try {
         loops[i] = meshes_[i].reroute_loop(loops[i], want);
@@ -358,7 +358,7 @@ DissectionSet SetDissector::run() {
                            "and no loop through its seeds puts it on the same side (" + e.what() +
                            "); move the seeds so that each feature is on the same side of the loop in every mesh");
       }
-    }, true);
+    });
   }
   DissectionSet out;
   std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
@@ -437,13 +437,13 @@ DissectionSet SetDissector::run() {
       std::vector<char> force(ps.size(), 0);
       Context quiet = ctx_.without_progress();
       quiet.log = nullptr;
-      parallel_for(ps.size(), [&](size_t i) {
+      parallel_for(ps.size(), ctx_, [&](size_t i) {
         if (!over[i] || !ps[i].sp.bijective() || ps[i].st.area3d < opt_.force_split_area * mesh_area[i]) return;
         const param::SquareParam m = minimized_leaf(ps[i], std::max(opt_.stretch_iterations, kRepairRounds), quiet);
         const double repaired =
             m.uv.empty() ? ps[i].st.patch : param::l2_stretch(ps[i].ex.pm.positions, ps[i].ex.pm.faces, m.uv).patch;
         force[i] = repaired > opt_.tau;
-      }, ps.size() > 1);
+      });
       progress = std::find(force.begin(), force.end(), 1) != force.end();
     }
     // Folds outrank the depth bound for a squeezed protrusion tip (see squeezed_tip): such a node
@@ -489,7 +489,7 @@ DissectionSet SetDissector::run() {
       // the example set's slivers). Skipped in one pose, where the maps are taken over below.
       if (opt_.refine_before_split && nm > 1 && !(opt_.same_pose && opt_.same_pose_maps)) {
         std::vector<char> refined(nm, 0);
-        parallel_for(nm - 1, [&](size_t k) {
+        parallel_for(nm - 1, node_faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t k) {
           Param& p = ps[k + 1];
           if (!p.sp.bijective() || !ps[0].sp.bijective()) return;
           const double own_children = predicted_children_stretch(p, peak, w);
@@ -501,7 +501,7 @@ DissectionSet SetDissector::run() {
             return;
           }
           refined[k + 1] = 1;
-        }, node_faces >= kParallelFaces);
+        });
         for (size_t i = 1; i < nm; ++i) ++(refined[i] ? out.before_split_refined : out.before_split_own);
       }
       // DissectOptions::same_pose_maps: every mesh's map of the node taken over from mesh 0's, also
@@ -515,11 +515,11 @@ DissectionSet SetDissector::run() {
         Context quiet = ctx_.without_progress();
         quiet.log = nullptr;
         // Also where mesh i's own map of the node folds; only a bijective result is taken.
-        parallel_for(nm - 1, [&](size_t k) {
+        parallel_for(nm - 1, node_faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t k) {
           Param& p = ps[k + 1];
           taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0],
                                            opt_.same_pose_untangle, quiet, p);
-        }, node_faces >= kParallelFaces);
+        });
         for (size_t i = 1; i < nm; ++i) {
           ++(taken[i] == Transfer::Own ? out.same_pose_own_maps : out.same_pose_maps);
           out.same_pose_polished += taken[i] == Transfer::Polished;
@@ -542,14 +542,14 @@ DissectionSet SetDissector::run() {
       Vec2 common_peak = peak;
       double common_w = w;
       auto split_all = [&](bool use_posed) {
-        parallel_for(meshes_.size(), [&](size_t i) {
+        parallel_for(meshes_.size(), node_faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t i) {
           try {
             kids[i] = use_posed ? meshes_[i].split(nodes[i], ps[i], posed[i])
                                 : meshes_[i].split(nodes[i], ps[i], common_peak, common_w);
           } catch (const SplitFailure& e) {
             throw SplitFailure(meshes_.size() > 1 ? meshes_[i].name() + ": " + e.what() : std::string(e.what()));
           }
-        }, node_faces >= kParallelFaces);
+        });
         // Counterparts must land in the same child. They do when every mesh's map is bijective
         // (the cuts are the same segments of the aligned domain); a folded map can break that.
         for (const auto& [k, local] : ps[0].features)
@@ -622,7 +622,7 @@ DissectionSet SetDissector::run() {
       std::vector<char> mode(nm, kNone);
       Context quiet = ctx_.without_progress();
       quiet.log = nullptr;
-      parallel_for(nm, [&](size_t i) {
+      parallel_for(nm, ctx_, [&](size_t i) {
         const size_t faces = ps[i].ex.faces.size();
         const size_t budget = std::max<size_t>(2 * in_[i].mesh->faces.size(), 20000);
         if (refined_total[i] >= budget) return;
@@ -636,7 +636,7 @@ DissectionSet SetDissector::run() {
         } else if (stop == StopReason::SplitFailed && faces <= kRefineFaces && refined_total[i] + 3 * faces <= budget) {
           mode[i] = kWhole;
         }
-      }, true);
+      });
       if (std::find_if(mode.begin(), mode.end(), [](char m) { return m != kNone; }) != mode.end()) {
         std::vector<int>& added = refined_faces[node.name];
         added.resize(nm, 0);

@@ -40,13 +40,6 @@ std::pair<int, double> MeshDissector::peak(const Param& p) const {
   return {peak, peak_s};
 }
 
-// Distance from q to the segment ab.
-double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b) {
-  const Vec2 d = b - a;
-  const double t = std::clamp((q - a).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-  return (a + t * d - q).norm();
-}
-
 namespace {
 
 // Whether the closed segments ab and cd cross or touch (collinear overlaps included).

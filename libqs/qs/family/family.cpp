@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <mutex>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <unordered_map>
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/family/sphere_hull.h"
 #include "qs/mesh/validate.h"
 
@@ -424,28 +423,9 @@ Family generate_family(const FamilyOptions& options, const Context& context) {
   family.limbs = base.limbs;
   for (const Limb& l : base.limbs_base) family.limb_names.push_back(l.name);
   family.shapes.resize(options.shapes);
-  const int threads = std::max(1, std::min<int>(options.shapes, static_cast<int>(std::thread::hardware_concurrency())));
-  std::vector<std::exception_ptr> errors(options.shapes);
-  std::mutex progress_mutex;
-  int done = 0;
-  auto work = [&](int t) {
-    for (int i = t; i < options.shapes; i += threads) {
-      try {
-        context.check_cancel();
-        family.shapes[i] = make_mesh(options, base, make_shape(options, base, i), i);
-      } catch (...) {
-        errors[i] = std::current_exception();
-      }
-      std::lock_guard<std::mutex> lock(progress_mutex);
-      context.report("family", static_cast<double>(++done) / options.shapes);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (auto& th : pool) th.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
+  parallel_for(
+      options.shapes, context,
+      [&](int i) { family.shapes[i] = make_mesh(options, base, make_shape(options, base, i), i); }, "family");
   return family;
 }
 

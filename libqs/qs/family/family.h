@@ -68,7 +68,7 @@ struct Family {
   std::vector<FamilyShape> shapes;
 };
 
-/// Generates the family. Shapes are made in parallel (std::thread); the result does not depend on
+/// Generates the family. Shapes are made in parallel (Context::threads); the result does not depend on
 /// the thread count. \throws InvalidInput for an option out of range (naming it), InternalError if
 /// a generated mesh fails its own checks (a bug). Progress stage: "family".
 Family generate_family(const FamilyOptions& options = {}, const Context& context = {});

@@ -21,6 +21,7 @@
 #include <unordered_map>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/core/parallel.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/metro/metro.h"
@@ -35,23 +36,6 @@ using Mat32 = Eigen::Matrix<double, 3, 2>;
 using Mat46 = Eigen::Matrix<double, 4, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-// Point location by the best barycentric score: when the uv triangle (a, b, c) is positive and
-// q's smallest barycentric coordinate in it beats `score`, takes it (best = id, bary, score).
-void try_triangle(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& q, int id, int& best, Vec3& bary,
-                  double& score) {
-  const double area = cross2(b - a, c - a);
-  if (!(area > 0)) return;
-  const Vec3 w(cross2(b - q, c - q) / area, cross2(c - q, a - q) / area, cross2(a - q, b - q) / area);
-  const double s = w.minCoeff();
-  if (s > score) {
-    score = s;
-    bary = w;
-    best = id;
-  }
-}
 
 // Eigenvalues of a symmetric 2x2 matrix clamped into [lo, hi] (closed form).
 Eigen::Matrix2d clamp_metric(const Eigen::Matrix2d& m, double lo, double hi) {
@@ -117,7 +101,7 @@ class UvLocator {
  private:
   int cell(double x) const { return std::clamp(static_cast<int>(std::floor(x * size_)), 0, size_ - 1); }
   void try_tri(int i, const Vec2& q, int& best, Vec3& bary, double& score) const {
-    try_triangle(tris_[i][0], tris_[i][1], tris_[i][2], q, i, best, bary, score);
+    try_uv_triangle(tris_[i][0], tris_[i][1], tris_[i][2], q, i, best, bary, score);
   }
 
   std::vector<std::array<Vec2, 3>> tris_;

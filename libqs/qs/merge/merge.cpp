@@ -4,15 +4,14 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <sstream>
-#include <thread>
 #include <unordered_map>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
+#include "qs/core/parallel.h"
 
 namespace qs::merge {
 namespace {
@@ -30,8 +29,6 @@ int orient(const Vec2& p, const Vec2& q, const Vec2& r) {
 // A merged face with less than this fraction of its parent's area is too thin for its double
 // positions to have a normal (two crossings a rounding apart): counted, not judged.
 constexpr double kThinFace = 1e-12;
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 std::string uv_string(const Vec2& p) {
   std::ostringstream s;
@@ -163,7 +160,6 @@ struct PatchResult {
   std::vector<int> parent_a, parent_b;
   std::vector<double> min_angle_uv;  // per face, degrees
   int polygons = 0;
-  std::exception_ptr error;
 };
 
 // The smallest corner angle (degrees): the one opposite the shortest side.
@@ -226,8 +222,8 @@ Vec3 in_face(const Vec2& uv, const std::array<Vec2, 3>& q, const std::array<Vec3
   const double longest = std::max({(q[1] - q[0]).squaredNorm(), (q[2] - q[1]).squaredNorm(), (q[0] - q[2]).squaredNorm()});
   double l0, l1, l2;
   if (area > kWellConditioned * longest) {
-    l0 = cross2(q[1] - uv, q[2] - uv) / area, l1 = cross2(q[2] - uv, q[0] - uv) / area;
-    l2 = cross2(q[0] - uv, q[1] - uv) / area;
+    const Vec3 l = barycentric(q[0], q[1], q[2], uv, area);
+    l0 = l[0], l1 = l[1], l2 = l[2];
   } else {
     const EPoint P = exact_point(uv), Q0 = exact_point(q[0]), Q1 = exact_point(q[1]), Q2 = exact_point(q[2]);
     const Epeck::FT twice = cross_exact(Q0, Q1, Q2);
@@ -660,30 +656,12 @@ Merged merge_charts(const dissect::Chart& a, const dissect::Chart& b, const Merg
   const auto by_a = faces_by_patch(a, patches), by_b = faces_by_patch(b, patches);
 
   std::vector<PatchResult> results(patches);
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int p; (p = next++) < patches;) {
-      try {
-        context.check_cancel();
-        const PatchMesh pa = build_patch(a, by_a[p], p, "mesh A");
-        const PatchMesh pb = build_patch(b_sides, by_b[p], p, "mesh B");
-        results[p] = PatchMerger(a, b_sides, pa, pb, options).run();
-      } catch (...) {
-        results[p].error = std::current_exception();
-      }
-    }
-  };
-  int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, std::max(1, patches));
-  if (threads == 1) {
-    worker();
-  } else {
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
-  }
-  for (const auto& r : results)
-    if (r.error) std::rethrow_exception(r.error);  // the lowest patch's error: deterministic
+  // Every patch runs; the lowest patch's error is rethrown: deterministic.
+  parallel_for(patches, options.threads, context, [&](int p) {
+    const PatchMesh pa = build_patch(a, by_a[p], p, "mesh A");
+    const PatchMesh pb = build_patch(b_sides, by_b[p], p, "mesh B");
+    results[p] = PatchMerger(a, b_sides, pa, pb, options).run();
+  });
 
   // Assembly in patch order: side vertices (A or B chart vertices on a patch side) are met in two
   // or more patches and take the first one's (patch, uv) and positions.

@@ -31,7 +31,7 @@ struct MergeOptions {
   /// Cut every overlay polygon into the triangles that maximize its smallest uv angle; false: a
   /// fan from its first vertex.
   bool improve_slivers = true;
-  /// Worker threads, one patch at a time; 0: one per hardware thread. Never changes the output.
+  /// Worker threads, one patch at a time; 0: Context::threads. Never changes the output.
   int threads = 0;
 };
 

@@ -7,15 +7,13 @@
 #include "qs/metro/metro.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 
 namespace qs::metro {
 
@@ -526,34 +524,8 @@ OneSided measure(const SampledMesh& from, const SurfaceDistance::Impl& to, long 
     results[static_cast<size_t>(c)] = r;
   };
 
-  std::atomic<long> next{0}, done{0};
-  std::atomic<bool> stop{false};
-  auto go_on = [&] { return !stop.load(std::memory_order_relaxed) && !(ctx.cancel && ctx.cancel->load()); };
-  auto worker = [&](bool report) {
-    for (long c; go_on() && (c = next.fetch_add(1)) < n_chunks;) {
-      run_chunk(c);
-      const long d = done.fetch_add(1) + 1;
-      if (report) ctx.report(stage, static_cast<double>(d) / static_cast<double>(n_chunks));
-    }
-  };
   ctx.report(stage, 0.0);
-  {
-    // Joins the helpers however this block is left (a throwing progress callback, a thread that
-    // cannot be started); `stop` only keeps them from claiming further chunks.
-    struct Pool {
-      std::vector<std::thread> threads;
-      std::atomic<bool>& stop;
-      ~Pool() {
-        stop = true;
-        for (auto& t : threads) t.join();
-      }
-    } pool{{}, stop};
-    const int n_threads = static_cast<int>(std::max(1L, std::min<long>(threads, n_chunks)));
-    for (int i = 1; i < n_threads; ++i) pool.threads.emplace_back(worker, false);
-    worker(true);  // the calling thread works too, and is the only one that reports progress
-  }
-  ctx.check_cancel();
-  ctx.report(stage, 1.0);
+  parallel_for(static_cast<int>(n_chunks), threads, ctx, run_chunk, stage);  // the calling thread reports
 
   OneSided out;
   double sum = 0, sum2 = 0;
@@ -595,38 +567,16 @@ MetroResult metro(const TriMesh& a, const TriMesh& b, const MetroOptions& option
         std::ceil(options.samples_per_face * static_cast<double>(std::max(a.num_faces(), b.num_faces())));
     n = std::max(options.min_samples, static_cast<long>(std::min(automatic, 1e15)));
   }
-  int threads = options.threads;
-  if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-
   // The two trees are independent: build them side by side.
   SurfaceDistance::Impl tree_a, tree_b;
-  if (threads > 1) {
-    std::exception_ptr failed;  // e.g. bad_alloc in the helper, rethrown here
-    std::thread other([&] {
-      try {
-        tree_b.build(b);
-      } catch (...) {
-        failed = std::current_exception();
-      }
-    });
-    try {
-      tree_a.build(a);
-    } catch (...) {
-      other.join();
-      throw;
-    }
-    other.join();
-    if (failed) std::rethrow_exception(failed);
-  } else {
-    tree_a.build(a);
-    tree_b.build(b);
-  }
-  ctx.check_cancel();
+  parallel_for(2, options.threads, ctx, [&](int i) { i == 0 ? tree_a.build(a) : tree_b.build(b); });
 
   MetroResult res;
   const std::uint64_t seed = splitmix64(options.seed);
-  res.a_to_b = measure(sa, tree_b, n, options.sample_vertices, splitmix64(seed ^ 0xA), threads, ctx, "metro A -> B");
-  res.b_to_a = measure(sb, tree_a, n, options.sample_vertices && options.sample_vertices_b, splitmix64(seed ^ 0xB), threads, ctx, "metro B -> A");
+  res.a_to_b = measure(sa, tree_b, n, options.sample_vertices, splitmix64(seed ^ 0xA), options.threads, ctx,
+                       "metro A -> B");
+  res.b_to_a = measure(sb, tree_a, n, options.sample_vertices && options.sample_vertices_b, splitmix64(seed ^ 0xB),
+                       options.threads, ctx, "metro B -> A");
   res.max = std::max(res.a_to_b.max, res.b_to_a.max);
   res.mean = 0.5 * (res.a_to_b.mean + res.b_to_a.mean);
   res.rms = std::sqrt(0.5 * (res.a_to_b.rms * res.a_to_b.rms + res.b_to_a.rms * res.b_to_a.rms));

@@ -41,7 +41,7 @@ struct MetroOptions {
   /// one query per vertex of B; B -> A then reports vertex_samples = 0.
   bool sample_vertices_b = true;
   std::uint64_t seed = 1;         ///< same seed, same samples, same numbers
-  /// Worker threads; 0 = std::thread::hardware_concurrency(). Does not change the results.
+  /// Worker threads; 0 = Context::threads. Does not change the results.
   int threads = 0;
 };
 

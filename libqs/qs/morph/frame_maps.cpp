@@ -11,6 +11,7 @@
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/morph/frames.h"
 #include "qs/morph/blend.h"
 
@@ -172,8 +173,8 @@ void write_textured_frames(const fs::path& folder, const std::vector<std::string
     throw InvalidInput("write_textured_frames: " + std::to_string(atlases.rgb.size()) + " normal maps for " +
                        std::to_string(shapes.size()) + " shapes");
   const TexturedObjWriter writer(faces, baked);
-  for_each_frame(
-      static_cast<int>(frames.size()), threads,
+  parallel_for(
+      static_cast<int>(frames.size()), threads, context,
       [&](int f) {
         const std::vector<double>& w = frames[f].weights;
         int alone = -1;  // a frame that is one shape gets that shape's PNG as it is
@@ -190,7 +191,7 @@ void write_textured_frames(const fs::path& folder, const std::vector<std::string
         write_file_atomically(folder / (name + ".mtl"), TexturedObjWriter::mtl(name + "_normal.png"));
         write_file_atomically(folder / (name + ".obj"), writer.obj(blend(shapes, w), name + ".mtl"));
       },
-      "textured frames", context);
+      "textured frames");
 }
 
 }  // namespace qs::morph

@@ -1,16 +1,13 @@
 #include "qs/morph/frames.h"
 
 #include <algorithm>
-#include <atomic>
 #include <charconv>
 #include <cstdint>
 #include <cstring>
-#include <exception>
-#include <mutex>
-#include <thread>
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 
 namespace qs::morph {
 namespace {
@@ -109,42 +106,6 @@ void FrameWriter::write(const std::filesystem::path& path, const std::vector<Vec
   write_file_atomically(path, bytes(positions));
 }
 
-void for_each_frame(int n, int threads, const std::function<void(int)>& work, const std::string& stage,
-                    const Context& context) {
-  if (n <= 0) return;
-  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  threads = std::max(1, std::min(threads, n));
-  std::atomic<int> next{0}, done{0};
-  std::mutex mutex;
-  int failed = n;
-  std::exception_ptr failure;
-  auto worker = [&] {
-    for (int f = next++; f < n; f = next++) {
-      try {
-        context.check_cancel();
-        work(f);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (f < failed) {
-          failed = f;
-          failure = std::current_exception();
-        }
-        next = n;  // stop handing out frames
-      }
-      const int d = ++done;
-      if (context.progress) {
-        std::lock_guard<std::mutex> lock(mutex);
-        context.report(stage, static_cast<double>(d) / n);
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
-}
-
 void write_frames(const std::filesystem::path& folder, const std::vector<std::string>& files,
                   const std::vector<std::vector<Vec3>>& shapes, const std::vector<Tri>& faces,
                   const std::vector<PathFrame>& frames, FrameFormat format, int threads, const Context& context) {
@@ -152,9 +113,9 @@ void write_frames(const std::filesystem::path& folder, const std::vector<std::st
     throw InvalidInput("write_frames: " + std::to_string(files.size()) + " file names for " +
                        std::to_string(frames.size()) + " frames");
   const FrameWriter writer(faces, format);
-  for_each_frame(
-      static_cast<int>(frames.size()), threads,
-      [&](int f) { writer.write(folder / files[f], blend(shapes, frames[f].weights)); }, "frames", context);
+  parallel_for(
+      static_cast<int>(frames.size()), threads, context,
+      [&](int f) { writer.write(folder / files[f], blend(shapes, frames[f].weights)); }, "frames");
 }
 
 }  // namespace qs::morph

@@ -39,14 +39,8 @@ class FrameWriter {
   std::string face_bytes_;
 };
 
-/// Runs work(f) for f in [0, n) on `threads` threads (<= 0: one per hardware thread), reporting
-/// progress (`stage`, fraction) and checking the cancel flag between items. Stops handing out work
-/// at the first failure and rethrows the exception of the lowest failed f.
-void for_each_frame(int n, int threads, const std::function<void(int)>& work, const std::string& stage,
-                    const Context& context = {});
-
 /// Blends and writes frame f as folder/files[f] for every f (blend(shapes, frames[f].weights)),
-/// on `threads` threads (<= 0: one per hardware thread). Reports progress ("frames", fraction),
+/// on `threads` threads (<= 0: Context::threads). Reports progress ("frames", fraction),
 /// checks the cancel flag. \throws what FrameWriter::write and blend throw (the lowest frame's).
 void write_frames(const std::filesystem::path& folder, const std::vector<std::string>& files,
                   const std::vector<std::vector<Vec3>>& shapes, const std::vector<Tri>& faces,

@@ -382,13 +382,7 @@ SemiRegularConnectivity adaptive_connectivity(const BaseTopology& topology, cons
     int nt = 0;
     for (int d = 0; d < 4; ++d) nt += (t[d] = f.is_split(f.neighbour(n, d)));
     if (nt == 0) {
-      if (node_diagonal02(topology, n)) {
-        faces.push_back({c[0], c[1], c[2]});
-        faces.push_back({c[0], c[2], c[3]});
-      } else {
-        faces.push_back({c[0], c[1], c[3]});
-        faces.push_back({c[1], c[2], c[3]});
-      }
+      push_cell(faces, c, node_diagonal02(topology, n));
       continue;
     }
     // h >= 1 here: a split neighbour has children of level n.level + 1 <= top.

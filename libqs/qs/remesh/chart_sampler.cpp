@@ -8,13 +8,12 @@
 #include <string>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/mesh/connectivity.h"
 
 namespace qs::remesh {
 
 namespace {
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // Coordinate along side k (0 at corner k, 1 at corner k+1) and the distance off it.
 double side_coordinate(int k, const Vec2& uv) {
@@ -214,17 +213,8 @@ int ChartSampler::best_face(int /*patch*/, const Vec2& q, const int* begin, cons
   int best = -1;
   for (const int* it = begin; it != end; ++it) {
     const auto& uv = chart_->face_uv[*it];
-    const double area = cross2(uv[1] - uv[0], uv[2] - uv[0]);
-    if (!(area > 0)) continue;
-    const Vec3 b(cross2(uv[1] - q, uv[2] - q) / area, cross2(uv[2] - q, uv[0] - q) / area,
-                 cross2(uv[0] - q, uv[1] - q) / area);
-    const double s = b.minCoeff();
-    if (s > score) {
-      score = s;
-      bary = b;
-      best = *it;
-      if (s >= 0) break;  // inside (or on the border of) this triangle
-    }
+    if (try_uv_triangle(uv[0], uv[1], uv[2], q, *it, best, bary, score) && score >= 0)
+      break;  // inside (or on the border of) this triangle
   }
   return best;
 }
@@ -291,8 +281,7 @@ std::vector<ChartSampler::Location> ChartSampler::locate_grid(int patch, int cou
       index_range(lo, hi, a0, a1);
       for (int a = a0; a <= a1; ++a) {
         const Vec2 q(first + a * step, v);
-        const Vec3 bary(cross2(uv[1] - q, uv[2] - q) / area, cross2(uv[2] - q, uv[0] - q) / area,
-                        cross2(uv[0] - q, uv[1] - q) / area);
+        const Vec3 bary = barycentric(uv[0], uv[1], uv[2], q, area);
         const double s = bary.minCoeff();
         const size_t idx = static_cast<size_t>(b) * count + a;
         if (s > score[idx]) {

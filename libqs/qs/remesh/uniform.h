@@ -22,6 +22,7 @@
 // Result size: V = Vb + Eb (N-1) + P (N-1)^2, F = 2 P N^2 (Vb, Eb, P: base vertices, edges,
 // patches). For a closed base domain V - E + F = Vb - Eb + P.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -122,6 +123,19 @@ SemiRegularSet remesh_uniform(const std::vector<const dissect::Chart*>& charts, 
                               const UniformOptions& options = {}, const Context& context = {});
 SemiRegularSet remesh_uniform(const std::vector<dissect::Chart>& charts, int level,
                               const UniformOptions& options = {}, const Context& context = {});
+
+/// Appends the two triangles of the quad cell c[0..3] (counter-clockwise) in the remeshes' pattern:
+/// (c0, c1, c2), (c0, c2, c3) when diag02 (the cut runs c0-c2), else (c0, c1, c3), (c1, c2, c3).
+inline void push_cell(std::vector<std::array<std::int64_t, 3>>& faces, const std::array<std::int64_t, 4>& c,
+                      bool diag02) {
+  if (diag02) {
+    faces.push_back({c[0], c[1], c[2]});
+    faces.push_back({c[0], c[2], c[3]});
+  } else {
+    faces.push_back({c[0], c[1], c[3]});
+    faces.push_back({c[1], c[2], c[3]});
+  }
+}
 
 /// Re-cuts one quad cell, given as its two triangles in the remeshes' pattern (f0 starts with the
 /// cell's corners v00, v10; diag02: the cut runs v00-v11), along the other diagonal when that

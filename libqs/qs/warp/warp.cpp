@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/core/problem_list.h"
 
 namespace qs::warp {
@@ -40,21 +41,13 @@ constexpr double kSameTime = 1e-12;
 constexpr int kCorners = 4;
 const std::array<Vec2, kCorners> kCornerPos = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
 
-double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 /// Twice the signed area of (a, b, c): > 0 when counter-clockwise.
-double orient(const Vec2& a, const Vec2& b, const Vec2& c) { return cross(b - a, c - a); }
+double orient(const Vec2& a, const Vec2& b, const Vec2& c) { return cross2(b - a, c - a); }
 
 /// > 0 when d lies inside the circle through the counter-clockwise triangle (a, b, c).
 double incircle(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
   const Vec2 ad = a - d, bd = b - d, cd = c - d;
-  return ad.squaredNorm() * cross(bd, cd) + bd.squaredNorm() * cross(cd, ad) + cd.squaredNorm() * cross(ad, bd);
-}
-
-double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double l2 = ab.squaredNorm();
-  const double s = l2 > 0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
-  return (a + s * ab - p).norm();
+  return ad.squaredNorm() * cross2(bd, cd) + bd.squaredNorm() * cross2(cd, ad) + cd.squaredNorm() * cross2(ad, bd);
 }
 
 double border_distance(const Vec2& p) {
@@ -309,7 +302,7 @@ double Warper::min_weight(const Vec2& p, int t) const {
   const Vec2& b = pos_[tri_[t][1]];
   const Vec2& c = pos_[tri_[t][2]];
   const double area = orient(a, b, c);
-  return std::min({cross(b - p, c - p), cross(p - a, c - a), cross(b - a, p - a)}) / area;
+  return std::min({cross2(b - p, c - p), cross2(p - a, c - a), cross2(b - a, p - a)}) / area;
 }
 
 Binding Warper::bind_in(const Vec2& p, int t) const {
@@ -321,7 +314,7 @@ Binding Warper::bind_in(const Vec2& p, int t) const {
   const double area = orient(a, b, c);
   Binding out;
   out.tri = t;
-  out.w = {cross(b - p, c - p) / area, cross(p - a, c - a) / area, cross(b - a, p - a) / area};
+  out.w = {cross2(b - p, c - p) / area, cross2(p - a, c - a) / area, cross2(b - a, p - a) / area};
   int nonzero = 0;
   double sum = 0;
   for (int i = 0; i < 3; ++i) {
@@ -390,8 +383,8 @@ Lin Warper::lin(const Triple& v, int moving, const Vec2& d) const {
   out.a = orient(pos_[v[0]], pos_[v[1]], pos_[v[2]]);
   for (int i = 0; i < 3; ++i) {
     if (v[i] != moving) continue;
-    // cross(q - p, r - p) with p = p0 + s d is linear in s with slope cross(d, q - r).
-    out.b = cross(d, pos_[v[(i + 1) % 3]] - pos_[v[(i + 2) % 3]]);
+    // cross2(q - p, r - p) with p = p0 + s d is linear in s with slope cross2(d, q - r).
+    out.b = cross2(d, pos_[v[(i + 1) % 3]] - pos_[v[(i + 2) % 3]]);
   }
   return out;
 }
@@ -501,9 +494,9 @@ bool Warper::illegal(int t, int j) const {
   while (tri_[u][k] == b || tri_[u][k] == c) ++k;
   const Vec2 d = pos_[tri_[u][k]];
   const Vec2 ad = pos_[v[j]] - d, bd = pos_[b] - d, cd = pos_[c] - d;
-  const double t1 = ad.squaredNorm() * cross(bd, cd);
-  const double t2 = bd.squaredNorm() * cross(cd, ad);
-  const double t3 = cd.squaredNorm() * cross(ad, bd);
+  const double t1 = ad.squaredNorm() * cross2(bd, cd);
+  const double t2 = bd.squaredNorm() * cross2(cd, ad);
+  const double t3 = cd.squaredNorm() * cross2(ad, bd);
   // d strictly inside the circumcircle of (a, b, c), beyond rounding (nearly cocircular: keep).
   if (!(t1 + t2 + t3 > kIncircleTolerance * (std::abs(t1) + std::abs(t2) + std::abs(t3)))) return false;
   // An illegal edge has a strictly convex quadrilateral; make sure the new triangles are positive.
