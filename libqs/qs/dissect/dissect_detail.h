@@ -410,7 +410,7 @@ constexpr double kPoseLoopSigma = 0.005;
 /// One seed loop for the set (DissectOptions::intrinsic_loops): the width, in geodesic
 /// coordinates (distances over the square root of the area), of the band around the first mesh's
 /// loop that another mesh's loop is routed in.
-constexpr double kIntrinsicLoopSigma = 0.1;
+constexpr double kIntrinsicLoopSigma = 0.2;
 /// same_pose: posed inner corners stay this far inside the square.
 constexpr double kSamePoseMargin = 0.03;
 
