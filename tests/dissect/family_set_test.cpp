@@ -92,6 +92,7 @@ TEST(FamilySetRefinement, AFoldedLeafIsRefinedAndEndsBijective) {
   qs::dissect::DissectOptions old_maps;
   old_maps.geodesic_seed_curves = false;
   old_maps.intrinsic_cotan = false;
+  old_maps.intrinsic_loops = false;  // the loops that lead to those folds: each shape's own
   const std::vector<qs::dissect::MeshToDissect> set(g.set.begin(), g.set.begin() + 4);
   const qs::dissect::DissectionSet s = qs::dissect::dissect_set(set, old_maps);
   int refined = 0;

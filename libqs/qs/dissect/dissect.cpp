@@ -17,6 +17,7 @@
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
 #include "qs/dissect/dissection.h"
+#include "qs/dissect/seed_order.h"
 #include "qs/metro/metro.h"
 
 namespace qs::dissect {
@@ -193,6 +194,32 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
   return out;
 }
 
+// dissect_set once the seeds are in their order: the pose detection, then the dissection.
+DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
+                                   const Context& context) {
+  // Same pose found by measurement (DissectOptions::same_pose_detect).
+  double measured = -1;
+  bool detected = false;
+  if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
+    if (const auto d = pose_distance(meshes)) {
+      measured = *d;
+      // One mesh given several times maps by the identity already; nothing to pose.
+      bool identical = true;
+      for (size_t i = 1; i < meshes.size() && identical; ++i)
+        identical = meshes[i].mesh->positions == meshes[0].mesh->positions &&
+                    meshes[i].mesh->faces == meshes[0].mesh->faces &&
+                    landmark_positions(meshes[i]) == landmark_positions(meshes[0]);
+      detected = *d <= options.same_pose_detect && !identical;
+    }
+  }
+  DissectOptions used = options;
+  used.same_pose = options.same_pose || detected;
+  DissectionSet out = dissect_with_nets(meshes, used, context);
+  out.pose_distance = measured;
+  out.same_pose_detected = detected;
+  return out;
+}
+
 }  // namespace
 
 std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes) {
@@ -243,26 +270,22 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   if (meshes.empty()) throw InvalidInput("no mesh to dissect");
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
-  // Same pose found by measurement (DissectOptions::same_pose_detect).
-  double measured = -1;
-  bool detected = false;
-  if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
-    if (const auto d = pose_distance(meshes)) {
-      measured = *d;
-      // One mesh given several times maps by the identity already; nothing to pose.
-      bool identical = true;
-      for (size_t i = 1; i < meshes.size() && identical; ++i)
-        identical = meshes[i].mesh->positions == meshes[0].mesh->positions &&
-                    meshes[i].mesh->faces == meshes[0].mesh->faces &&
-                    landmark_positions(meshes[i]) == landmark_positions(meshes[0]);
-      detected = *d <= options.same_pose_detect && !identical;
-    }
+  // The seeds' cyclic order of the set's shortest loop (the same permutation for every mesh).
+  const SeedOrderChoice order = shortest_seed_order(meshes);
+  if (order.changed()) {
+    std::vector<MeshToDissect> reordered = meshes;
+    for (size_t i = 0; i < meshes.size(); ++i)
+      for (int k = 0; k < 4; ++k) {
+        if (meshes[i].seeds) (*reordered[i].seeds)[k] = (*meshes[i].seeds)[order.order[k]];
+        if (meshes[i].seed_points) (*reordered[i].seed_points)[k] = (*meshes[i].seed_points)[order.order[k]];
+      }
+    DissectionSet out = dissect_set_in_order(reordered, options, context);
+    out.seed_order = order.order;
+    out.seed_loop_lengths = order.lengths;
+    return out;
   }
-  DissectOptions used = options;
-  used.same_pose = options.same_pose || detected;
-  DissectionSet out = dissect_with_nets(meshes, used, context);
-  out.pose_distance = measured;
-  out.same_pose_detected = detected;
+  DissectionSet out = dissect_set_in_order(meshes, options, context);
+  out.seed_loop_lengths = order.lengths;
   return out;
 }
 

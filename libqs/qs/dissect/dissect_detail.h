@@ -311,6 +311,9 @@ class SetDissector {
   // DissectOptions::same_pose: fits the poses and seeds every mesh (mesh 0 first, then each other
   // mesh along mesh 0's curves, see pose_loop), pushing the seed patches onto roots.
   void seed_posed(std::vector<SeedLoop>& loops, std::array<std::vector<Node>, 2>& roots, DissectionSet& out);
+  // DissectOptions::intrinsic_loops: routes every mesh's loop but the first's along the first's
+  // in geodesic coordinates; returns how many were routed so (the others keep their own).
+  int route_intrinsic(std::vector<SeedLoop>& loops) const;
   // The inner corners of a split at (peak, w) in every mesh (mesh 0: the common ones; mesh i: its
   // points nearest mesh 0's, see same_pose), or empty when a mesh has none that make a split.
   std::vector<std::array<Vec2, 4>> posed_corners(const std::vector<Param>& ps, const Vec2& peak, double w) const;
@@ -366,6 +369,10 @@ constexpr double kSamePoseReach = 0.05;
 /// same_pose: the seed loop of mesh i follows mesh 0's (moved into its pose) with edge costs
 /// length x (1 + (d / sigma)^2), sigma this fraction of mesh i's diagonal (trace_guided_loop).
 constexpr double kPoseLoopSigma = 0.005;
+/// One seed loop for the set (DissectOptions::intrinsic_loops): the width, in geodesic
+/// coordinates (distances over the square root of the area), of the band around the first mesh's
+/// loop that another mesh's loop is routed in.
+constexpr double kIntrinsicLoopSigma = 0.2;
 /// same_pose: posed inner corners stay this far inside the square.
 constexpr double kSamePoseMargin = 0.03;
 

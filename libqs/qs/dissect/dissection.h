@@ -173,6 +173,11 @@ struct DissectOptions {
   /// library's default; qs-dissect uses kSamePoseDetect unless told --same-pose or
   /// --no-same-pose). \pre >= 0
   double same_pose_detect = 0;
+  /// Meshes in other poses: every mesh's seed loop but the first's is routed to follow the
+  /// first's in geodesic coordinates of the landmarks (trace_intrinsic_loop), which a change of
+  /// pose keeps, instead of each mesh's own shortest loop. Not with same_pose (the loops follow
+  /// the first's by pose then).
+  bool intrinsic_loops = true;
 };
 
 /// qs-dissect's same_pose_detect: 1% of the diagonal. Measured (README, "Same pose"): a body and
@@ -334,6 +339,12 @@ struct DissectionSet {
   /// turned same_pose on.
   double pose_distance = -1;
   bool same_pose_detected = false;
+  /// The seeds' cyclic order used (seed k of the result is seed seed_order[k] as given): the
+  /// set's shortest loop (shortest_seed_order), and the three orders' loop lengths (0 when the
+  /// seeds were automatic).
+  std::array<int, 4> seed_order{0, 1, 2, 3};
+  std::array<double, 3> seed_loop_lengths{};
+  int intrinsic_loops = 0;  ///< meshes but the first whose loop follows the first's (intrinsic_loops)
 };
 
 /// How far a set is from one pose: for every mesh but the first, the least-squares similarity

@@ -175,11 +175,9 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
   return cur;
 }
 
-SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
-                           const std::array<std::vector<Vec3>, 4>& guides, double sigma,
-                           const std::vector<int>& avoid) {
+SeedLoop trace_weighted_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const EdgeFactor& factor,
+                             const std::vector<int>& avoid) {
   check_seeds(mesh, seeds);
-  if (!(sigma > 0)) throw InvalidInput("trace_guided_loop: sigma must be > 0");
   const Graph g = build_graph(mesh);
   const int nv = g.num_vertices();
   std::vector<char> blocked(nv, 0);
@@ -191,9 +189,6 @@ SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
   std::vector<double> dist(nv);
   std::vector<int> from(nv);
   for (int i = 0; i < 4; ++i) {
-    const std::vector<Vec3>& guide = guides[i];
-    if (guide.empty()) throw InvalidInput("trace_guided_loop: guide " + std::to_string(i) + " is empty");
-    auto to_guide = [&](const Vec3& p) { return polyline_distance(p, guide); };
     // Dijkstra from seeds[i] to seeds[i+1] (ties by vertex id: deterministic).
     const int a = seeds[i], b = seeds[(i + 1) % 4];
     std::fill(dist.begin(), dist.end(), kInf);
@@ -210,8 +205,7 @@ SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
       for (int k = g.start[v]; k < g.start[v + 1]; ++k) {
         const int w = g.neighbor[k];
         if (blocked[w] && w != b) continue;
-        const double r = to_guide(0.5 * (mesh.positions[v] + mesh.positions[w])) / sigma;
-        const double nd = d + g.length[k] * (1 + r * r);
+        const double nd = d + g.length[k] * factor(i, v, w);
         if (nd < dist[w]) {
           dist[w] = nd;
           from[w] = v;
@@ -220,8 +214,8 @@ SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
       }
     }
     if (from[b] < 0)
-      throw InvalidInput("trace_guided_loop: no path from " + seed_name(seeds, i) + " to " +
-                         seed_name(seeds, (i + 1) % 4) + " avoids the paths already routed");
+      throw InvalidInput("seed loop: no path from " + seed_name(seeds, i) + " to " + seed_name(seeds, (i + 1) % 4) +
+                         " avoids the paths already routed");
     std::vector<int> path;
     for (int v = b; v != -1; v = from[v]) path.push_back(v);
     std::reverse(path.begin(), path.end());
@@ -230,6 +224,21 @@ SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
   }
   seed_patch_of_faces(mesh, loop);  // throws when the loop does not cut the mesh in two
   return loop;
+}
+
+SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
+                           const std::array<std::vector<Vec3>, 4>& guides, double sigma,
+                           const std::vector<int>& avoid) {
+  if (!(sigma > 0)) throw InvalidInput("trace_guided_loop: sigma must be > 0");
+  for (int i = 0; i < 4; ++i)
+    if (guides[i].empty()) throw InvalidInput("trace_guided_loop: guide " + std::to_string(i) + " is empty");
+  return trace_weighted_loop(
+      mesh, seeds,
+      [&](int i, int v, int w) {
+        const double r = polyline_distance(0.5 * (mesh.positions[v] + mesh.positions[w]), guides[i]) / sigma;
+        return 1 + r * r;
+      },
+      avoid);
 }
 
 std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop) {

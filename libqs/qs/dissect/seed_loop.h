@@ -3,6 +3,7 @@
 // cut a closed genus-0 mesh into two quad patches. The rules in full: docs/algorithms.md.
 
 #include <array>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,6 +64,16 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
 SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
                            const std::array<std::vector<Vec3>, 4>& guides, double sigma,
                            const std::vector<int>& avoid);
+
+/// Cost factor of the edge v-w for path i (>= 1 keeps the paths' lengths meaningful).
+using EdgeFactor = std::function<double(int path, int v, int w)>;
+
+/// Path i from seeds[i] to seeds[(i+1)%4] along mesh edges, the shortest under edge costs
+/// length x factor(i, v, w); paths in order 0..3, each avoiding the other seeds, the vertices in
+/// `avoid` and the paths already routed. \throws InvalidInput when a path does not route or the
+/// loop does not cut the mesh into two patches.
+SeedLoop trace_weighted_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const EdgeFactor& factor,
+                             const std::vector<int>& avoid);
 
 /// The side of the loop each vertex in `vertices` lies on (0 or 1); -1 for a vertex on the loop.
 std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& vertices);

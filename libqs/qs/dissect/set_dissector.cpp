@@ -15,6 +15,7 @@
 
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
+#include "qs/dissect/loop_guide.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/metro/metro.h"
@@ -321,6 +322,40 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
   return out;
 }
 
+int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops) const {
+  const size_t nm = meshes_.size();
+  // The landmarks every mesh has: the four seeds, then the features present in all meshes.
+  std::vector<size_t> common;
+  for (size_t k = 0; k < feature_names_.size(); ++k) {
+    bool all = true;
+    for (size_t i = 0; i < nm && all; ++i) all = meshes_[i].feature_vertices()[k] >= 0;
+    if (all) common.push_back(k);
+  }
+  auto landmarks = [&](size_t i) {
+    std::vector<int> l(loops[i].seeds.begin(), loops[i].seeds.end());
+    for (size_t k : common) l.push_back(meshes_[i].feature_vertices()[k]);
+    return l;
+  };
+  const TriMesh m0 = meshes_[0].trimesh();
+  const auto reference = loop_coordinates(geodesic_coordinates(m0, landmarks(0)), loops[0]);
+  const std::vector<int> want = meshes_[0].feature_sides(loops[0]);
+  std::vector<char> routed(nm, 0);
+  parallel_for(static_cast<int>(nm) - 1, ctx_, [&](int t) {
+    const size_t i = static_cast<size_t>(t) + 1;
+    const TriMesh mi = meshes_[i].trimesh();
+    try {
+      SeedLoop l = trace_intrinsic_loop(mi, loops[i].seeds, geodesic_coordinates(mi, landmarks(i)), reference,
+                                        kIntrinsicLoopSigma, meshes_[i].feature_vertices());
+      if (meshes_[i].feature_sides(l) != want) return;
+      loops[i] = std::move(l);
+      routed[i] = 1;
+    } catch (const InvalidInput&) {
+      // the mesh keeps its own loop
+    }
+  });
+  return static_cast<int>(std::count(routed.begin(), routed.end(), 1));
+}
+
 DissectionSet SetDissector::run() {
   ctx_.report("seed loops", 0.0);
   const size_t nm = meshes_.size();
@@ -361,6 +396,7 @@ DissectionSet SetDissector::run() {
     });
   }
   DissectionSet out;
+  if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops) out.intrinsic_loops = route_intrinsic(loops);
   std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
   if (opt_.same_pose && nm > 1) {
     seed_posed(loops, roots, out);

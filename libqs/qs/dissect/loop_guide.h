@@ -1,0 +1,38 @@
+#pragma once
+// One seed loop for the set: every mesh's loop routed to follow the first mesh's by intrinsic
+// coordinates (distances along the surface to the landmarks), which a change of pose keeps.
+
+#include <array>
+#include <vector>
+
+#include "qs/core/mesh.h"
+#include "qs/dissect/seed_loop.h"
+
+namespace qs::dissect {
+
+/// Per vertex, its edge-path distances to the landmark vertices, divided by the square root of
+/// the surface area: #V rows of `landmarks` numbers (row-major). Unreachable: +infinity.
+struct GeodesicCoordinates {
+  int dims = 0;
+  std::vector<double> values;
+  const double* at(int v) const { return values.data() + static_cast<size_t>(v) * dims; }
+};
+
+/// \pre landmarks index into mesh.positions.
+GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks);
+
+/// The coordinates of the vertices of each path of `loop` (at most `samples` per path, evenly
+/// spaced along the path's vertices, both ends included).
+std::array<std::vector<std::vector<double>>, 4> loop_coordinates(const GeodesicCoordinates& coords,
+                                                                 const SeedLoop& loop, int samples = 128);
+
+/// The seed loop through `seeds` whose path i follows reference[i] (another mesh's loop in
+/// intrinsic coordinates of the same landmarks, in the same order): edge v-w of path i costs
+/// length x (1 + (c / sigma)^2), c the mean over v and w of the coordinate distance to the nearest
+/// point of reference[i]. Paths avoid `avoid`. \throws InvalidInput as trace_weighted_loop.
+/// \pre sigma > 0, coords.dims equal to the reference's dimension, references not empty.
+SeedLoop trace_intrinsic_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const GeodesicCoordinates& coords,
+                              const std::array<std::vector<std::vector<double>>, 4>& reference, double sigma,
+                              const std::vector<int>& avoid);
+
+}  // namespace qs::dissect
