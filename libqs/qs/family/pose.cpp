@@ -123,14 +123,19 @@ bool limb_region(const TriMesh& mesh, const std::vector<double>& d, double radiu
   for (std::size_t k = 0; k < parent.size(); ++k) components += find(static_cast<int>(k)) == static_cast<int>(k);
   const int euler = static_cast<int>(verts.size()) - num_edges + static_cast<int>(inside_faces.size());
   if (components != 1 || euler != 1 || border.empty()) return false;
-  double length = 0;
+  // The border against a geodesic circle of its own radius (the border's mean distance from the
+  // tip, which is below `radius` by up to an edge).
+  double length = 0, border_radius = 0;
   Vec3 centre = Vec3::Zero();
   for (const auto& [a, b] : border) {
     const double l = (mesh.positions[a] - mesh.positions[b]).norm();
     length += l;
+    border_radius += 0.5 * l * (d[a] + d[b]);
     centre += 0.5 * l * (mesh.positions[a] + mesh.positions[b]);
   }
-  if (length >= border_bound * 2 * kPi * radius || length <= 0) return false;
+  if (length <= 0) return false;
+  border_radius /= length;
+  if (length >= border_bound * 2 * kPi * border_radius) return false;
   *pivot = centre / length;
   return true;
 }
@@ -196,7 +201,7 @@ Analysis analyse(const TriMesh& mesh, int max_count) {
   });
   const double total_area = surface_area(mesh);
   // The border's bound is relaxed while fewer than 3 limbs stand out (a mesh with short legs).
-  for (double border : {0.45, 0.6, 0.75}) {
+  for (double border : {0.45, 0.6}) {
     an.extremities.clear();
     an.limbs.clear();
     std::vector<char> taken(nv, 0);

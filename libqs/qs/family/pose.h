@@ -6,10 +6,10 @@
 // The extremities are found without knowing the shape: geodesic farthest points, each moved uphill
 // on the geodesic distance from the set's geodesic median (the core) to a local maximum. An
 // extremity is a limb when the vertices within a geodesic radius R of it (R = half its distance
-// from the core, shrunk until it holds) form a disc whose border is under 0.45 * 2 pi R (a
-// protrusion, not a patch of a flat side; relaxed to 0.6, then 0.75, while fewer than 3 limbs are
-// found) and hold under 30% of the area. A pose rotates each
-// limb's outer half (the vertices within R / 2 of the tip: the handle) rigidly about a pivot at the
+// from the core, shrunk until it holds) form a disc whose border is under 0.45 * 2 pi r (r: the
+// border's mean geodesic distance from the tip; a protrusion, not a patch of a flat side; 0.6 when
+// fewer than 3 limbs are found so) and hold under 30% of the area. A pose rotates each limb's
+// outer half (the vertices within R / 2 of the tip: the handle) rigidly about a pivot at the
 // limb's root (the border's centroid), about an axis across the limb (a bent joint) or along it (a
 // turned head); the rest of the limb (R / 2 .. R) is deformed as rigidly as possible (CGAL
 // Surface_mesh_deformation, spokes and rims), everything beyond R stays in place. A limb whose
