@@ -75,58 +75,58 @@ for mesh in $LIST; do
       "$d/posed_r.landmarks.json" "$d/posed_r.map.json" "$d/posed.obj"
 done
 
-/usr/bin/python3 - "$RESULTS" <<'PY'
-import json, os, sys
-import numpy as np
+python3 - "$RESULTS" <<'PY'
+import json, math, os, struct, sys
 
 def read_chart(path):
+    """A qs chart: vertex positions and per face (vertices, patch index)."""
     data = open(path, 'rb').read()
     h = data.index(b'end_header\n') + len(b'end_header\n')
     hdr = data[:h].decode('ascii', 'replace')
     nv = int(hdr.split('element vertex ')[1].split()[0])
     nf = int(hdr.split('element face ')[1].split()[0])
-    tex = '<f8' if 'list uchar double texcoord' in hdr else '<f4'
-    P = np.frombuffer(data, dtype='<f8', count=3 * nv, offset=h).reshape(-1, 3)
-    rec = np.dtype([('n', 'u1'), ('v', '<i4', 3), ('m', 'u1'), ('t', tex, 6), ('p', '<i4'), ('c', 'u1', 3)])
-    F = np.frombuffer(data, dtype=rec, count=nf, offset=h + 24 * nv)
+    fmt = '<B3iB6diBBB' if 'list uchar double texcoord' in hdr else '<B3iB6fiBBB'
+    P = list(struct.iter_unpack('<3d', data[h:h + 24 * nv]))
+    size = struct.calcsize(fmt)
+    F = [(r[1:4], r[11]) for r in struct.iter_unpack(fmt, data[h + 24 * nv:h + 24 * nv + size * nf])]
     return P, F
 
 def obj_faces(path):
-    return np.array([[int(t.split('/')[0]) - 1 for t in l.split()[1:4]] for l in open(path) if l.startswith('f ')])
+    return [[int(t.split('/')[0]) - 1 for t in l.split()[1:4]] for l in open(path) if l.startswith('f ')]
 
 def sides(dissection, i, nv):
-    """Per input vertex of mesh i: bit 1 / 2 when a chart face on seed patch 0 / 1 touches it;
-    and the vertex's area (a third of its chart faces')."""
+    """Per input vertex of mesh i: bit 1 / 2 when a chart face of seed patch 0 / 1 touches it, and
+    the vertex's area (a third of its chart faces')."""
     doc = json.load(open(os.path.join(dissection, 'dissection.json')))
     m = doc['meshes'][i]
     P, F = read_chart(os.path.join(dissection, m['chart']))
-    names = [p['name'] for p in m['patches']]
-    top = np.array([1 << int(n.split('.')[0]) for n in names])
-    V = F['v']
-    area = 0.5 * np.linalg.norm(np.cross(P[V[:, 1]] - P[V[:, 0]], P[V[:, 2]] - P[V[:, 0]]), axis=1)
-    side = np.zeros(len(P), dtype=int)
-    w = np.zeros(len(P))
-    for k in range(3):
-        np.bitwise_or.at(side, V[:, k], top[F['p']])
-        np.add.at(w, V[:, k], area / 3)
+    top = [1 << int(p['name'].split('.')[0]) for p in m['patches']]
+    side, w = [0] * len(P), [0.0] * len(P)
+    for (a, b, c), patch in F:
+        u = [P[b][k] - P[a][k] for k in range(3)]
+        v = [P[c][k] - P[a][k] for k in range(3)]
+        x = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        area = 0.5 * math.sqrt(sum(t * t for t in x))
+        for q in (a, b, c):
+            side[q] |= top[patch]
+            w[q] += area / 3
     return side[:nv], w[:nv]
 
 def same_side(dissection, mb, posed):
-    """The share of B's area (per vertex) whose exact image on A lies on the same side of A's seed loop
-    as on B's (a vertex on a loop agrees with either side)."""
+    """The share of B's area (per vertex) whose exact image on A lies on the same side of A's seed
+    loop as it lies of B's (a vertex on a loop agrees with either side)."""
     faces = obj_faces(posed)
-    nv_a = int(faces.max()) + 1
+    nv_a = max(max(f) for f in faces) + 1
     sa, _ = sides(dissection, 0, nv_a)
-    doc = json.load(open(os.path.join(dissection, 'dissection.json')))
     if mb == '-':
         sb, wb = sides(dissection, 1, nv_a)
         image = sa
     else:
         origins = json.load(open(mb))['origins']
         sb, wb = sides(dissection, 1, len(origins))
-        image = np.array([sa[faces[int(o[0])][int(np.argmax(o[1:4]))]] for o in origins])
-    agree = (image & sb) != 0
-    return float((wb * agree).sum() / wb.sum())
+        image = [sa[faces[int(o[0])][max(range(3), key=lambda k: o[1 + k])]] for o in origins]
+    agree = sum(w for w, x, y in zip(wb, image, sb) if x & y)
+    return agree / sum(wb)
 
 rows = [l.rstrip('\n').split('\t') for l in open(sys.argv[1])]
 print()

@@ -395,6 +395,10 @@ Pose pose_mesh(const TriMesh& mesh, const PoseOptions& options, const Context& c
     for (int v : limbs[k].region) limb_of[v] = static_cast<int>(k);
   const std::set<std::pair<int, int>> before = self_intersections(mesh);
   pose.input_self_intersections = static_cast<int>(before.size());
+  // Faces that already cross the surface in the input (touching fingers, say) may cross elsewhere
+  // once moved: only crossings between other faces count.
+  std::vector<char> crossing_before(mesh.faces.size(), 0);
+  for (const auto& [f, g] : before) crossing_before[f] = crossing_before[g] = 1;
   std::vector<int> tries(limbs.size(), 0);
   std::vector<char> active(limbs.size(), 1);
   for (int attempt = 0; attempt < 12; ++attempt) {
@@ -435,7 +439,7 @@ Pose pose_mesh(const TriMesh& mesh, const PoseOptions& options, const Context& c
     };
     for (int f : folded_faces(mesh, out)) blame(f);
     for (const auto& pr : self_intersections(out))
-      if (!before.count(pr)) blame(pr.first), blame(pr.second);
+      if (!crossing_before[pr.first] && !crossing_before[pr.second]) blame(pr.first), blame(pr.second);
     bool any = false;
     for (std::size_t k = 0; k < limbs.size(); ++k) {
       if (!failed[k] || !active[k]) continue;

@@ -81,14 +81,14 @@ struct Pose {
   std::vector<PosedLimb> limbs;  ///< the limbs posed (those left out are not listed)
   int limbs_found = 0;           ///< limbs found on the mesh
   int limbs_dropped = 0;         ///< limbs that could not be posed without folds or crossings
-  int input_self_intersections = 0;  ///< intersecting face pairs of the input (kept, not new)
+  int input_self_intersections = 0;  ///< intersecting face pairs of the input (their faces excused)
   double max_handle_error = 0;   ///< largest distance of a handle vertex from its rigid target
 };
 
 /// Poses `mesh` (see the file comment). Afterwards no face is folded against an edge neighbour
 /// that it did not fold against before (normals turned more than 90 degrees apart where they were
-/// within 60), no face shrinks to under 1e-3 of its area, and the surface crosses itself nowhere
-/// where the input did not (CGAL Polygon_mesh_processing::self_intersections).
+/// within 60), no face shrinks to under 1e-3 of its area, and no two faces cross that did not
+/// cross any face in the input (CGAL Polygon_mesh_processing::self_intersections).
 /// \pre `mesh` is closed, manifold, genus 0, outward (validated). \throws InvalidInput for options
 /// out of range, SolverError when the mesh has no limb or none can be posed. Progress stage: "pose".
 Pose pose_mesh(const TriMesh& mesh, const PoseOptions& options = {}, const Context& context = {});
