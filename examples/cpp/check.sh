@@ -44,9 +44,16 @@ check_set() {
   shift
   local tools="$work/$name/tools" program="$work/$name/example"
   echo "== $name: $*"
-  "$prefix/bin/qs-dissect" "$@" -o "$tools/dissection" >/dev/null
-  "$prefix/bin/qs-remesh" "$tools/dissection" --level 4 -o "$tools/remesh-L4" >/dev/null
-  "$example" "$program" "$@" >/dev/null
+  mkdir -p "$work/$name"
+  local log="$work/$name/log.txt"
+  if ! { "$prefix/bin/qs-dissect" "$@" -o "$tools/dissection" &&
+         "$prefix/bin/qs-remesh" "$tools/dissection" --level 4 -o "$tools/remesh-L4" &&
+         "$example" "$program" "$@"; } >"$log" 2>&1; then
+    echo "FAIL: a program failed; its output:" >&2
+    cat "$log" >&2
+    status=1
+    return
+  fi
   same_tree "$tools" "$program" || status=1
 }
 

@@ -26,8 +26,8 @@ int main(int argc, char** argv) {
     for (int i = 2; i < argc; ++i) inputs.push_back(qs::pipeline::load_input(argv[i]));
 
     qs::Context ctx;
-    ctx.log = [](qs::LogLevel level, const std::string& m) {
-      if (level != qs::LogLevel::Debug) std::cerr << m << "\n";
+    ctx.log = [](qs::LogLevel level, const std::string& m) {  // warnings, as the tools print them
+      if (level == qs::LogLevel::Warning) std::cerr << "qs_example: warning: " << m << "\n";
     };
     const auto dissection = qs::pipeline::dissect(inputs, {}, ctx);
     const auto dissection_folder = out / "dissection";
