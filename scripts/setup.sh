@@ -29,9 +29,6 @@ packages=(
   libcli11-dev liblemon-dev libcpp-httplib-dev
   ca-certificates  # the validator's download (node uses the system's certificates)
 )
-if [ "$studio" = 1 ]; then
-  packages+=(npm)
-fi
 if [ "$dev" = 1 ]; then
   packages+=(
     libgtest-dev libgmock-dev
@@ -44,7 +41,8 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
 done
-# node runs the glTF validator; a machine that has one already (any packaging) keeps it.
+# node runs the glTF validator, npm installs web/studio's packages; a machine that has them
+# already (from any packaging) keeps them.
 command -v node >/dev/null || missing+=(nodejs)
 if [ "$studio" = 1 ] && ! command -v npm >/dev/null; then
   missing+=(npm)
