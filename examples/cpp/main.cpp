@@ -25,11 +25,8 @@ int main(int argc, char** argv) {
     std::vector<qs::pipeline::Input> inputs;
     for (int i = 2; i < argc; ++i) inputs.push_back(qs::pipeline::load_input(argv[i]));
 
-    qs::Context ctx;
-    ctx.log = [](qs::LogLevel level, const std::string& m) {  // warnings, as the tools print them
-      if (level == qs::LogLevel::Warning) std::cerr << "qs_example: warning: " << m << "\n";
-    };
-    const auto dissection = qs::pipeline::dissect(inputs, {}, ctx);
+    for (const std::string& w : qs::pipeline::check_inputs(inputs)) std::cerr << "qs_example: warning: " << w << "\n";
+    const auto dissection = qs::pipeline::dissect(inputs);
     const auto dissection_folder = out / "dissection";
     qs::pipeline::write_dissection(dissection, dissection_folder);
     qs::pipeline::check_bijective(dissection);
@@ -39,7 +36,7 @@ int main(int argc, char** argv) {
     qs::pipeline::RemeshConfig config;
     config.level = 4;
     const auto loaded = qs::pipeline::read_dissection(dissection_folder);
-    const auto remesh = qs::pipeline::remesh(loaded, dissection_folder, config, ctx);
+    const auto remesh = qs::pipeline::remesh(loaded, dissection_folder, config);
     qs::pipeline::write_remesh(remesh, out / "remesh-L4");
     std::cout << remesh.report;
     return 0;
