@@ -9,8 +9,10 @@
 #   usage: scripts/run-example.sh [OUTDIR]   (default out/example)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
-bash scripts/build.sh
+bash scripts/setup.sh  # build and run dependencies and the glTF validator only (not --dev)
+# Only the tools this script runs (scripts/build.sh builds everything, tests and benchmarks too).
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$(nproc)" --target qs-inspect qs-dissect qs-remesh qs-bake qs-morph qs-merge qs-render
 out=${1:-out/example}
 tools=build/tools
 meshes=(examples/spot_2k.obj examples/cat_16k.obj examples/koala_7k.obj)

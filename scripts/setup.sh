@@ -1,64 +1,123 @@
 #!/usr/bin/env bash
-# Installs qs's build and test dependencies from Debian 12's packages.
-# Idempotent and non-interactive; run as root (or with sudo available).
+# Installs what qs needs from Debian 12's packages. Idempotent and non-interactive; run as root
+# (or with sudo available).
+#   usage: scripts/setup.sh [--studio] [--dev]
+#   (none)    build and run: compiler, CMake, Ninja, the libraries qs links, and node with the
+#             Khronos glTF validator (scripts/validate-gltf.sh) that scripts/run-example.sh runs
+#   --studio  adds npm and web/studio's npm packages (three.js, which qs-studio's page loads)
+#   --dev     adds what scripts/test.sh needs: GoogleTest/GoogleMock, clang-16 with its runtime
+#             (libFuzzer, ASan, UBSan for scripts/fuzz.sh), Chromium and web/studio's npm packages
+#             (puppeteer-core drives the studio's browser tests)
+# What each package is for, and their licences: docs/packaging.md.
 set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+
+studio=0
+dev=0
+for a in "$@"; do
+  case "$a" in
+    --studio) studio=1 ;;
+    --dev) dev=1; studio=1 ;;
+    -h|--help) sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "setup: unknown argument '$a' (usage: scripts/setup.sh [--studio] [--dev])" >&2; exit 2 ;;
+  esac
+done
 
 packages=(
-  build-essential cmake ninja-build pkg-config git
-  libcgal-dev libeigen3-dev libopenmesh-dev libopenimageio-dev
-  libtinygltf-dev nlohmann-json3-dev libcli11-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
-  libcpp-httplib-dev chromium
-  liblemon-dev
-  clang-16 libclang-rt-16-dev  # libFuzzer, ASan and UBSan for scripts/fuzz.sh (clang 14 lacks C++20 binding captures)
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libcgal-dev libopenimageio-dev libtinygltf-dev nlohmann-json3-dev
+  libcli11-dev liblemon-dev libcpp-httplib-dev
+  ca-certificates  # the validator's download (node uses the system's certificates)
 )
+if [ "$dev" = 1 ]; then
+  packages+=(
+    libgtest-dev libgmock-dev
+    clang-16 libclang-rt-16-dev  # clang 14 lacks C++20 binding captures
+    chromium
+  )
+fi
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
 done
-
-# node (with npm) runs the Khronos glTF validator; a machine that has one already keeps it.
-if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
-  missing+=(nodejs npm)
+# node runs the glTF validator, npm installs web/studio's packages; a machine that has them
+# already (from any packaging) keeps them.
+command -v node >/dev/null || missing+=(nodejs)
+if [ "$studio" = 1 ] && ! command -v npm >/dev/null; then
+  missing+=(npm)
 fi
 
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "setup: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
+    sudo="sudo"
+  fi
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  # --force-unsafe-io: dpkg does not fsync each unpacked file (as in Debian's container images);
+  # about a third of the installation's time on a fresh machine (docs/packaging.md).
+  $sudo apt-get install -y -qq --no-install-recommends -o Dpkg::Options::=--force-unsafe-io "${missing[@]}" >/dev/null
+fi
+
+# The Khronos glTF validator (npm package gltf-validator, one file of JavaScript and no
+# dependencies) into scripts/validator/node_modules: with npm when there is one, else the
+# package's tarball fetched by node and checked against the integrity hash in package-lock.json.
+# Without the npm registry the GLB checks are skipped (tests say so); everything else works.
 install_validator() {
-  local dir="$(cd "$(dirname "$0")" && pwd)/validator"
+  local dir="$here/validator"
   [ -f "$dir/node_modules/gltf-validator/index.js" ] && return 0
-  echo "setup: installing the glTF validator (npm gltf-validator) into scripts/validator"
-  # Without the npm registry the GLB checks are skipped (tests say so); everything else works.
-  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null 2>&1) ||
-    echo "setup: warning: could not install gltf-validator; GLB validation will be skipped" >&2
+  echo "setup: installing the glTF validator (gltf-validator) into scripts/validator"
+  if command -v npm >/dev/null; then
+    (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null 2>&1) && return 0
+  else
+    node - "$dir" <<'JS' && return 0
+const fs = require('fs'), path = require('path'), crypto = require('crypto');
+const { execFileSync } = require('child_process');
+const dir = process.argv[2];
+const lock = JSON.parse(fs.readFileSync(path.join(dir, 'package-lock.json'), 'utf8'));
+const pkg = lock.packages['node_modules/gltf-validator'];
+const url = pkg.resolved || `https://registry.npmjs.org/gltf-validator/-/gltf-validator-${pkg.version}.tgz`;
+(async () => {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+  const data = Buffer.from(await response.arrayBuffer());
+  const [algorithm, expected] = pkg.integrity.split(/-(.*)/s);
+  if (crypto.createHash(algorithm).update(data).digest('base64') !== expected)
+    throw new Error(`${url}: the download does not match package-lock.json's integrity hash`);
+  const modules = path.join(dir, 'node_modules'), dest = path.join(modules, 'gltf-validator');
+  const staging = path.join(modules, '.gltf-validator.staging'), tarball = staging + '.tgz';
+  fs.rmSync(staging, { recursive: true, force: true });
+  fs.mkdirSync(staging, { recursive: true });
+  fs.writeFileSync(tarball, data);
+  execFileSync('tar', ['-xzf', tarball, '-C', staging, '--strip-components=1']);
+  fs.rmSync(tarball);
+  fs.rmSync(dest, { recursive: true, force: true });
+  fs.renameSync(staging, dest);
+})().catch((e) => { console.error(`setup: ${e.message}`); process.exit(1); });
+JS
+  fi
+  echo "setup: warning: could not install gltf-validator; GLB validation will be skipped" >&2
 }
 
-# qs-studio's page: three.js (served locally, no CDN) and puppeteer-core (its browser tests).
+# web/studio's npm packages: three.js (qs-studio's page, served locally) and puppeteer-core (its
+# browser tests). Without the npm registry the studio serves a page that says what is missing.
 install_studio_web() {
-  local dir="$(cd "$(dirname "$0")/.." && pwd)/web/studio"
+  local dir="$here/../web/studio"
   [ -f "$dir/node_modules/three/build/three.module.js" ] && [ -d "$dir/node_modules/puppeteer-core" ] && return 0
-  echo "setup: installing three.js and puppeteer-core (npm) into web/studio for qs-studio"
-  # Without the npm registry the studio serves a page that says what is missing; browser tests skip.
+  echo "setup: installing three.js and puppeteer-core (npm) into web/studio"
   (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null 2>&1) ||
     echo "setup: warning: could not install web/studio's npm packages; qs-studio's page and browser tests will not work" >&2
 }
 
+install_validator
+if [ "$studio" = 1 ]; then
+  install_studio_web
+fi
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages already installed"
-  install_validator
-  install_studio_web
-  exit 0
+else
+  echo "setup: done"
 fi
-
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then
-  command -v sudo >/dev/null || { echo "setup: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
-  sudo="sudo"
-fi
-
-echo "setup: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-install_validator
-install_studio_web
-echo "setup: done"

@@ -4,7 +4,7 @@
 # tests (set QS_SKIP_SANITIZERS=1 to skip that part locally).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --dev
 bash scripts/build.sh
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 
