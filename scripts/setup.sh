@@ -4,7 +4,7 @@
 #   usage: scripts/setup.sh [--studio] [--dev]
 #   (none)    build and run: compiler, CMake, Ninja, the libraries qs links, and node with the
 #             Khronos glTF validator (scripts/validate-gltf.sh) that scripts/run-example.sh runs
-#   --studio  adds npm and web/studio's npm packages (three.js, which qs-studio's page loads)
+#   --studio  adds web/studio's npm packages (three.js, which qs-studio's page loads)
 #   --dev     adds what scripts/test.sh needs: GoogleTest/GoogleMock, clang-16 with its runtime
 #             (libFuzzer, ASan, UBSan for scripts/fuzz.sh), Chromium and web/studio's npm packages
 #             (puppeteer-core drives the studio's browser tests)
@@ -27,7 +27,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libcgal-dev libopenimageio-dev libtinygltf-dev nlohmann-json3-dev
   libcli11-dev liblemon-dev libcpp-httplib-dev
-  ca-certificates  # the validator's download (node uses the system's certificates)
+  ca-certificates  # npm's downloads
 )
 if [ "$dev" = 1 ]; then
   packages+=(
@@ -44,9 +44,7 @@ done
 # node runs the glTF validator, npm installs web/studio's packages; a machine that has them
 # already (from any packaging) keeps them.
 command -v node >/dev/null || missing+=(nodejs)
-if [ "$studio" = 1 ] && ! command -v npm >/dev/null; then
-  missing+=(npm)
-fi
+command -v npm >/dev/null || missing+=(npm)
 
 if [ ${#missing[@]} -gt 0 ]; then
   sudo=""
@@ -63,42 +61,13 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # The Khronos glTF validator (npm package gltf-validator, one file of JavaScript and no
-# dependencies) into scripts/validator/node_modules: with npm when there is one, else the
-# package's tarball fetched by node and checked against the integrity hash in package-lock.json.
+# dependencies) into scripts/validator/node_modules, as package-lock.json pins it.
 # Without the npm registry the GLB checks are skipped (tests say so); everything else works.
 install_validator() {
   local dir="$here/validator"
   [ -f "$dir/node_modules/gltf-validator/index.js" ] && return 0
   echo "setup: installing the glTF validator (gltf-validator) into scripts/validator"
-  if command -v npm >/dev/null; then
-    (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null 2>&1) && return 0
-  else
-    node - "$dir" <<'JS' && return 0
-const fs = require('fs'), path = require('path'), crypto = require('crypto');
-const { execFileSync } = require('child_process');
-const dir = process.argv[2];
-const lock = JSON.parse(fs.readFileSync(path.join(dir, 'package-lock.json'), 'utf8'));
-const pkg = lock.packages['node_modules/gltf-validator'];
-const url = pkg.resolved || `https://registry.npmjs.org/gltf-validator/-/gltf-validator-${pkg.version}.tgz`;
-(async () => {
-  const response = await fetch(url);
-  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
-  const data = Buffer.from(await response.arrayBuffer());
-  const [algorithm, expected] = pkg.integrity.split(/-(.*)/s);
-  if (crypto.createHash(algorithm).update(data).digest('base64') !== expected)
-    throw new Error(`${url}: the download does not match package-lock.json's integrity hash`);
-  const modules = path.join(dir, 'node_modules'), dest = path.join(modules, 'gltf-validator');
-  const staging = path.join(modules, '.gltf-validator.staging'), tarball = staging + '.tgz';
-  fs.rmSync(staging, { recursive: true, force: true });
-  fs.mkdirSync(staging, { recursive: true });
-  fs.writeFileSync(tarball, data);
-  execFileSync('tar', ['-xzf', tarball, '-C', staging, '--strip-components=1']);
-  fs.rmSync(tarball);
-  fs.rmSync(dest, { recursive: true, force: true });
-  fs.renameSync(staging, dest);
-})().catch((e) => { console.error(`setup: ${e.message}`); process.exit(1); });
-JS
-  fi
+  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null 2>&1) && return 0
   echo "setup: warning: could not install gltf-validator; GLB validation will be skipped" >&2
 }
 
