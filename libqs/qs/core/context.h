@@ -17,6 +17,7 @@ struct Context {
   std::function<void(const std::string&, double)> progress;
   /// When set and true, long calls stop at the next check and throw an Internal qs::Error "cancelled".
   const std::atomic<bool>* cancel = nullptr;
+  int threads = 0;  ///< 0: all hardware threads
 
   void info(const std::string& m) const { if (log) log(LogLevel::Info, m); }
   void warn(const std::string& m) const { if (log) log(LogLevel::Warning, m); }
