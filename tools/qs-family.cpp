@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "mesh_input.h"
+#include "qs/pipeline/pipeline.h"
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/family/family.h"
@@ -83,7 +83,7 @@ int run_generate(const qs::family::FamilyOptions& opt, const std::string& outdir
 
 int run_retessellate(const std::string& input, const std::optional<std::string>& landmark_file,
                      const qs::family::RetessellateOptions& opt, const std::string& output, bool quiet) {
-  const qs::tools::MeshInput in = qs::tools::load_mesh_input(input, landmark_file);
+  const qs::pipeline::Input in = qs::pipeline::load_input(input, landmark_file);
   if (in.valid.vertex_map.size() != in.read.mesh.positions.size() || in.valid.report.orientation_flipped ||
       in.valid.mesh.num_vertices() != in.read.mesh.num_vertices())
     throw qs::InvalidInput(input + ": the mesh has unreferenced vertices or faces inward; origins would not refer "

@@ -78,6 +78,19 @@ void validate_config(const DissectConfig& config);
 /// One line per option for --help-all: key, default, what it does.
 std::string describe_config();
 
+/// What dissect() computes for meshes already in memory: dissect_set with the map hooks, then
+/// refine_maps for two or more meshes; no report, no files (benchmarks, studio).
+struct SetResult {
+  dissect::DissectionSet set;              ///< the refined charts when refine_maps ran
+  maprefine::RefineReport refine;          ///< empty when the maps were not refined
+  maprefine::RefineOptions refine_options; ///< as run (the pose pull and its border iterations set)
+  bool one_pose = false;                   ///< same_pose told or detected
+  double dissect_seconds = 0, refine_seconds = 0;
+};
+/// \throws as dissect().
+SetResult dissect_meshes(const std::vector<dissect::MeshToDissect>& meshes, const DissectConfig& config = {},
+                         const Context& ctx = {});
+
 /// A dissected set, ready to be written.
 struct DissectResult {
   DissectConfig config;                        ///< as asked (written as dissection.json's "options")
