@@ -5,6 +5,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
 #include <variant>
 
 #include "qs/core/error.h"
@@ -98,10 +99,13 @@ const std::vector<Entry>& schema() {
   return entries;
 }
 
+// The shortest decimal text that reads back as x.
 std::string number(double x) {
-  std::ostringstream s;
-  s << std::setprecision(17) << x;
-  return s.str();
+  for (int digits = 6;; ++digits) {
+    std::ostringstream s;
+    s << std::setprecision(digits) << x;
+    if (digits >= 17 || std::stod(s.str()) == x) return s.str();
+  }
 }
 
 std::string range_text(const Entry& e) {
