@@ -154,12 +154,10 @@ int main(int argc, char** argv) {
           meshes[i], landmark_files.empty() ? std::nullopt : std::optional(landmark_files[i])));
     const auto t1 = std::chrono::steady_clock::now();
 
+    if (!quiet)
+      for (const std::string& w : qs::pipeline::check_inputs(inputs)) std::cerr << "qs-dissect: warning: " << w << "\n";
     qs::Context ctx;
     ctx.threads = threads;
-    if (!quiet)
-      ctx.log = [](qs::LogLevel level, const std::string& m) {
-        if (level == qs::LogLevel::Warning) std::cerr << "qs-dissect: warning: " << m << "\n";
-      };
     // Each stage once at its start, then at every quarter it passes, never backwards or twice.
     std::string last_stage;
     int last_quarter = -1;

@@ -60,6 +60,23 @@ std::string default_dissection_folder(const std::vector<std::string>& files) {
   return d + ".dissection";
 }
 
+std::vector<std::string> check_inputs(const std::vector<Input>& inputs) {
+  auto has_seeds = [](const Input& in) { return in.landmarks && in.landmarks->seeds.size() == 4; };
+  const auto with_seeds = std::count_if(inputs.begin(), inputs.end(), has_seeds);
+  if (with_seeds != 0 && with_seeds != static_cast<long>(inputs.size())) {
+    std::string which;
+    for (const auto& in : inputs)
+      if (!has_seeds(in)) which += (which.empty() ? "" : ", ") + in.file;
+    throw InvalidInput("seeds correspond by order across the set, so every mesh needs them: " + which +
+                       " has no seeds (give a landmark file with 4 seeds for each mesh, or for none)");
+  }
+  std::vector<std::string> warnings;
+  if (inputs.size() > 1 && with_seeds == 0)
+    warnings.push_back("no seeds given; each mesh gets automatic seeds from its own principal axes, which "
+                       "correspond only for similar poses. Give seeds for a reliable correspondence.");
+  return warnings;
+}
+
 SetResult dissect_meshes(const std::vector<dissect::MeshToDissect>& meshes, const DissectConfig& config,
                          const Context& ctx) {
   validate_config(config);
@@ -101,7 +118,6 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
 
   std::vector<dissect::MeshToDissect> set(inputs.size());
   std::vector<std::string> seed_source(inputs.size(), "automatic");
-  int with_seeds = 0;
   for (size_t i = 0; i < inputs.size(); ++i) {
     const auto& in = inputs[i];
     set[i].mesh = &in.valid.mesh;
@@ -114,7 +130,6 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
       for (int k = 0; k < 4; ++k) seeds[k] = in.landmarks->seeds[k].where;
       set[i].seed_points = seeds;
       seed_source[i] = in.landmark_file;
-      ++with_seeds;
     }
     for (const auto& l : in.landmarks->features) {
       dissect::Feature f;
@@ -124,16 +139,7 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
       set[i].features.push_back(f);
     }
   }
-  if (with_seeds != 0 && with_seeds != static_cast<int>(inputs.size())) {
-    std::string which;
-    for (size_t i = 0; i < inputs.size(); ++i)
-      if (!set[i].seed_points) which += (which.empty() ? "" : ", ") + inputs[i].file;
-    throw InvalidInput("seeds correspond by order across the set, so every mesh needs them: " + which +
-                       " has no seeds (give a landmark file with 4 seeds for each mesh, or for none)");
-  }
-  if (inputs.size() > 1 && with_seeds == 0)
-    ctx.warn("no seeds given; each mesh gets automatic seeds from its own principal axes, which correspond only "
-             "for similar poses. Give seeds for a reliable correspondence.");
+  check_inputs(inputs);
 
   SetResult run = dissect_meshes(set, config, ctx);
   dissect::DissectionSet& sets = run.set;

@@ -106,10 +106,13 @@ struct DissectResult {
   std::string folded_message;
 };
 
+/// Checks that the inputs can be dissected together and returns the warnings a user should see
+/// (a set without seeds). \throws InvalidInput when some meshes have seeds and others not.
+std::vector<std::string> check_inputs(const std::vector<Input>& inputs);
+
 /// Dissects the meshes together (one union quinary tree, the same patches on every mesh),
 /// refines the maps between them and writes the report. Seeds come from the landmarks (every
 /// mesh or none), features by name. Stages: "dissect", "refine maps" (Context::progress).
-/// Warnings (no seeds for a set) go to Context::log.
 /// \throws UsageError for a bad configuration, InvalidInput for inconsistent landmarks or
 /// meshes that cannot be dissected, SolverError when a map fails, InternalError for a result
 /// that breaks the dissection's invariants.
