@@ -53,11 +53,15 @@ cr::TruthMesh sphere_truth(const qs::family::FamilyShape& s) {
   return t;
 }
 
+// The pair dissected together without the same-pose steps (these tests measure the refinement
+// of a given dissection; one surface tessellated twice would be found in one pose).
 std::vector<qs::dissect::Dissection> dissect_pair(const qs::family::Family& fam,
                                                   const qs::dissect::DissectOptions& options = {}) {
   std::vector<qs::dissect::MeshToDissect> in;
   for (const auto& s : fam.shapes) in.push_back(cr::dissect_input(s));
-  return qs::dissect::dissect_set(in, options).meshes;
+  qs::dissect::DissectOptions unposed = options;
+  unposed.same_pose_detect = 0;
+  return qs::dissect::dissect_set(in, unposed).meshes;
 }
 
 cr::ErrorStats measure(const cr::GroundTruth& truth, const std::vector<qs::dissect::Dissection>& set) {
@@ -762,8 +766,12 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   const auto not_found = qs::dissect::dissect_set(fin, o);
   EXPECT_FALSE(not_found.same_pose_detected);
   EXPECT_EQ(not_found.same_pose_splits, 0);
-  // Off by default in the library; one mesh given twice is not posed (its map is the identity).
-  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, -1);
+  // On by default (qs-dissect's detection), off with 0; one mesh given twice is not posed (its
+  // map is the identity).
+  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, *d_same);
+  qs::dissect::DissectOptions off;
+  off.same_pose_detect = 0;
+  EXPECT_EQ(qs::dissect::dissect_set(in, off).pose_distance, -1);
   EXPECT_FALSE(qs::dissect::dissect_set({in[0], in[0]}, o).same_pose_detected);
 
   in[1].seeds.reset();

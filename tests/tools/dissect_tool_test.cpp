@@ -221,7 +221,8 @@ TEST_F(DissectTool, HelpIsShort) {
   const RunResult h = run_tool("qs-dissect", "--help");
   ASSERT_EQ(h.exit, 0);
   int options = 0;
-  std::istringstream lines(h.out.substr(h.out.find("OPTIONS:")));
+  ASSERT_NE(h.out.find("Options:"), std::string::npos) << h.out;
+  std::istringstream lines(h.out.substr(h.out.find("Options:")));
   for (std::string line; std::getline(lines, line);)
     if (line.rfind("  -", 0) == 0) ++options;
   EXPECT_GT(options, 5) << h.out;
