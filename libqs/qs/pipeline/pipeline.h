@@ -174,8 +174,8 @@ struct RemeshResult {
 
 /// Remeshes a dissected set (read from `dissection_folder`) with one face list for all its
 /// meshes, and measures the results (smallest angles, vertex density; the Metro error with
-/// config.error). 	hrows UsageError for a bad configuration, InvalidInput for a level the mode
-/// does not reach.
+/// config.error). \throws UsageError for a bad configuration or a level the mode does not reach
+/// (the even remesh with anisotropic cells goes to remesh::kMaxAnisotropicLevel).
 RemeshResult remesh(const dissect::LoadedDissection& dissection, const std::filesystem::path& dissection_folder,
                     const RemeshConfig& config = {}, const Context& ctx = {});
 

@@ -67,9 +67,6 @@ void validate_config(const RemeshConfig& c) {
   if (!(c.grid_relax >= 0 && c.grid_relax <= remesh::kMaxGridRelax))
     throw UsageError("--grid-relax must be in [0, " + std::to_string(remesh::kMaxGridRelax) + "]");
   if (c.metro_samples < 0) throw UsageError("--metro-samples must be at least 0");
-  if (even(c) && !c.square_cells && c.level > remesh::kMaxAnisotropicLevel)
-    throw UsageError("--level " + std::to_string(c.level) + ": the even remesh goes to level " +
-                     std::to_string(remesh::kMaxAnisotropicLevel) + "; add --uniform for the square grid");
 }
 
 fs::path default_remesh_folder(const fs::path& dissection_folder, const RemeshConfig& c) {
@@ -81,6 +78,9 @@ fs::path default_remesh_folder(const fs::path& dissection_folder, const RemeshCo
 RemeshResult remesh(const dissect::LoadedDissection& in, const fs::path& dissection_folder, const RemeshConfig& config,
                     const Context& ctx) {
   validate_config(config);
+  if (even(config) && !config.square_cells && config.level > remesh::kMaxAnisotropicLevel)
+    throw UsageError("--level " + std::to_string(config.level) + ": the even remesh goes to level " +
+                     std::to_string(remesh::kMaxAnisotropicLevel) + "; add --uniform for the square grid");
   if (in.meshes.empty()) throw InvalidInput("the dissection has no meshes");
   RemeshResult result;
   result.config = config;
