@@ -1,10 +1,10 @@
-// Benchmark that chose the default dissection options (issue 13): for every closed genus-0 mesh of
+// Benchmark that chose the default dissection options: for every closed genus-0 mesh of
 // a folder and every candidate option set, the patches, the dissection time, the level-5 uniform
 // remesh's mean error (Metro two-sided, % of the original's bounding-box diagonal, 20000 samples
 // per direction as qs-remesh measures it), the level-4 remesh's smallest-angle shares and median,
 // the level-5 remesh's vertex-density spread (p95 / p5 over the surface) and the texel-density
 // spread of a normal-map atlas (chart density, p95 / p5). Each candidate's second row ("/even")
-// measures the same dissection with the even remesh (qs-remesh --even: about the uniform level's
+// measures the same dissection with the even remesh (qs-remesh --level: about the uniform level's
 // face count spread by area) and 256-texel tiles sized by area (qs-bake --tiles area), with the
 // even level-5 face count relative to the uniform one in the time column.
 //   usage: qs-bench-defaults [MESH_DIR] [CANDIDATES] [MESH_FILTER]
@@ -47,12 +47,6 @@ struct Candidate {
   double relax = qs::remesh::UniformOptions{}.relax;  ///< the uniform remesh's grid relaxation
 };
 
-qs::dissect::DissectOptions predict() {
-  qs::dissect::DissectOptions o;
-  o.predict_split = true;
-  return o;
-}
-
 qs::dissect::DissectOptions protrusion(double s) {
   qs::dissect::DissectOptions o;
   o.protrusion_stretch = s;
@@ -65,33 +59,29 @@ qs::dissect::DissectOptions cotan() {
   return o;
 }
 
-qs::dissect::DissectOptions make(double tau, double max_area, int stretch_iterations, int split_stretch) {
+qs::dissect::DissectOptions make(double tau, double max_area, int stretch_iterations) {
   qs::dissect::DissectOptions o;
   o.tau = tau;
   o.max_patch_area = max_area;
   o.stretch_iterations = stretch_iterations;
-  o.split_stretch_rounds = split_stretch;
   return o;
 }
 
 std::vector<Candidate> candidates() {
   return {
       {"default", qs::dissect::DissectOptions{}},
-      {"old", make(3, 0, 0, 0)},             // the defaults before issue 13
-      {"recipe", make(3, 0.15, 0, 0)},       // the README's remeshing recipe before issue 13
-      {"a15s10", make(3, 0.15, 10, 0)},
-      {"a10s10", make(3, 0.10, 10, 0)},
-      {"a15s10x3", make(3, 0.15, 10, 3)},
-      {"t2a15s10", make(2, 0.15, 10, 0)},
-      {"t2.5a10s10", make(2.5, 0.10, 10, 0)},
+      {"old", make(3, 0, 0)},             // no area cap, no leaf stretch minimization
+      {"recipe", make(3, 0.15, 0)},       // the area cap alone
+      {"a15s10", make(3, 0.15, 10)},
+      {"a10s10", make(3, 0.10, 10)},
+      {"t2a15s10", make(2, 0.15, 10)},
+      {"t2.5a10s10", make(2.5, 0.10, 10)},
       // Remesh grid relaxation (UniformOptions::relax) on the default dissection, and cotan maps.
       {"relax0", qs::dissect::DissectOptions{}, 0.0},
       {"relax50", qs::dissect::DissectOptions{}, 0.5},
       {"relax90", qs::dissect::DissectOptions{}, 0.9},
       {"cotan", cotan(), 0.0},
       {"cotan_relax90", cotan(), 0.9},
-      // Splits chosen by the children's stretch predicted from the parent's map.
-      {"predict", predict()},
       // Squeezed protrusions split with the w rule (DissectOptions::protrusion_stretch 0: the
       // defaults before it).
       {"protrusion0", protrusion(0)},
@@ -125,11 +115,11 @@ int main(int argc, char** argv) {
       files.push_back(e.path());
   }
   std::sort(files.begin(), files.end());
-  std::printf("candidates (tau, max patch area, leaf stretch rounds, split-stretch rounds, cotan, remesh grid relax):\n");
+  std::printf("candidates (tau, max patch area, leaf stretch rounds, cotan, remesh grid relax):\n");
   for (const auto& c : cands)
-    std::printf("  %-12s tau %.2f, max-area %.3g, optimize-stretch %d, split-stretch %d, cotan %d, relax %.2f\n",
-                c.name.c_str(), c.options.tau, c.options.max_patch_area, c.options.stretch_iterations,
-                c.options.split_stretch_rounds, int(c.options.intrinsic_cotan), c.relax);
+    std::printf("  %-12s tau %.2f, max-area %.3g, stretch_iterations %d, cotan %d, relax %.2f\n", c.name.c_str(),
+                c.options.tau, c.options.max_patch_area, c.options.stretch_iterations, int(c.options.intrinsic_cotan),
+                c.relax);
   std::printf("\nerr5 = level-5 mean error (%% of diagonal); <5/<10/<20 = %% of level-4 faces with a smallest angle "
               "under 5/10/20 deg, med = median (deg); vsp = level-5 vertex-density spread p95/p5; tsp = texel-density "
               "spread p95/p5; time = dissection s\n\n");

@@ -1,4 +1,5 @@
-// Benchmark: dissecting sets of meshes together (union quinary tree + feature alignment).
+// Benchmark: dissecting sets of meshes together (union quinary tree + feature alignment), as
+// qs-dissect does (qs::pipeline::dissect_meshes: the map hooks, same-pose detection, refine_maps).
 //   usage: qs-bench-dissect-set [MESH_DIR]   (default ../shared/meshes)
 // Prints, per set: meshes, common patches, max stretch, features, warp flips, time, and the
 // time per 10k input faces; then the scaling of one mesh repeated 1, 2, 4, 8 times.
@@ -17,6 +18,7 @@
 #include "qs/dissect/dissection.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
+#include "qs/pipeline/pipeline.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -51,7 +53,7 @@ void run(const std::string& label, const std::vector<qs::dissect::MeshToDissect>
   for (const auto& m : set) faces += static_cast<long>(m.mesh->faces.size());
   const auto t0 = Clock::now();
   try {
-    const auto s = qs::dissect::dissect_set(set);
+    const auto s = qs::pipeline::dissect_meshes(set).set;
     const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
     int over = 0, nonbij = 0;
     for (const auto& d : s.meshes)

@@ -1,5 +1,6 @@
 // Benchmark: set dissections of generated families (qs::family, 8000 faces a shape, 4 seeds and
-// the limb tips as surface points) of 1, 2, 4, 8 and 16 shapes.
+// the limb tips as surface points) of 1, 2, 4, 8 and 16 shapes, dissected as qs-dissect does
+// (qs::pipeline::dissect_meshes: the map hooks, same-pose detection, refine_maps after).
 //   usage: qs-bench-family-sets [SEED ...]   (default seeds 1 2 3)
 // Prints per family size: time (best of 3), time per mesh, the ratio t(N) / (N t(1)) (1: linear;
 // below 1: the meshes' work runs in parallel), common patches, faces added by local refinement,
@@ -16,6 +17,7 @@
 #include "qs/dissect/dissection.h"
 #include "qs/correspondence/correspondence.h"
 #include "qs/family/family.h"
+#include "qs/pipeline/pipeline.h"
 
 using Clock = std::chrono::steady_clock;
 
@@ -23,7 +25,7 @@ int main(int argc, char** argv) {
   std::vector<std::uint64_t> seeds;
   for (int i = 1; i < argc; ++i) seeds.push_back(std::strtoull(argv[i], nullptr, 10));
   if (seeds.empty()) seeds = {1, 2, 3};
-  std::printf("family sets: 8000-face shapes, seeds and limb tips as surface points, default options\n");
+  std::printf("family sets: 8000-face shapes, seeds and limb tips as surface points, qs-dissect's defaults\n");
   std::printf("%6s %4s %10s %12s %10s %8s %9s %s\n", "seed", "N", "time s", "s per mesh", "t/(N t1)", "patches",
               "refined", "exact");
   for (const std::uint64_t seed : seeds) {
@@ -41,7 +43,7 @@ int main(int argc, char** argv) {
       try {
         for (int rep = 0; rep < 3; ++rep) {
           const auto t0 = Clock::now();
-          result = qs::dissect::dissect_set(set);
+          result = qs::pipeline::dissect_meshes(set).set;
           best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
         }
       } catch (const qs::Error& e) {

@@ -44,21 +44,19 @@ std::vector<Variant> variants() {
     v.push_back({name, what, o});
   };
   add("default", "DissectOptions{} as compiled", [](auto&) {});
-  add("before12", "--min-split-area 0 --force-split-area 0 (the no-progress rule alone)", [](auto& o) {
+  add("before12", "min_split_area 0, force_split_area 0 (the no-progress rule alone)", [](auto& o) {
     o.min_split_area = 0;
     o.force_split_area = 0;
   });
-  add("xdepth0", "--area-extra-depth 0 (max_depth for every patch, as before issue 13 item 3)",
+  add("xdepth0", "area_extra_depth 0 (max_depth for every patch)",
       [](auto& o) { o.area_extra_depth = 0; });
-  add("msa0", "--min-split-area 0", [](auto& o) { o.min_split_area = 0; });
-  add("msa0.003", "--min-split-area 0.003", [](auto& o) { o.min_split_area = 0.003; });
-  add("fsa0.005", "--force-split-area 0.005", [](auto& o) { o.force_split_area = 0.005; });
+  add("msa0", "min_split_area 0", [](auto& o) { o.min_split_area = 0; });
+  add("msa0.003", "min_split_area 0.003", [](auto& o) { o.min_split_area = 0.003; });
+  add("fsa0.005", "force_split_area 0.005", [](auto& o) { o.force_split_area = 0.005; });
   add("depth8", "--max-depth 8", [](auto& o) { o.max_depth = 8; });
   add("tau2", "--tau 2", [](auto& o) { o.tau = 2; });
   add("margin0.4", "peak_margin 0.4 (default 0.35)", [](auto& o) { o.peak_margin = 0.4; });
   add("wmax0.55", "w_max 0.55 (default 0.65)", [](auto& o) { o.w_max = 0.55; });
-  add("sstretch6", "--split-stretch 6", [](auto& o) { o.split_stretch_rounds = 6; });
-  add("predict", "--predict-split", [](auto& o) { o.predict_split = true; });
   return v;
 }
 

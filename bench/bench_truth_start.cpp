@@ -1,4 +1,4 @@
-// Benchmark (issue 17): is the map refinement's energy a guide toward the exact map?
+// Benchmark: is the map refinement's energy a guide toward the exact map?
 //   usage: qs-bench-truth-start [--samples N] [--pose-pull W] [--faces F] [--variation V] [SEED ...]   (seeds 1..6)
 //          qs-bench-truth-start [--samples N] [--pose-pull W] --pair A.obj B.obj LANDMARKS.json
 //   (--pose-pull: the pull's weight for a pair found in one pose, default qs-dissect's 10)
@@ -6,8 +6,8 @@
 // 0 and 1 of the seed) with B rebuilt on A's connectivity (every vertex of A at its exact image on
 // shape 1), or two meshes with identical face lists (e.g. smpl_man_14k / smpl_woman_14k) and one
 // landmark file for both. The pair is dissected as qs-dissect does by default, then refined twice:
-//   qs:    B's chart as dissected, refine_maps at qs-dissect's defaults (the pose pull and 3 border
-//          Newton steps when the pair is found to share a pose);
+//   qs:    B's chart as dissected, refine_maps at qs-dissect's defaults (the pose pull and its
+//          border Newton steps when the pair is found to share a pose);
 //   exact: B's chart replaced by A's chart on B's positions (the exact map, error 0), the same
 //          refine_maps.
 // Prints for both the error of the chart map against the exact one (% of B's diagonal) and the
@@ -26,6 +26,7 @@
 #include "qs/core/error.h"
 #include "qs/correspondence/correspondence.h"
 #include "qs/dissect/dissection.h"
+#include "qs/pipeline/pipeline.h"
 #include "qs/family/family.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/maprefine/map_refine.h"
@@ -82,17 +83,13 @@ void print_row(const char* label, const char* which, const Row& r) {
 // Dissects {A, B} (identical connectivity), refines both ways and prints the rows.
 void run_pair(const char* label, const TriMesh& a, const TriMesh& b, const qs::dissect::MeshToDissect& a_in,
               const qs::dissect::MeshToDissect& b_in, long samples, double pose_pull) {
-  qs::dissect::DissectOptions opt;
-  opt.same_pose_detect = qs::dissect::kSamePoseDetect;
-  qs::maprefine::RefineOptions ro;
-  qs::maprefine::NodeRefineOptions node;
-  node.metric = qs::maprefine::NodeMetric::Composition;
-  opt.refine_before_split = qs::maprefine::node_refiner(ro, node);
-  const qs::dissect::DissectionSet set = qs::dissect::dissect_set({a_in, b_in}, opt);
-  if (set.same_pose_detected && set.same_pose_fallback.empty()) {
-    ro.pose_pull = pose_pull >= 0 ? pose_pull : qs::maprefine::kDefaultPosePull;
-    if (ro.pose_pull > 0) ro.border_iterations = qs::maprefine::kPoseBorderIterations;
-  }
+  // Dissected as qs-dissect does, the refinement left to the two runs below.
+  qs::pipeline::DissectConfig config;
+  config.refine_maps = false;
+  if (pose_pull >= 0) config.pose_pull = pose_pull;
+  const qs::pipeline::SetResult run = qs::pipeline::dissect_meshes({a_in, b_in}, config);
+  const qs::dissect::DissectionSet& set = run.set;
+  const qs::maprefine::RefineOptions ro = run.refine_options;
   std::vector<qs::correspondence::TruthMesh> tm(2);
   tm[0].name = "A";
   tm[0].mesh = a;  // no map: the exact map is the identity of the connectivity

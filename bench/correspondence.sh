@@ -4,9 +4,9 @@
 #
 #   usage: bench/correspondence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-correspondence)
 #   env:   QS_TOOLS (default build/tools), SAMPLES (default 100000), FACES (default 8000),
-#          DISSECT_ARGS (extra qs-dissect options, e.g. "--no-refine-maps" or "--edge-seed-paths --mean-value" for the
-#          maps that were the defaults before issues 13/17; the table then shows the
-#          dissection's and the refinement's own times from qs-dissect's report)
+#          DISSECT_ARGS (extra qs-dissect options, e.g. "--no-refine-maps" or "--config FILE" with
+#          {"geodesic_seed_curves": false, "intrinsic_cotan": false} for the old maps; the table then
+#          shows the dissection's and the refinement's own times from qs-dissect's report)
 #
 # Pairs (data made here, nothing committed but the SMPL landmark file):
 #   gen-sS        generated pair (qs-family, seed S = 1, 2, 3): two warps of one base, own tessellations
@@ -19,7 +19,7 @@
 #                 (re-tessellated by qs-family retessellate --keep-shape; the rows "(isotropic
 #                 re-tessellation)" again with the default isotropic one, which cuts fingers and toes)
 #   human-same    smpl_man_14k against smpl_woman_14k as shipped (identical connectivity)
-#   ... --no-same-pose  the same-pose pairs again with qs-dissect --no-same-pose (qs-dissect finds
+#   ... --no-same-pose  the same-pose pairs again with qs-dissect --same-pose no (qs-dissect finds
 #                 that they share a pose and treats them so by default; this row is without it)
 # Seeds of the humans: middle fingers and big toes; features: nose, head top, heels
 # (bench/correspondence/smpl.landmarks.json, SMPL vertex ids).
@@ -100,7 +100,7 @@ g="$OUT/gen-s1"
 run_pair "self-gen" "$OUT/self-gen/dissection" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
     "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
 BASE_EXTRA=("${EXTRA[@]}")
-EXTRA=("${BASE_EXTRA[@]}" --no-same-pose)
+EXTRA=("${BASE_EXTRA[@]}" --same-pose no)
 run_pair "self-gen --no-same-pose" "$OUT/self-gen/dissection-unposed" "$g/shape00.obj" "$OUT/self-gen/shape00_r.obj" -- \
     "$g/shape00.landmarks.json" "$OUT/self-gen/shape00_r.landmarks.json" -- - "$OUT/self-gen/shape00_r.map.json"
 EXTRA=("${BASE_EXTRA[@]}")
@@ -132,9 +132,9 @@ if [ -f "$MESHES/smpl_man_14k.obj" ] && [ -f "$MESHES/smpl_woman_14k.obj" ]; the
   }
   human_pairs "" ""
   human_pairs " (isotropic re-tessellation)" "-iso" "$h/iso"
-  # The same-pose pairs again with qs-dissect --no-same-pose (found to share a pose by default).
+  # The same-pose pairs again with qs-dissect --same-pose no (found to share a pose by default).
   BASE_EXTRA=("${EXTRA[@]}")
-  EXTRA=("${BASE_EXTRA[@]}" --no-same-pose)
+  EXTRA=("${BASE_EXTRA[@]}" --same-pose no)
   human_pairs " --no-same-pose" "-unposed"
   EXTRA=("${BASE_EXTRA[@]}")
 else
@@ -145,7 +145,7 @@ fi
 python3 - "$RESULTS" <<'PY'
 import json, re, sys
 def timing(path, secs):
-    # "0.42 s" or, with --refine-maps, "0.42 s (dissect 0.30 + refine 0.08)" from qs-dissect's report
+    # "0.42 s" or, with the map refinement, "0.42 s (dissect 0.30 + refine 0.08)" from qs-dissect's report
     try:
         rep = open(path.replace(".corr.json", ".report.txt")).read()
     except OSError:

@@ -6,7 +6,7 @@
 #
 #   usage: bench/family_correspondence.sh [OUT_DIR]   (default out/bench-family-correspondence)
 #   env:   QS_TOOLS (default build/tools), SAMPLES (default 20000),
-#          DISSECT_ARGS (extra qs-dissect options, e.g. "--refine-before-split --refine-before-split-metric composition")
+#          DISSECT_ARGS (extra qs-dissect options, e.g. "--no-refine-maps" or "--config FILE")
 # Prints per family: shapes, variation, faces, dissection wall time, common patches, and over its
 # pairs the mean of the mean / p95 / max errors, the worst max (% of B's diagonal), the share of
 # A's area in the same patch on B, and the mean distance of B's patch corners from their exact place.

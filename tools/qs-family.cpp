@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "mesh_input.h"
+#include "qs/pipeline/pipeline.h"
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/family/family.h"
@@ -172,7 +172,7 @@ void write_retessellation(const RetessellationOut& o, const qs::TriMesh& ref, co
 
 // Origins and landmarks refer to vertices and faces of the file as written: a mesh that
 // validation changes (unreferenced vertices, faces turned) is refused.
-void require_as_written(const qs::tools::MeshInput& in, const std::string& input) {
+void require_as_written(const qs::pipeline::Input& in, const std::string& input) {
   if (in.valid.vertex_map.size() != in.read.mesh.positions.size() || in.valid.report.orientation_flipped ||
       in.valid.mesh.num_vertices() != in.read.mesh.num_vertices())
     throw qs::InvalidInput(input + ": the mesh has unreferenced vertices or faces inward; origins would not refer "
@@ -181,7 +181,7 @@ void require_as_written(const qs::tools::MeshInput& in, const std::string& input
 
 int run_retessellate(const std::string& input, const std::optional<std::string>& landmark_file,
                      const qs::family::RetessellateOptions& opt, const std::string& output, bool quiet) {
-  const qs::tools::MeshInput in = qs::tools::load_mesh_input(input, landmark_file);
+  const qs::pipeline::Input in = qs::pipeline::load_input(input, landmark_file);
   require_as_written(in, input);
   const RetessellationOut o = make_retessellation(in.valid.mesh, in.landmarks, input, opt, output);
   write_retessellation(o, in.valid.mesh, input, output, quiet);
@@ -204,7 +204,7 @@ struct PoseArgs {
 
 int run_pose(const std::string& input, const std::optional<std::string>& landmark_file, const PoseArgs& args,
              const std::string& output, bool quiet) {
-  const qs::tools::MeshInput in = qs::tools::load_mesh_input(input, landmark_file);
+  const qs::pipeline::Input in = qs::pipeline::load_input(input, landmark_file);
   require_as_written(in, input);
   qs::family::PoseOptions opt = args.opt;
   opt.kind = args.pose_name == "bend"    ? qs::family::PoseKind::Bend

@@ -1,5 +1,5 @@
-// The default dissection options (issue 13: chosen by qs-bench-defaults, table in the README) and
-// the patch counts the README documents for them.
+// The default dissection options (chosen by qs-bench-defaults; docs/tools/qs-dissect.md) and the
+// patch counts documented for them.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -25,14 +25,14 @@ TEST(DissectDefaults, AreTheDocumentedOnes) {
   EXPECT_EQ(o.tau, 3.0);
   EXPECT_EQ(o.max_patch_area, 0.15);
   EXPECT_EQ(o.stretch_iterations, 10);
-  EXPECT_EQ(o.split_stretch_rounds, 0);
+  EXPECT_EQ(o.same_pose_detect, qs::dissect::kSamePoseDetect);  // the pipeline's: same pose found
   EXPECT_EQ(o.max_depth, 6);
   EXPECT_EQ(o.min_faces_to_split, 150);
   EXPECT_EQ(o.min_split_area, 0.01);    // README, qs-dissect, "Bodies and long limbs"
   EXPECT_EQ(o.force_split_area, 0.03);
-  EXPECT_EQ(o.area_extra_depth, 4);     // README, "Even sampling of bodies" (issue 13, item 3)
+  EXPECT_EQ(o.area_extra_depth, 4);     // README, "Even sampling of bodies"
   EXPECT_EQ(o.protrusion_stretch, 1000);  // README, "Default options", squeezed protrusions
-  EXPECT_TRUE(o.geodesic_seed_curves);  // issue 13/17: the tessellation-independent maps
+  EXPECT_TRUE(o.geodesic_seed_curves);  // the tessellation-independent maps
   EXPECT_TRUE(o.intrinsic_cotan);
 }
 

@@ -53,11 +53,15 @@ cr::TruthMesh sphere_truth(const qs::family::FamilyShape& s) {
   return t;
 }
 
+// The pair dissected together without the same-pose steps (these tests measure the refinement
+// of a given dissection; one surface tessellated twice would be found in one pose).
 std::vector<qs::dissect::Dissection> dissect_pair(const qs::family::Family& fam,
                                                   const qs::dissect::DissectOptions& options = {}) {
   std::vector<qs::dissect::MeshToDissect> in;
   for (const auto& s : fam.shapes) in.push_back(cr::dissect_input(s));
-  return qs::dissect::dissect_set(in, options).meshes;
+  qs::dissect::DissectOptions unposed = options;
+  unposed.same_pose_detect = 0;
+  return qs::dissect::dissect_set(in, unposed).meshes;
 }
 
 cr::ErrorStats measure(const cr::GroundTruth& truth, const std::vector<qs::dissect::Dissection>& set) {
@@ -245,9 +249,7 @@ TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeature
   const double e_distorted = mr::map_energy(set[0], set[1]);
 
   const auto before = set;
-  mr::RefineOptions with_sliding = inside_only();
-  with_sliding.slide_borders = true;
-  const auto report = mr::refine_maps(set, with_sliding);
+  const auto report = mr::refine_maps(set, inside_only());
   ASSERT_EQ(report.meshes.size(), 2u);
   EXPECT_TRUE(report.meshes[0].reference);
   const auto& r = report.meshes[1];
@@ -263,7 +265,7 @@ TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeature
   EXPECT_GE(r.energy_after, 1.0 - 1e-9);  // normalized: 1 only for an isometry
 
   // The reference is untouched. In the refined mesh, corners, seeds and features keep every
-  // wedge's uv; a vertex on a patch side stays on it (the coordinate that was 0 or 1 is unchanged).
+  // wedge's uv; a vertex on a patch side stays where it is.
   EXPECT_EQ(set[0].chart.face_uv, before[0].chart.face_uv);
   const auto held = held_vertices(before[1]);
   const auto pinned = pinned_vertices(before[1]);
@@ -280,7 +282,7 @@ TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeature
       } else moved += now != was;
     }
   EXPECT_GT(moved, 0);
-  EXPECT_GT(moved_on_side, 0);
+  EXPECT_EQ(moved_on_side, 0);
   EXPECT_EQ(pinned_moved, 0);
   EXPECT_EQ(left_side, 0);
   // Both patches of a side agree on where its vertices are: the remesher's sampler accepts it.
@@ -301,12 +303,12 @@ TEST(RefineMaps, RepairsADistortedChartWithoutFoldsHoldingBordersSeedsAndFeature
   EXPECT_LT(refined.mean, 1.15 * plain.mean);
 }
 
-TEST(RefineMaps, WithoutSlidingTheBordersStayExactly) {
+TEST(RefineMaps, InsideThePatchesTheBordersStayExactly) {
   const auto fam = same_shape_pair();
   auto set = dissect_pair(fam);
   distort(set[1]);
   const auto before = set;
-  const auto r = mr::refine_maps(set, inside_only());  // slide_borders is off by default
+  const auto r = mr::refine_maps(set, inside_only());
   EXPECT_LT(r.meshes[1].energy_after, r.meshes[1].energy_before);
   const auto held = held_vertices(before[1]);
   int changed = 0;
@@ -323,7 +325,6 @@ TEST(RefineMaps, TheResultDoesNotDependOnTheThreadCount) {
   distort(set1[1]);
   auto set4 = set1;
   mr::RefineOptions o;
-  o.slide_borders = true;
   o.threads = 1;
   const auto r1 = mr::refine_maps(set1, o);
   o.threads = 4;
@@ -632,29 +633,6 @@ TEST(PosePull, BringsOneSurfaceTessellatedTwiceCloserToTheIdentity) {
   }
 }
 
-// The sliding pass pulls too: with RefineOptions::slide_borders, every sliding side vertex is
-// pulled along its side toward the nearest point of the reference in its patch, so sliding with
-// the pull brings one surface tessellated twice closer to the identity than the pull without
-// sliding.
-TEST(PosePull, PullsTheSlidingSideVerticesToo) {
-  const auto fam = same_shape_pair();
-  const cr::GroundTruth truth({sphere_truth(fam.shapes[0]), sphere_truth(fam.shapes[1])});
-  const auto dissected = dissect_pair(fam);
-  mr::RefineOptions o;
-  o.pose_pull = 10;
-  auto held = dissected;
-  mr::refine_maps(held, o);
-  o.slide_borders = true;
-  auto slid = dissected;
-  const auto r = expect_thread_independent(slid, o);
-  EXPECT_EQ(r.meshes[1].flipped_faces + r.meshes[1].zero_area_faces, 0);
-  EXPECT_EQ(slid[1].seeds, dissected[1].seeds);
-  const auto e_held = measure(truth, held);
-  const auto e_slid = measure(truth, slid);
-  // Measured 0.2053 held, 0.2025 slid with the pull (0.2038 when the sliding pass did not pull).
-  EXPECT_LT(e_slid.mean, 0.99 * e_held.mean) << e_held.mean << " -> " << e_slid.mean;
-}
-
 // The corner moves pull too: with RefineOptions::move_corners, the cone charts around the
 // corners are pulled toward the nearest points like the interiors and the sides, so moving the
 // corners brings one surface tessellated twice closer to the identity than holding them.
@@ -788,8 +766,12 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   const auto not_found = qs::dissect::dissect_set(fin, o);
   EXPECT_FALSE(not_found.same_pose_detected);
   EXPECT_EQ(not_found.same_pose_splits, 0);
-  // Off by default in the library; one mesh given twice is not posed (its map is the identity).
-  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, -1);
+  // On by default (qs-dissect's detection), off with 0; one mesh given twice is not posed (its
+  // map is the identity).
+  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, *d_same);
+  qs::dissect::DissectOptions off;
+  off.same_pose_detect = 0;
+  EXPECT_EQ(qs::dissect::dissect_set(in, off).pose_distance, -1);
   EXPECT_FALSE(qs::dissect::dissect_set({in[0], in[0]}, o).same_pose_detected);
 
   in[1].seeds.reset();
@@ -798,33 +780,7 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   EXPECT_FALSE(qs::dissect::pose_distance({in[0]}).has_value());
 }
 
-TEST(ConeGlue, TheSquareGluedAndBackIsTheIdentityAndTheAxesGoOntoTheRays) {
-  for (int k : {3, 4, 5, 6})
-    for (int j = 0; j < k; ++j) {
-      for (int a = 0; a <= 20; ++a)
-        for (int b = 0; b <= 20; ++b) {
-          const Vec2 q(a / 20.0, b / 20.0);
-          const Vec2 g = mr::cone_glue(q, k, j);
-          const Vec2 back = mr::cone_unglue(g, k, j);
-          EXPECT_NEAR(back.x(), q.x(), 1e-12) << "k " << k << " sector " << j << " q " << q.transpose();
-          EXPECT_NEAR(back.y(), q.y(), 1e-12) << "k " << k << " sector " << j << " q " << q.transpose();
-          // Inside the sector: angle in [2 pi j / k, 2 pi (j + 1) / k], radius |q|^(4/k).
-          if (a + b > 0) {
-            double ang = std::atan2(g.y(), g.x());
-            if (ang < -1e-12) ang += 2 * M_PI;
-            if (j == k - 1 && ang < 1e-12) ang = 2 * M_PI;
-            EXPECT_GE(ang, 2 * M_PI * j / k - 1e-12);
-            EXPECT_LE(ang, 2 * M_PI * (j + 1) / k + 1e-12);
-            EXPECT_NEAR(g.norm(), std::pow(q.norm(), 4.0 / k), 1e-12);
-          }
-        }
-      // Patch j's +y side is patch j+1's +x side: the same glued points.
-      for (int a = 1; a <= 10; ++a) {
-        const Vec2 from_j = mr::cone_glue(Vec2(0, a / 10.0), k, j);
-        const Vec2 from_next = mr::cone_glue(Vec2(a / 10.0, 0), k, (j + 1) % k);
-        EXPECT_NEAR((from_j - from_next).norm(), 0, 1e-14);
-      }
-    }
+TEST(SectorGlue, TheSquareGluedAndBackIsTheIdentityAndTheAxesGoOntoTheRays) {
   // The sector glue (an affine map per patch): the identity back, and the sides on the rays.
   for (int k : {3, 4, 5, 6, 7})
     for (int j = 0; j < k; ++j)
@@ -838,9 +794,9 @@ TEST(ConeGlue, TheSquareGluedAndBackIsTheIdentityAndTheAxesGoOntoTheRays) {
                         1e-14);
           }
         }
-  // Valence 4: the four squares are [-1, 1]^2 exactly.
-  EXPECT_EQ(mr::cone_glue(Vec2(1, 0), 4, 1), Vec2(0, 1));
-  EXPECT_EQ(mr::cone_glue(Vec2(0, 0.5), 4, 1), Vec2(-0.5, 0));
+  // Valence 4: the four squares are [-1, 1]^2.
+  EXPECT_NEAR((mr::sector_glue(Vec2(1, 0), 4, 1) - Vec2(0, 1)).norm(), 0, 1e-15);
+  EXPECT_NEAR((mr::sector_glue(Vec2(0, 0.5), 4, 1) - Vec2(-0.5, 0)).norm(), 0, 1e-15);
 }
 
 namespace {
@@ -935,26 +891,6 @@ TEST(MoveCorners, MovesCornersBijectivelyKeepingSeedsFeaturesAndTheBaseDomain) {
   EXPECT_NO_THROW(qs::merge::merge_charts(moved[0].chart, c));
 }
 
-TEST(MoveCorners, ThePowerMapChartMovesCornersWithoutFolds) {
-  const auto fam = same_shape_pair();
-  qs::dissect::DissectOptions old_maps;
-  old_maps.geodesic_seed_curves = false;
-  old_maps.intrinsic_cotan = false;
-  auto set = dissect_pair(fam, old_maps);
-  const auto was = set;
-  mr::RefineOptions o;
-  o.move_corners = true;
-  o.corner_chart = mr::CornerChart::Power;
-  const auto r = mr::refine_maps(set, o).meshes[1];
-  EXPECT_GT(r.corners_moved, 0);
-  EXPECT_EQ(r.flipped_faces + r.zero_area_faces, 0);
-  EXPECT_EQ(folded_faces(set[1].chart), 0);
-  EXPECT_LT(r.energy_after, r.energy_before);
-  EXPECT_EQ(corner_incidences(set[1]), corner_incidences(was[1]));
-  EXPECT_EQ(set[1].seeds, was[1].seeds);
-  EXPECT_NO_THROW(qs::remesh::ChartSampler sampler(set[1].chart));
-}
-
 TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothing) {
   auto set1 = small_pair(2);
   auto plain = set1;
@@ -973,26 +909,10 @@ TEST(MoveCorners, IsDeterministicWhateverTheThreadCountAndZeroSweepsChangeNothin
   EXPECT_THROW(mr::refine_maps(zero, o), qs::InvalidInput);
 }
 
-// DissectOptions::refine_before_split (issue 17 experiment): every mesh's map of a node is refined
-// against mesh 0's before the node is split. The dissection must stay as valid as without it,
-// whichever way the refinement sees the reference (NodeMetric).
-class RefineBeforeSplit : public ::testing::TestWithParam<mr::NodeMetric> {};
+// DissectOptions::refine_before_split: every mesh's map of a node is refined against mesh 0's
+// (the composed map) before the node is split. The dissection must stay as valid as without it.
 
-mr::NodeRefineOptions node_options(mr::NodeMetric metric) {
-  mr::NodeRefineOptions o;
-  o.metric = metric;
-  return o;
-}
-
-INSTANTIATE_TEST_SUITE_P(Metrics, RefineBeforeSplit,
-                         ::testing::Values(mr::NodeMetric::Vertex, mr::NodeMetric::Face, mr::NodeMetric::Composition),
-                         [](const auto& info) {
-                           return std::string(info.param == mr::NodeMetric::Vertex ? "Vertex"
-                                              : info.param == mr::NodeMetric::Face ? "Face"
-                                                                                   : "Composition");
-                         });
-
-TEST_P(RefineBeforeSplit, KeepsEveryLeafBijectiveAndFeaturesAndSeedsExact) {
+TEST(RefineBeforeSplit, KeepsEveryLeafBijectiveAndFeaturesAndSeedsExact) {
   qs::family::FamilyOptions o;
   o.shapes = 2;
   o.seed = 2;
@@ -1001,7 +921,7 @@ TEST_P(RefineBeforeSplit, KeepsEveryLeafBijectiveAndFeaturesAndSeedsExact) {
   const auto fam = qs::family::generate_family(o);
   const auto plain = dissect_pair(fam);
   qs::dissect::DissectOptions opt;
-  opt.refine_before_split = mr::node_refiner({}, node_options(GetParam()));
+  opt.refine_before_split = mr::node_refiner();
   const auto set = dissect_pair(fam, opt);
   ASSERT_EQ(set.size(), 2u);
   ASSERT_EQ(set[0].chart.patches.size(), set[1].chart.patches.size());
@@ -1061,7 +981,7 @@ TEST_P(RefineBeforeSplit, KeepsEveryLeafBijectiveAndFeaturesAndSeedsExact) {
 
 // refine_patch on one patch: a distorted map of the reference's own patch moves back towards it;
 // the boundary loop and held vertices stay, every face stays positive; bad sizes are named.
-TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
+TEST(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   const auto fam = same_shape_pair();
   const auto set = dissect_pair(fam);
   // The largest patch of mesh 0 as a PatchMesh with its chart map.
@@ -1110,12 +1030,12 @@ TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   // vertex-averaged metric comes close.
   {
     auto free = moved;
-    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, node_options(GetParam())));
-    EXPECT_LT(err(free), (GetParam() == mr::NodeMetric::Vertex ? 0.1 : 1e-4) * before)
+    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, mr::NodeRefineOptions{}));
+    EXPECT_LT(err(free), 1e-4 * before)
         << "mean uv distance to the reference's map: " << before << " -> " << err(free);
   }
   // One interior vertex held away from it.
-  ASSERT_TRUE(mr::refine_patch(pm, uv, pm, moved, held, {}, node_options(GetParam())));
+  ASSERT_TRUE(mr::refine_patch(pm, uv, pm, moved, held, {}, mr::NodeRefineOptions{}));
   EXPECT_LT(err(moved), 0.5 * before)
       << "mean uv distance to the reference's map: " << before << " -> " << err(moved);
   for (int v : pm.boundary) EXPECT_EQ(moved[v], start[v]);
@@ -1125,17 +1045,17 @@ TEST_P(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
     EXPECT_GT(0.5 * (a.x() * b.y() - a.y() * b.x()), qs::param::kZeroUvArea);
   }
   std::vector<char> short_held(uv.size() - 1, 0);
-  EXPECT_THROW(mr::refine_patch(pm, uv, pm, moved, short_held, {}, node_options(GetParam())), qs::InvalidInput);
+  EXPECT_THROW(mr::refine_patch(pm, uv, pm, moved, short_held, {}, mr::NodeRefineOptions{}), qs::InvalidInput);
   qs::param::PatchMesh bad_ref = pm;
   bad_ref.faces[0][1] = static_cast<int>(pm.positions.size());
-  EXPECT_THROW(mr::refine_patch(bad_ref, uv, pm, moved, held, {}, node_options(GetParam())), qs::InvalidInput);
+  EXPECT_THROW(mr::refine_patch(bad_ref, uv, pm, moved, held, {}, mr::NodeRefineOptions{}), qs::InvalidInput);
   // The composition leaves a node alone when its start is more distorted than the limit (here
   // about 1.4, 1 = isometric); the metrics do not look at it.
-  mr::NodeRefineOptions capped = node_options(GetParam());
+  mr::NodeRefineOptions capped;
   capped.max_start_distortion = 1.01;
   auto again = start;
-  EXPECT_EQ(mr::refine_patch(pm, uv, pm, again, held, {}, capped), GetParam() != mr::NodeMetric::Composition);
-  if (GetParam() == mr::NodeMetric::Composition) {
+  EXPECT_FALSE(mr::refine_patch(pm, uv, pm, again, held, {}, capped));
+  {
     EXPECT_EQ(again, start);
   }
   capped.max_start_distortion = -1;

@@ -40,7 +40,7 @@ class BakeTool : public ::testing::Test {
     qs::io::write_mesh(dir_ / "bumpy.obj", qs::shapes::bumpy_sphere(0.06, 4, 4));
     const RunResult d = run_tool("qs-dissect", (dir_ / "bumpy.obj").string() + " -q -o " + (dir_ / "d").string());
     ASSERT_EQ(d.exit, 0) << d.out;
-    const RunResult r = run_tool("qs-remesh", (dir_ / "d").string() + " --level 2 --no-metro -q -o " + remesh().string());
+    const RunResult r = run_tool("qs-remesh", (dir_ / "d").string() + " --level 2 -q -o " + remesh().string());
     ASSERT_EQ(r.exit, 0) << r.out;
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }

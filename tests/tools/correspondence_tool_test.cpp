@@ -223,10 +223,10 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
   // A shape and its own re-tessellation are in one pose, and qs-dissect finds it by itself: the
   // second seed loop is routed along the first's, the split corners are placed at the first
   // mesh's, the refinement pulls toward nearest points, and the map gets closer to the identity
-  // (measured at 8000 faces: 0.18% -> 0.06% mean, corners 0.19% -> 0.08%). --no-same-pose
-  // --no-refine-before-split is the common (u, v) of each mesh's own map (with the refinement
+  // (measured at 8000 faces: 0.18% -> 0.06% mean, corners 0.19% -> 0.08%). --same-pose no with
+  // refine_before_split false is the common (u, v) of each mesh's own map (with the refinement
   // before a split, the default, this small pair's common corners come as close as the posed
-  // ones: 0.19 against 0.21%); --same-pose says what the detection found.
+  // ones: 0.19 against 0.21%); --same-pose yes says what the detection found.
   ASSERT_EQ(run_tool("qs-family", "retessellate " + mesh(0) + " -o " + d() + "/r.obj --quiet").exit, 0);
   const std::string pair = mesh(0) + " " + d() + "/r.obj --landmarks " + d() + "/shape00.landmarks.json " + d() +
                            "/r.landmarks.json --quiet";
@@ -245,9 +245,10 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
     text << in.rdbuf();
     return text.str();
   };
-  const auto common = measure(" --no-same-pose --no-refine-before-split", "common");
+  std::ofstream(d() + "/own_maps.json") << R"({"refine_before_split": false})";
+  const auto common = measure(" --same-pose no --config " + d() + "/own_maps.json", "common");
   const auto found = measure("", "found");
-  const auto told = measure(" --same-pose", "told");
+  const auto told = measure(" --same-pose yes", "told");
   EXPECT_LT(found["dissection"]["mean_percent"].get<double>(), common["dissection"]["mean_percent"].get<double>());
   EXPECT_LT(found["corner_distance_mean_percent"].get<double>(), common["corner_distance_mean_percent"].get<double>());
   EXPECT_EQ(found["dissection"]["mean_percent"].get<double>(), told["dissection"]["mean_percent"].get<double>());
@@ -260,21 +261,25 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
   EXPECT_THAT(read(d() + "/common.txt"), HasSubstr("(Newton steps per side: at most 1)"));
   EXPECT_THAT(text, HasSubstr("bijective: yes"));
   EXPECT_THAT(read(d() + "/common.txt"), Not(HasSubstr("pose: ")));
-  EXPECT_EQ(read(d() + "/found/dissection.json"), read(d() + "/told/dissection.json"));
+  // Found or told, the same result; the options record what was asked.
+  for (const char* chart : {"shape00.chart.ply", "r.chart.ply"})
+    EXPECT_EQ(read(d() + "/found/" + chart), read(d() + "/told/" + chart)) << chart;
   const auto doc = nlohmann::json::parse(read(d() + "/found/dissection.json"));
-  EXPECT_EQ(doc["options"]["same_pose"], true);
+  EXPECT_EQ(doc["tree"], nlohmann::json::parse(read(d() + "/told/dissection.json"))["tree"]);
+  EXPECT_EQ(doc["options"]["same_pose"], false);
+  EXPECT_EQ(doc["options"]["same_pose_detect"], 0.01);
   int posed_splits = 0;
   for (const auto& n : doc["tree"]) posed_splits += n.value("posed", false) ? 1 : 0;
   EXPECT_GT(posed_splits, 0);
-  // Without it the file does not mention it.
-  EXPECT_FALSE(nlohmann::json::parse(read(d() + "/common/dissection.json"))["options"].contains("same_pose"));
-  // Usage errors: both flags, a negative pull (exit 1, nothing written).
-  RunResult r = run_tool("qs-dissect", pair + " --same-pose --no-same-pose -o " + d() + "/bad");
+  // Without it no split is posed.
+  for (const auto& n : nlohmann::json::parse(read(d() + "/common/dissection.json"))["tree"]) EXPECT_FALSE(n.contains("posed"));
+  // Usage errors: a bad --same-pose, a negative pull (exit 1, nothing written).
+  RunResult r = run_tool("qs-dissect", pair + " --same-pose sometimes -o " + d() + "/bad");
   EXPECT_EQ(r.exit, 1) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("--same-pose excludes --no-same-pose"));
-  r = run_tool("qs-dissect", pair + " --refine-pose-pull -1 -o " + d() + "/bad");
+  std::ofstream(d() + "/pull.json") << R"({"pose_pull": -1})";
+  r = run_tool("qs-dissect", pair + " --config " + d() + "/pull.json -o " + d() + "/bad");
   EXPECT_EQ(r.exit, 1) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("--refine-pose-pull: Value -1 not in range"));
+  EXPECT_THAT(r.out, HasSubstr("\"pose_pull\" must be a number in [0, 1e+06], found -1"));
   EXPECT_FALSE(std::filesystem::exists(d() + "/bad"));
 }
 
@@ -321,15 +326,9 @@ TEST_F(CorrespondenceTool, SamePoseTakesEveryNodeMapOverOnRealMeshes) {
 
 // A camel against its re-tessellation, in one pose: taken-over node maps fold where the legs are
 // squeezed (in either mesh), and the untangler (the own map pulled toward the take-over under an
-// injectivity barrier) mends them; before it, nodes kept their own maps, a hoof ended in another
+// injectivity barrier) mends them; without it nodes kept their own maps, a hoof ended in another
 // leg's patch, the pose folded and the set fell back to the common (u, v): 3.85% mean, 35% max.
-// Without the untangler the safety nets still work: the set folds with the pose and the new maps
-// (6957 uv faces), not with the pose and the old maps, which are kept. Without the maps' net as
-// well, the pose's net gives the pose up for the common (u, v), which folds less (73 faces), and
-// the run ends with exit 4 naming the folded leaves. (Before posed corners were taken from node
-// maps folded here and there, the pose folded with either maps and the common (u, v) with the
-// new maps, so that both nets were needed: none folded with both off.)
-TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBack) {
+TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOvers) {
   if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
     GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
   const std::string out = d() + "/camel", pair = camel_self_pair(out, R"({"fa": 743, "fb": 400})");
@@ -348,23 +347,10 @@ TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOversAndWithoutThemFallsBa
   // took the mean from 1.37 to 0.66% (every one keeping the pose, 5 before the safety nets' order).
   EXPECT_LT(e["mean_percent"].get<double>(), 1.0);
   EXPECT_LT(e["max_percent"].get<double>(), 20.0);
-  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(out + "/dissection.json"))["options"].contains("same_pose"));
-  // Without the untangler: the maps' net.
-  r = run_tool("qs-dissect", pair + " --no-same-pose-untangle -o " + out + "_n --report " + out + "_n.txt");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  text = report("_n");
-  EXPECT_THAT(text, HasSubstr("one pose (as --same-pose)"));
-  EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
-  EXPECT_THAT(text, HasSubstr("maps: edge+mean-value (fallback: "));
-  EXPECT_THAT(text, Not(HasSubstr("bijective: NO")));
-  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(out + "_n/dissection.json"))["options"].contains("same_pose"));
-  // Without the maps' net too: the pose's net, and folded leaves named with exit 4.
-  r = run_tool("qs-dissect",
-               pair + " --no-same-pose-untangle --no-fallback-maps -o " + out + "_m --report " + out + "_m.txt");
-  EXPECT_EQ(r.exit, 4) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("uv faces stay flipped or of zero area"));
-  EXPECT_THAT(report("_m"), HasSubstr("same pose: not used ("));
-  EXPECT_THAT(report("_m"), HasSubstr("the common (u,v) fold less"));
+  // The options record the request (one pose found by the detection, not told).
+  const auto options = nlohmann::json::parse(std::ifstream(out + "/dissection.json"))["options"];
+  EXPECT_EQ(options["same_pose"], false);
+  EXPECT_GT(options["same_pose_detect"].get<double>(), 0);
 }
 
 // Posed corners from node maps folded here and there lower the error on most sets, but on this
@@ -379,9 +365,9 @@ TEST_F(CorrespondenceTool, SamePoseTriesCornersFromUnfoldedMapsBeforeGivingUpThe
   EXPECT_THAT(text, HasSubstr("; posed corners from unfolded node maps only ("));
   EXPECT_THAT(text, HasSubstr("maps: geodesic+cotan\n"));
   EXPECT_THAT(text, Not(HasSubstr("bijective: NO")));
+  // The options record what was asked (the nets' choice is in the report above).
   const auto options = nlohmann::json::parse(std::ifstream(out + "/dissection.json"))["options"];
-  EXPECT_TRUE(options.contains("same_pose"));
-  EXPECT_EQ(options.value("same_pose_folded_maps", true), false);
+  EXPECT_FALSE(options.contains("same_pose_folded_maps"));
   EXPECT_LT(camel_error(out)["mean_percent"].get<double>(), 1.0);
 }
 

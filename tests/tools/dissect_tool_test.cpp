@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
@@ -62,9 +63,9 @@ TEST_F(DissectTool, WritesTheChartAndTheJsonContract) {
   EXPECT_EQ(bytes(out / "blob.chart.ply"), bytes(out2 / "blob.chart.ply"));
 }
 
-// Issue 17's maps (geodesic seed curves and intrinsic cotangent weights, the defaults), each turned
-// off alone and both (the old maps): exit 0, every leaf bijective, the output deterministic; the
-// options record which maps were used.
+// The maps (geodesic seed curves and intrinsic cotangent weights, the defaults), each turned off
+// alone and both (the old maps) through --config: exit 0, every leaf bijective, the output
+// deterministic; the options record what was asked and "maps" what was used.
 TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
   const qs::TriMesh mesh = qs::shapes::bumpy_sphere(0.15, 4, 4);
   const std::string in = write("bumpy.obj", mesh);
@@ -72,8 +73,13 @@ TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
     std::ifstream f(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(f), {});
   };
-  for (const std::string opts : {"", "--edge-seed-paths", "--mean-value", "--edge-seed-paths --mean-value"}) {
-    SCOPED_TRACE(opts);
+  for (const std::string maps : {"", "edge", "mean", "edge mean"}) {
+    SCOPED_TRACE(maps);
+    const bool edge = maps.find("edge") != std::string::npos, mean = maps.find("mean") != std::string::npos;
+    const fs::path config = dir_ / "config.json";
+    std::ofstream(config) << "{\"geodesic_seed_curves\": " << (edge ? "false" : "true")
+                          << ", \"intrinsic_cotan\": " << (mean ? "false" : "true") << "}";
+    const std::string opts = "--config " + config.string();
     const fs::path out = dir_ / "o1", out2 = dir_ / "o2";
     fs::remove_all(out);
     fs::remove_all(out2);
@@ -84,10 +90,9 @@ TEST_F(DissectTool, GeodesicSeedCurvesAndCotanWeights) {
     EXPECT_EQ(bytes(out / "bumpy.chart.ply"), bytes(out2 / "bumpy.chart.ply"));
     std::ifstream js(out / "dissection.json");
     const auto j = nlohmann::json::parse(js);
-    EXPECT_EQ(j["options"]["geodesic_seed_curves"], opts.find("--edge-seed-paths") == std::string::npos);
-    EXPECT_EQ(j["options"]["intrinsic_cotan"], opts.find("--mean-value") == std::string::npos);
-    EXPECT_EQ(j["maps"], std::string(opts.find("--edge-seed-paths") == std::string::npos ? "geodesic" : "edge") + "+" +
-                             (opts.find("--mean-value") == std::string::npos ? "cotan" : "mean-value"));
+    EXPECT_EQ(j["options"]["geodesic_seed_curves"], !edge);
+    EXPECT_EQ(j["options"]["intrinsic_cotan"], !mean);
+    EXPECT_EQ(j["maps"], std::string(edge ? "edge" : "geodesic") + "+" + (mean ? "mean-value" : "cotan"));
     for (const auto& p : j["meshes"][0]["patches"]) {
       EXPECT_EQ(p["flipped_faces"], 0);
       EXPECT_EQ(p["zero_area_faces"], 0);
@@ -104,12 +109,26 @@ TEST_F(DissectTool, ExitCodes) {
   const std::string ball = write("ball.obj", qs::shapes::icosphere(2));
   EXPECT_EQ(run_tool("qs-dissect", ball + " " + ball + " --landmarks " + ball).exit, 1);  // 1 file, 2 meshes
   EXPECT_EQ(run_tool("qs-dissect", ball + " --tau 0.5").exit, 1);
-  EXPECT_EQ(run_tool("qs-dissect", ball + " --min-split-area 1.5").exit, 1);
-  EXPECT_EQ(run_tool("qs-dissect", ball + " --force-split-area -0.1").exit, 1);
-  const RunResult nan_area = run_tool("qs-dissect", ball + " --min-split-area nan");
-  EXPECT_EQ(nan_area.exit, 1) << nan_area.out;
-  EXPECT_THAT(nan_area.out, HasSubstr("--min-split-area"));
-  EXPECT_EQ(run_tool("qs-dissect", ball + " --area-extra-depth 13").exit, 1);
+  const RunResult nan_tau = run_tool("qs-dissect", ball + " --tau nan");
+  EXPECT_EQ(nan_tau.exit, 1) << nan_tau.out;
+  EXPECT_EQ(run_tool("qs-dissect", ball + " --same-pose maybe").exit, 1);
+  // --config: out of range, wrong type, unknown key, not JSON: usage errors that say what is wrong.
+  const std::string config = (dir_ / "config.json").string();
+  for (const auto& [text, says] :
+       std::vector<std::pair<std::string, std::string>>{{R"({"min_split_area": 1.5})", "\"min_split_area\" must be a number in [0, 1]"},
+                                                        {R"({"force_split_area": -0.1})", "force_split_area"},
+                                                        {R"({"area_extra_depth": 13})", "an integer in [0, 12]"},
+                                                        {R"({"refine_maps": 1})", "true or false"},
+                                                        {R"({"max_depth": 2.5})", "max_depth"},
+                                                        {R"({"relax_rounds": 1})", "unknown option \"relax_rounds\""},
+                                                        {R"({"tau": 3,})", "config.json"},
+                                                        {R"([1, 2])", "expected a JSON object"}}) {
+    std::ofstream(config) << text;
+    const RunResult r = run_tool("qs-dissect", ball + " --config " + config + " -o " + (dir_ / "x").string());
+    EXPECT_EQ(r.exit, 1) << text << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr(says)) << text;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "x"));
   EXPECT_EQ(run_tool("qs-dissect", (dir_ / "missing.obj").string()).exit, 3);
   std::ofstream(dir_ / "ball.landmarks.json") << R"({"seeds": [0, 1, 1, 2]})";
   const RunResult dup = run_tool("qs-dissect", ball + " -o " + (dir_ / "b").string());
@@ -170,4 +189,59 @@ TEST_F(DissectTool, SetOfTwoMeshesWithFeatures) {
   const RunResult half = run_tool("qs-dissect", fa + " " + fb + " -o " + (dir_ / "set3").string());
   EXPECT_EQ(half.exit, 2) << half.out;
   EXPECT_THAT(half.out, HasSubstr("has no seeds"));
+}
+
+// --config replays a run from its own output folder, byte for byte, whether given the whole
+// dissection.json or its "options" object; options on the command line override it.
+TEST_F(DissectTool, ConfigReplaysARun) {
+  const std::string blob = write("blob.obj", qs::shapes::star_blob(4, 1.5, 4));
+  auto bytes = [](const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  const fs::path a = dir_ / "a", b = dir_ / "b", c = dir_ / "c", d = dir_ / "d";
+  ASSERT_EQ(run_tool("qs-dissect", blob + " --tau 1.5 --max-depth 4 -q -o " + a.string()).exit, 0);
+  const RunResult r = run_tool("qs-dissect", blob + " -q --config " + (a / "dissection.json").string() + " -o " + b.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_EQ(bytes(a / "dissection.json"), bytes(b / "dissection.json"));
+  EXPECT_EQ(bytes(a / "blob.chart.ply"), bytes(b / "blob.chart.ply"));
+  const auto j = nlohmann::ordered_json::parse(bytes(a / "dissection.json"));
+  EXPECT_EQ(j["options"]["tau"], 1.5);
+  EXPECT_EQ(j["options"]["max_depth"], 4);
+  std::ofstream(dir_ / "options.json") << j["options"].dump(1);
+  ASSERT_EQ(run_tool("qs-dissect", blob + " -q --config " + (dir_ / "options.json").string() + " -o " + c.string()).exit, 0);
+  EXPECT_EQ(bytes(a / "dissection.json"), bytes(c / "dissection.json"));
+  ASSERT_EQ(run_tool("qs-dissect", blob + " -q --tau 3 --config " + (dir_ / "options.json").string() + " -o " + d.string()).exit,
+            0);
+  EXPECT_EQ(nlohmann::json::parse(bytes(d / "dissection.json"))["options"]["tau"], 3.0);
+}
+
+// The help a person reads: at most 15 options, no history; --help-all adds every --config key.
+TEST_F(DissectTool, HelpIsShort) {
+  const RunResult h = run_tool("qs-dissect", "--help");
+  ASSERT_EQ(h.exit, 0);
+  int options = 0;
+  ASSERT_NE(h.out.find("Options:"), std::string::npos) << h.out;
+  std::istringstream lines(h.out.substr(h.out.find("Options:")));
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("  -", 0) == 0) ++options;
+  EXPECT_GT(options, 5) << h.out;
+  EXPECT_LE(options, 15) << h.out;
+  EXPECT_THAT(h.out, ::testing::Not(HasSubstr("issue")));
+  EXPECT_THAT(h.out, ::testing::Not(HasSubstr("refine_corners")));
+  const RunResult all = run_tool("qs-dissect", "--help-all");
+  ASSERT_EQ(all.exit, 0);
+  for (const char* key : {"tau", "refine_corners", "same_pose_detect", "pose_pull", "protrusion_stretch"})
+    EXPECT_THAT(all.out, HasSubstr(std::string("  ") + key + " ")) << key;
+}
+
+// --json: a summary on stdout that parses, naming the folder and each mesh's chart.
+TEST_F(DissectTool, JsonSummary) {
+  const std::string blob = write("blob.obj", qs::shapes::star_blob(4, 1.5, 4));
+  const RunResult r = run_tool("qs-dissect", blob + " --json -o " + (dir_ / "j").string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_EQ(j["output"], (dir_ / "j").string());
+  EXPECT_EQ(j["meshes"][0]["chart"], "blob.chart.ply");
+  EXPECT_TRUE(j["bijective"].get<bool>());
 }

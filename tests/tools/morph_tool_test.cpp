@@ -191,7 +191,7 @@ class MorphTool : public ::testing::Test {
     const RunResult d = run_tool("qs-dissect", (root_ / "a.obj").string() + " " + (root_ / "b.obj").string() + " " +
                                                    (root_ / "c.obj").string() + " -q -o " + (root_ / "D").string());
     ASSERT_EQ(d.exit, 0) << d.out;
-    const RunResult r = run_tool("qs-remesh", (root_ / "D").string() + " --level 2 --no-metro -q -o " + (root_ / "R").string());
+    const RunResult r = run_tool("qs-remesh", (root_ / "D").string() + " --level 2 -q -o " + (root_ / "R").string());
     ASSERT_EQ(r.exit, 0) << r.out;
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }

@@ -57,8 +57,8 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
   const RunResult ad = run_tool("qs-remesh", d.string() + " --adaptive 0.002 -q -o " + (dir_ / "ad").string());
   ASSERT_EQ(ad.exit, 0) << ad.out;
   EXPECT_EQ(qs::io::read_mesh(dir_ / "ad" / "a.obj").mesh.faces, qs::io::read_mesh(dir_ / "ad" / "b.obj").mesh.faces);
-  // --even: samples by area, one face list, closed and manifold, the same bytes twice.
-  const RunResult ev = run_tool("qs-remesh", d.string() + " --level 3 --even -o " + (dir_ / "ev").string());
+  // The even remesh: samples by area, one face list, closed and manifold, the same bytes twice.
+  const RunResult ev = run_tool("qs-remesh", d.string() + " --level 3 -o " + (dir_ / "ev").string());
   ASSERT_EQ(ev.exit, 0) << ev.out;
   EXPECT_THAT(ev.out, HasSubstr("remesh even level 3"));
   const auto ea = qs::io::read_mesh(dir_ / "ev" / "a.obj"), eb = qs::io::read_mesh(dir_ / "ev" / "b.obj");
@@ -75,12 +75,12 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
     EXPECT_EQ(j["diagonals"], "templates");
     EXPECT_FALSE(j["meshes"][0].contains("error"));
   }
-  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --even -q -o " + (dir_ / "ev2").string()).exit, 0);
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 -q -o " + (dir_ / "ev2").string()).exit, 0);
   std::ifstream f1(dir_ / "ev" / "a.obj"), f2(dir_ / "ev2" / "a.obj");
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(f1), {}), std::string(std::istreambuf_iterator<char>(f2), {}));
-  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --adaptive 0.01 --even").exit, 1);
-  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --quads").exit, 1);
-  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --diagonals pattern").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --adaptive 0.01 --cells square").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --cells square --quads").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --cells square --diagonals pattern").exit, 1);
 }
 
 // --level n alone is the even remesh with anisotropic cells (issue 13); --uniform (or a uniform-grid
@@ -106,8 +106,8 @@ TEST_F(RemeshTool, LevelDefaultsToTheAnisotropicEvenRemesh) {
   EXPECT_EQ(jd["mode"], "even");
   EXPECT_EQ(jd["even"]["cells"], "aniso");
   EXPECT_GE(jd["even"]["max_leaf_aspect"].get<double>(), 1.0);
-  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --even --cells aniso -q -o " + (dir_ / "ex").string()).exit, 0);
-  EXPECT_EQ(text(d / "remesh-L3" / "a.obj"), text(dir_ / "ex" / "a.obj")) << "--even --cells aniso is the default";
+  ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells aniso -q -o " + (dir_ / "ex").string()).exit, 0);
+  EXPECT_EQ(text(d / "remesh-L3" / "a.obj"), text(dir_ / "ex" / "a.obj")) << "--cells aniso is the default";
   const auto a = qs::io::read_mesh(d / "remesh-L3" / "a.obj").mesh, b = qs::io::read_mesh(d / "remesh-L3" / "b.obj").mesh;
   EXPECT_EQ(a.faces, b.faces);
   for (const auto* m : {&a, &b}) {
@@ -123,7 +123,7 @@ TEST_F(RemeshTool, LevelDefaultsToTheAnisotropicEvenRemesh) {
   EXPECT_EQ(text(d / "remesh-L3-uniform" / "a.obj"), text(dir_ / "da" / "a.obj"));
   ASSERT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells square -q").exit, 0);
   EXPECT_EQ(json(d / "remesh-L3-square")["even"]["cells"], "square");
-  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --uniform --even").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --uniform --cells square").exit, 1);
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --uniform --cells aniso").exit, 1);
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells square --quads").exit, 1);
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 3 --cells round").exit, 1);
@@ -170,6 +170,6 @@ TEST_F(RemeshTool, GridRelaxKeepsTheFaceListMovesTheSamplesAndIsDeterministic) {
   EXPECT_EQ(qs::io::read_mesh(dir_ / "r1" / "a.obj").mesh.faces, qs::io::read_mesh(dir_ / "r1" / "b.obj").mesh.faces);
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --grid-relax 2.5").exit, 1);
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --grid-relax -1").exit, 1);
-  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --even --grid-relax 1").exit, 1);
+  EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --cells aniso --grid-relax 1").exit, 1);
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --adaptive 0.01 --grid-relax 1").exit, 1);
 }

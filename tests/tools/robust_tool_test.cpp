@@ -80,7 +80,7 @@ class RobustTool : public ::testing::Test {
     const RunResult d = run_tool("qs-dissect", (root_ / "blob.obj").string() + " " + (root_ / "ball.obj").string() +
                                                    " --tau 2 -q -o " + (root_ / "set.dissection").string());
     ASSERT_EQ(d.exit, 0) << d.out;
-    const RunResult r = run_tool("qs-remesh", (root_ / "set.dissection").string() + " --level 2 -q --no-metro -o " +
+    const RunResult r = run_tool("qs-remesh", (root_ / "set.dissection").string() + " --level 2 -q -o " +
                                                   (root_ / "remesh").string());
     ASSERT_EQ(r.exit, 0) << r.out;
   }
@@ -276,7 +276,7 @@ TEST_F(RobustTool, FailedRunsLeaveTheOutputFolderAsItWas) {
 // --- damaged dissection and remesh folders -------------------------------------------------------
 
 TEST_F(RobustTool, DamagedChartFilesAreInvalidInput) {
-  const std::string level = " --level 1 -q --no-metro -o ";
+  const std::string level = " --level 1 -q -o ";
   auto damaged = [&](const std::string& name, auto&& edit) {
     const fs::path d = dir_ / name;
     fs::copy(root_ / "set.dissection", d, fs::copy_options::recursive);
@@ -349,7 +349,7 @@ TEST_F(RobustTool, MalformedDissectionJsonFieldsAreInvalidInput) {
     EXPECT_NE(at, std::string::npos) << from;
     if (at != std::string::npos) s.replace(at, from.size(), to);
     write_bytes(d / "dissection.json", s);
-    return run_tool("qs-remesh", d.string() + " --level 1 -q --no-metro -o " + (dir_ / "o").string());
+    return run_tool("qs-remesh", d.string() + " --level 1 -q -o " + (dir_ / "o").string());
   };
   expect_clean_failure(with("\"input_faces\": ", "\"input_faces\": 1e300, \"x\": "), 2, "input_faces");
   expect_clean_failure(with("\"format\": \"qs-dissection\"", "\"format\": \"qs-dissection\", \"format\": 1"), 2,
@@ -403,7 +403,9 @@ TEST_F(RobustTool, SolverAdviceFollowsTheStopReason) {
   // bijectively; the old ones (edge paths, mean-value weights) end with exit 4, split_failed.
   const RunResult d = run_tool("qs-dissect", file + " -q -o " + (dir_ / "d").string());
   EXPECT_EQ(d.exit, 0) << d.out;
-  const RunResult r = run_tool("qs-dissect", file + " --edge-seed-paths --mean-value -o " + (dir_ / "o").string());
+  write_bytes(dir_ / "old_maps.json", R"({"geodesic_seed_curves": false, "intrinsic_cotan": false})");
+  const RunResult r =
+      run_tool("qs-dissect", file + " --config " + (dir_ / "old_maps.json").string() + " -o " + (dir_ / "o").string());
   EXPECT_THAT(r.out, Not(HasSubstr("internal error")));
   if (r.exit != 4) GTEST_SKIP() << "the cone dissects cleanly now (exit " << r.exit << ")";
   const std::string advice = r.out.substr(r.out.find("solver error"));

@@ -34,156 +34,97 @@ using NodeMapPuller =
     std::function<bool(const param::PatchMesh& patch, std::vector<Vec2>& uv, const std::vector<char>& held,
                        const std::vector<Vec2>& target, const std::vector<char>& has_target, bool polish)>;
 
+/// same_pose_detect's default: 1% of the first mesh's bounding-box diagonal (a body and its
+/// re-tessellation lie 0.1% apart, two registered bodies 0.2-0.3%, two shapes of a generated
+/// family 1.4-2.9%; docs/algorithms.md, "Same pose").
+inline constexpr double kSamePoseDetect = 0.01;
+
+/// The options of a dissection. The defaults are qs-dissect's except for the two hooks, which
+/// qs::pipeline::dissect sets (they are empty here: the dissect module does not depend on
+/// maprefine). Measurements behind each default: docs/tools/qs-dissect.md.
 struct DissectOptions {
-  /// A patch whose normalized L2 stretch (1 = isometric up to scale) exceeds tau is split.
+  /// A patch whose normalized L2 stretch (1 = isometric up to scale) exceeds tau is split. \pre >= 1
   double tau = 3.0;
   int max_depth = 6;             ///< seed patches have depth 0
   int min_faces_to_split = 150;  ///< smaller patches are not split (stop reason "too_few_faces")
   /// The w rule: w = clamp(w_bias + log10(s_peak), w_min, w_max), s_peak the smoothed peak
-  /// stretch (paper eq. 4 with psi = w_bias). With stretch normalized to 1 for an isometry, the
-  /// peak of a patch worth splitting is well above 1, so the clamp decides in practice: w_max
-  /// keeps the four outer children from becoming slivers (see the README).
+  /// stretch (paper eq. 4 with psi = w_bias).
   double w_bias = 0.45;
   double w_min = 0.5;
   double w_max = 0.65;
-  /// Squeezed protrusions: a node whose stretch exceeds this (a protrusion squeezed by the map
-  /// into a point of the square: a tail, a leg) is split so that the raw stretch peak (before the
-  /// peak_margin clamp) lies inside the centre child, 0.05 inside its square: the centre moves
-  /// from the clamped peak as little as needed, w unchanged, the centre's square kept 0.1 off
-  /// the parent's sides (when that cannot hold the peak, the rule's centre stays; a node holding
-  /// features keeps it too, its split placed by the feature nudge: measured on the example set,
-  /// where moving one such centre by 0.0004 took its cat's remesh from 2.67% to 2.77% of faces
-  /// under 10 degrees). With the
-  /// clamp alone, a peak near a side leaves the protrusion in an outer child, which keeps two
-  /// corners of its parent: split after split around the same two corners (lion_sumner_10k:
-  /// base vertices of valence 9 and 12), whose children end as strips (3D corner angles 0, 0,
-  /// 179, 179 degrees) that no map to the square gives well-shaped remesh cells. Default 1000
-  /// (issue 13, chosen by qs-bench-defaults, see the README): lion_sumner_10k's level-4 faces
-  /// under 10 degrees 2.84% -> 0.65%; 12 of the 26 shared meshes change, each with fewer such
-  /// faces. 0: off.
+  /// A node stretched more than this (a protrusion squeezed into a point of the square) is split
+  /// with its raw stretch peak inside the centre child, 0.05 inside its square, w unchanged; a
+  /// node holding features keeps the rule's centre. 0: off. \pre >= 0
   double protrusion_stretch = 1000;
-  /// The peak is clamped into [peak_margin, 1 - peak_margin]^2: a peak near a side would make
-  /// the child along that side a thin strip whose own map to the square is badly stretched.
+  /// The stretch peak is clamped into [peak_margin, 1 - peak_margin]^2.
   double peak_margin = 0.35;
-  /// Features (in the aligned parameter domain of the patch being split) must stay at least this
-  /// far from the 8 cut segments and 4 inner corners: the peak is nudged to keep them clear.
+  /// Features (in the aligned domain of the patch being split) stay at least this far from the
+  /// 8 cuts and 4 inner corners: the peak is nudged to keep them clear.
   double feature_cut_margin = 0.02;
-  /// Features closer than this in a node's parameter domain (in any mesh, or their targets) are
-  /// aligned as one group by their centroid; groups nearer the border than this are held.
+  /// Features closer than this in a node's domain (in any mesh, or their targets) are aligned as
+  /// one group by their centroid; groups nearer the border than this are held.
   double feature_group_distance = 1e-3;
-  /// Rounds of seed-curve relaxation (relax_seed_loop) before splitting. Off by default: on the
-  /// 24 shared meshes it straightens the curves but does not lower the maximum stretch (README).
-  int relax_rounds = 0;
-  /// Straighten the four seed curves into geodesics cut into the mesh (straighten_seed_loop)
-  /// before anything else, so that the seed loop is the same curve on the surface for any
-  /// tessellation (issue 17); false: the shortest edge paths as traced. On by default (issue 13/17):
-  /// with intrinsic_cotan it lowers the error of one surface tessellated twice (gen-v0: mean
-  /// 0.94% -> 0.19%) and of the re-tessellated human pair (see the README).
+  /// Straighten the four seed curves into geodesics cut into the mesh (straighten_seed_loop);
+  /// false: the shortest edge paths as traced.
   bool geodesic_seed_curves = true;
   /// Interior weights of every patch map: cotangent weights on the patch's intrinsic Delaunay
-  /// triangulation (param::InteriorWeights::IntrinsicCotan, tessellation-independent in the
-  /// limit) instead of Floater's mean-value weights; a patch whose own triangles fold under it
-  /// keeps mean-value weights. On by default (issue 13/17); false: mean-value weights everywhere.
+  /// triangulation (a patch whose own triangles fold under them keeps mean-value weights);
+  /// false: Floater's mean-value weights everywhere.
   bool intrinsic_cotan = true;
-  /// Safety net of the new maps (issues 13/17): when a dissection with geodesic seed curves or
-  /// cotangent weights ends with folded leaves (flipped or zero-area uv faces), the whole set is
-  /// dissected again with edge paths and mean-value weights, and that result is kept if it folds
-  /// less (DissectionSet::maps_fallback says why). false: the result of the options as given.
+  /// When a dissection with geodesic seed curves or cotangent weights ends with folded leaves,
+  /// dissect the set again with edge paths and mean-value weights and keep that result if it
+  /// folds less (DissectionSet::maps_fallback says why).
   bool fallback_maps = true;
-  /// Choose the split among candidate centres and w by the children's stretch predicted from the
-  /// parent's map (see the README); false: the peak and w rule alone.
-  bool predict_split = false;
-  /// Rounds of stretch minimization of every leaf's final map (param::SquareParamOptions::
-  /// stretch_iterations; features stay pinned at their aligned (u,v)). It changes no patch,
-  /// only where the samples of a remesh or a normal map land in each patch; a leaf keeps its
-  /// mean-value map when the minimized one is not bijective or not less stretched.
-  /// Default 10 (issue 13, chosen by qs-bench-defaults, see the README): on the shared meshes it
-  /// lowers the level-5 remesh error (mean 0.032% -> 0.026%) and evens out the sampling.
+  /// Rounds of stretch minimization of every leaf's final map (features pinned at their aligned
+  /// (u,v)); no patch changes. A leaf keeps its map when the minimized one is not bijective or
+  /// not less stretched.
   int stretch_iterations = 10;
-  /// A patch whose 3D area exceeds this fraction of its mesh's surface area is split too (0: no
-  /// limit). Stretch alone leaves large smooth patches (a skull cap) with as many remesh samples
-  /// as a small one; a cap evens out the sampling density of a remesh. Default 0.15 (issue 13):
-  /// heads get 18 patches and a level-5 remesh error of about 0.015% instead of 2 patches and
-  /// 0.1-0.2%.
+  /// A patch whose 3D area exceeds this fraction of its mesh's area is split too. 0: no limit.
   double max_patch_area = 0.15;
-  /// A patch over tau under its mean-value map gets this many stretch-minimization rounds before
-  /// it is judged: it is split only if still over tau, around the peak of the minimized map.
-  int split_stretch_rounds = 0;
-  /// A patch over tau by its stretch alone (bijective in every mesh, under the area cap) that
-  /// holds less than this fraction of its mesh's surface is not split (stop reason "small_area");
-  /// the leaf repair (stretch minimization) takes it. On a body whose seeds sit at the limb
-  /// tips, the patches along the limbs are lengthwise strips that a quinary split cannot cut
-  /// across (each child keeps a whole side of its parent): splitting them only shaves off
-  /// thinner strips, 1282 patches instead of 122 on the human pair. 0: off.
+  /// A patch over tau by its stretch alone (bijective in every mesh, under the area cap) holding
+  /// less than this fraction of its mesh's area is not split (stop reason "small_area"); the
+  /// leaf repair takes it. 0: off. \pre in [0, 1]
   double min_split_area = 0.01;
-  /// A patch still over tau after the leaf repair that holds at least this fraction of its
-  /// mesh's surface is split even when the no-progress rule would stop it (stretch not lower
-  /// than its parent's). Large over-tau leaves are what a user sees; small ones are not. 0: off.
+  /// A patch still over tau after the leaf repair holding at least this fraction of its mesh's
+  /// area is split even when the no-progress rule would stop it. 0: off. \pre in [0, 1]
   double force_split_area = 0.03;
-  /// A patch over tau (by its stretch, or folded) that holds at least force_split_area of its
-  /// mesh's surface may be split up to this many levels past max_depth (stop reason "max_depth"
-  /// at the deeper bound); 0: max_depth for every patch. With seeds on a belt around a body each
-  /// limb is a protrusion of a seed patch, and every split hands it to its centre child one level
-  /// deeper. Default 4 (issue 13, item 3, see the README): polygirl_20k 35% -> 7% of its area in
-  /// leaves over tau; horse_40k level-5 remesh error 0.0023% -> 0.0017%.
+  /// A patch over tau (or folded) holding at least force_split_area of its mesh's area may be
+  /// split this many levels past max_depth. 0: off. \pre in [0, 12]
   int area_extra_depth = 4;
-  /// Issue 17 (qs-dissect's default, `--no-refine-before-split` turns it off): before a node is
-  /// split, the node's map of every mesh but mesh 0 is refined against mesh 0's map of the node
-  /// by this function (qs::maprefine::node_refiner(); the dissect module does not depend on
-  /// maprefine), so that the split points, taken at equal (u, v) in every mesh, correspond
-  /// better. The border, corners and features stay; a refined map is kept only when it stays
-  /// bijective and the split's children's predicted stretch (predicted_children_stretch at the
-  /// chosen split) stays within tau or within the node's own map's. Not run with same_pose and
-  /// same_pose_maps (the node maps are taken over from mesh 0's). Empty (the library's default):
-  /// off. See the README ("Map refinement") for what it measured.
+  /// Before a node is split, the node's map of every mesh but mesh 0 is refined against mesh 0's
+  /// by this function (qs::maprefine::node_refiner), so that the split points, taken at equal
+  /// (u, v), correspond better; a refined map is kept only when it stays bijective and the
+  /// children's predicted stretch stays within tau or within the node's own map's. Not run with
+  /// same_pose and same_pose_maps. Empty: off.
   NodeMapRefiner refine_before_split;
-  /// The meshes are in one pose (`qs-dissect --same-pose`): registered scans, re-tessellations
-  /// of one surface, characters posed alike. Every split's four inner corners, which are taken at
-  /// equal (u, v) in every mesh otherwise, are then placed in each mesh but the first at its
-  /// points nearest the first mesh's corners, once those are moved by the least-squares
-  /// similarity of the landmarks (seeds and features, Umeyama); the cuts run straight in each
-  /// mesh's own map between them. A split keeps the common (u, v) when a posed corner lies
-  /// farther than 5% of its mesh's diagonal from its target, the posed quad would not make a
-  /// quinary split, a feature would be nearer a cut than feature_cut_margin, or the split fails.
-  /// Wrong for meshes in different poses. Off by default.
+  /// The meshes are in one pose (registered scans, re-tessellations of one surface): every split's
+  /// inner corners are placed in each mesh but the first at its points nearest the first mesh's,
+  /// after the landmarks' least-squares similarity (Umeyama); a split keeps the common (u, v) when
+  /// a posed corner lies over 5% of the diagonal from its target, the posed quad would not make a
+  /// quinary split, a feature would be too near a cut, or the split fails. Wrong for meshes in
+  /// different poses.
   bool same_pose = false;
   /// With same_pose: before every split, each mesh's map of the node (but the first's) is taken
-  /// over from the first mesh's by nearest points (the landmarks' similarity, then every interior
-  /// vertex at the (u, v) of the first mesh's nearest point of the node; folds mended by solves
-  /// of the node's own weights around them; kept only when bijective), so that the split's cuts,
-  /// straight at equal (u, v), run along the same curves on every surface. false: each mesh's
-  /// own map. On by default (README, "Same pose": the bodies against their own re-tessellation
-  /// 0.19 / 0.17% -> 0.17 / 0.15% mean).
+  /// over from the first mesh's by nearest points (folds mended; kept only when bijective).
   bool same_pose_maps = true;
-  /// With same_pose: a mesh whose node map folds here and there (a face by a feature the
-  /// alignment moved) still places its posed corners by its other faces. false: such a node keeps
-  /// the common (u, v) for its split, as before 2026-11-25; the safety nets try that when the
+  /// With same_pose: a node map that folds here and there still places its posed corners by its
+  /// other faces; false: such a node keeps the common (u, v). The safety nets turn it off when the
   /// set ends with folded leaves (DissectionSet::posed_corners_fallback).
   bool same_pose_folded_maps = true;
-  /// With same_pose_maps: a node whose taken-over map still folds after the repair is untangled
-  /// by this function instead of keeping its own map (qs::maprefine::untangler(); qs-dissect's
-  /// default): from the own map (stretch-minimized when it folds), every free vertex pulled toward
-  /// its nearest-point (u, v) under an injectivity barrier; a repaired map is polished by it where
-  /// the repair left the nearest points (see transfer_node_map). Empty (the library's default):
-  /// repaired maps stay as repaired and a node still folded keeps its own map.
+  /// With same_pose_maps: a node whose taken-over map still folds after the repair is untangled by
+  /// this function (qs::maprefine::untangler) instead of keeping its own map, and a repaired map is
+  /// polished by it. Empty: repaired maps stay as repaired, a node still folded keeps its own.
   NodeMapPuller same_pose_untangle;
-  /// Turns same_pose on by itself when the meshes are found in one pose: every mesh, moved onto
-  /// the first by the landmarks' similarity, lies at a mean distance of at most this fraction of
-  /// the first mesh's diagonal from it (pose_distance). Needs seeds in every mesh. 0: off (the
-  /// library's default; qs-dissect uses kSamePoseDetect unless told --same-pose or
-  /// --no-same-pose). \pre >= 0
-  double same_pose_detect = 0;
+  /// Turn same_pose on when every mesh, moved onto the first by the landmarks' similarity, lies at
+  /// a mean distance of at most this fraction of the first mesh's diagonal from it
+  /// (pose_distance; needs seeds in every mesh; one mesh given twice is not posed). 0: off. \pre >= 0
+  double same_pose_detect = kSamePoseDetect;
   /// Meshes in other poses: every mesh's seed loop but the first's is routed to follow the
   /// first's in geodesic coordinates of the landmarks (trace_intrinsic_loop), which a change of
   /// pose keeps, instead of each mesh's own shortest loop. Not with same_pose (the loops follow
   /// the first's by pose then).
   bool intrinsic_loops = true;
 };
-
-/// qs-dissect's same_pose_detect: 1% of the diagonal. Measured (README, "Same pose"): a body and
-/// its re-tessellation 0.1%, two registered bodies 0.2-0.3%, a generated surface tessellated twice
-/// 0.3%; two shapes of a generated family 1.4-2.9%.
-inline constexpr double kSamePoseDetect = 0.01;
 
 /// Meshes in one pose: a nearest point on the first mesh (the posed corners, the node maps taken
 /// over, the refinement's pull) counts only on faces whose unit normal has at least this cosine

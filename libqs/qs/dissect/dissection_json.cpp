@@ -12,36 +12,15 @@ namespace qs::dissect {
 
 using nlohmann::ordered_json;
 
-std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const DissectOptions& options,
-                               bool include_times, const std::string& maps) {
+namespace {
+
+std::string document(const std::vector<DissectedMesh>& meshes, ordered_json options, bool include_times,
+                     const std::string& maps) {
   ordered_json doc;
   doc["format"] = "qs-dissection";
   doc["version"] = kDissectionFormatVersion;
   if (!maps.empty()) doc["maps"] = maps;
-  doc["options"] = {{"tau", options.tau},
-                    {"max_depth", options.max_depth},
-                    {"min_faces_to_split", options.min_faces_to_split},
-                    {"w_bias", options.w_bias},
-                    {"w_min", options.w_min},
-                    {"w_max", options.w_max},
-                    {"peak_margin", options.peak_margin},
-                    {"feature_cut_margin", options.feature_cut_margin},
-                    {"feature_group_distance", options.feature_group_distance},
-                    {"relax_rounds", options.relax_rounds},
-                    {"geodesic_seed_curves", options.geodesic_seed_curves},
-                    {"intrinsic_cotan", options.intrinsic_cotan},
-                    {"fallback_maps", options.fallback_maps},
-                    {"predict_split", options.predict_split},
-                    {"stretch_iterations", options.stretch_iterations},
-                    {"max_patch_area", options.max_patch_area},
-                    {"split_stretch_rounds", options.split_stretch_rounds},
-                    {"min_split_area", options.min_split_area},
-                    {"force_split_area", options.force_split_area},
-                    {"area_extra_depth", options.area_extra_depth},
-                    {"protrusion_stretch", options.protrusion_stretch}};
-  if (options.same_pose) doc["options"]["same_pose"] = true;  // written only when on
-  // Written only when the safety nets turned it off (DissectionSet::posed_corners_fallback).
-  if (options.same_pose && !options.same_pose_folded_maps) doc["options"]["same_pose_folded_maps"] = false;
+  doc["options"] = std::move(options);
   if (meshes.empty()) return json_strict::dump(doc, 2);
   const Dissection& first = meshes.front().dissection;
   ordered_json tree = ordered_json::array();
@@ -137,6 +116,41 @@ std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const D
   }
   doc["meshes"] = list;
   return json_strict::dump(doc, 2) + "\n";
+}
+
+}  // namespace
+
+std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const DissectOptions& options,
+                               bool include_times, const std::string& maps) {
+  ordered_json o = {{"tau", options.tau},
+                    {"max_depth", options.max_depth},
+                    {"min_faces_to_split", options.min_faces_to_split},
+                    {"w_bias", options.w_bias},
+                    {"w_min", options.w_min},
+                    {"w_max", options.w_max},
+                    {"peak_margin", options.peak_margin},
+                    {"feature_cut_margin", options.feature_cut_margin},
+                    {"feature_group_distance", options.feature_group_distance},
+                    {"geodesic_seed_curves", options.geodesic_seed_curves},
+                    {"intrinsic_cotan", options.intrinsic_cotan},
+                    {"fallback_maps", options.fallback_maps},
+                    {"stretch_iterations", options.stretch_iterations},
+                    {"max_patch_area", options.max_patch_area},
+                    {"min_split_area", options.min_split_area},
+                    {"force_split_area", options.force_split_area},
+                    {"area_extra_depth", options.area_extra_depth},
+                    {"protrusion_stretch", options.protrusion_stretch},
+                    {"same_pose", options.same_pose},
+                    {"same_pose_detect", options.same_pose_detect},
+                    {"same_pose_maps", options.same_pose_maps}};
+  return document(meshes, std::move(o), include_times, maps);
+}
+
+std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const std::string& options_json,
+                               bool include_times, const std::string& maps) {
+  ordered_json o = ordered_json::parse(options_json);
+  if (!o.is_object()) throw InvalidInput("dissection_to_json: the options must be a JSON object");
+  return document(meshes, std::move(o), include_times, maps);
 }
 
 }  // namespace qs::dissect

@@ -30,6 +30,10 @@ struct DissectedMesh {
 /// weights were used, and why, e.g. after the fallback of DissectOptions::fallback_maps).
 std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const DissectOptions& options,
                                bool include_times, const std::string& maps = {});
+/// The same with the "options" object given as JSON text (qs::pipeline::config_to_json: every
+/// option of the run, so that it replays). \throws InvalidInput when it is not an object.
+std::string dissection_to_json(const std::vector<DissectedMesh>& meshes, const std::string& options_json,
+                               bool include_times, const std::string& maps = {});
 
 }  // namespace qs::dissect
 

@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 #include "qs/dissect/geodesic_loop.h"
-#include "qs/dissect/relax.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/warp/warp.h"
 
@@ -208,19 +207,6 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
       feature_of_.resize(cm_.num_vertices(), -1);
     }
   }
-  if (opt_.relax_rounds > 0) {
-    // Paper 3.3: each seed curve becomes the straight line of the map of the mesh cut along the
-    // other three. New vertices are appended, so input and feature ids stay valid.
-    RelaxOptions ro;
-    ro.rounds = opt_.relax_rounds;
-    ro.avoid = feature_vertex_;
-    RelaxedLoop r = relax_seed_loop(tm, loop, ro, ctx_);
-    tm = std::move(r.mesh);
-    loop = std::move(r.loop);
-    cm_ = CutMesh(tm);
-    grow();
-    feature_of_.resize(cm_.num_vertices(), -1);
-  }
   for (int k = 0; k < 4; ++k) {
     seed_curves_[k].clear();
     for (int v : loop.paths[k]) seed_curves_[k].push_back(tm.positions[v]);
@@ -265,13 +251,12 @@ Param MeshDissector::parameterize(const Node& node) {
   collect_features(p);
   // A map squeezed to zero area (a long protrusion) that holds features is spread out by stretch
   // minimization, so that the features can be aligned (measured: it changes the tree of a mesh
-  // without features for the worse as often as for the better). With the option, every patch
-  // over tau is judged (and split) by its minimized map.
+  // without features for the worse as often as for the better).
   const bool squeezed = !p.sp.bijective() && !p.features.empty();
-  if (squeezed || (opt_.split_stretch_rounds > 0 && p.st.patch > opt_.tau)) {
+  if (squeezed) {
     param::SquareParamOptions po;
     po.weights = p.weights;
-    po.stretch_iterations = squeezed ? std::max(opt_.split_stretch_rounds, kRepairRounds) : opt_.split_stretch_rounds;
+    po.stretch_iterations = kRepairRounds;
     try {
       param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
       // Kept when it folds less, or, both bijective, when it is less stretched.

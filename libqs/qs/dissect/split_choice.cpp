@@ -199,7 +199,7 @@ std::pair<Vec2, double> SetDissector::choose_split(const Node& node, const std::
   const Param& p = ps[best];
   const Tri& t = p.ex.pm.faces[face];
   const Vec2 raw = (p.sp.uv[t[0]] + p.sp.uv[t[1]] + p.sp.uv[t[2]]) / 3.0;
-  double w = std::clamp(opt_.w_bias + std::log10(std::max(peak_s, 1e-12)), opt_.w_min, opt_.w_max);
+  const double w = std::clamp(opt_.w_bias + std::log10(std::max(peak_s, 1e-12)), opt_.w_min, opt_.w_max);
   auto clamp = [&](const Vec2& q) { return Vec2(q.cwiseMax(opt_.peak_margin).cwiseMin(1 - opt_.peak_margin)); };
   Vec2 peak = clamp(raw);
   tn.split_mesh = best;
@@ -210,24 +210,6 @@ std::pair<Vec2, double> SetDissector::choose_split(const Node& node, const std::
   // remesh got 2.67 -> 2.77% of its level-4 faces under 10 degrees).
   if (opt_.protrusion_stretch > 0 && p.features.empty() && p.st.patch > opt_.protrusion_stretch)
     peak = centre_holding(raw, peak, w);
-  if (opt_.predict_split) {
-    // Candidates: the rule above first, the raw peak with smaller margins, a 3x3 grid of centres,
-    // each with w in {0.5, 0.65, 0.8}; the lowest predicted children's stretch wins (ties: first).
-    std::vector<Vec2> centres = {peak};
-    for (double m : {0.25, 0.15}) centres.push_back(Vec2(raw.cwiseMax(m).cwiseMin(1 - m)));
-    for (double y : {0.3, 0.5, 0.7})
-      for (double x : {0.3, 0.5, 0.7}) centres.emplace_back(x, y);
-    double best_score = predicted_children_stretch(p, peak, w);
-    for (const Vec2& cc : centres)
-      for (double ww : {0.5, 0.65, 0.8}) {
-        const double sc = predicted_children_stretch(p, cc, ww);
-        if (sc < best_score * (1 - 1e-9)) {
-          best_score = sc;
-          peak = cc;
-          w = ww;
-        }
-      }
-  }
   if (!p.features.empty()) {
     // Every mesh's features must clear the cuts (grouped or held features are not aligned).
     std::vector<Vec2> fuv;

@@ -343,7 +343,7 @@ using MetricFn = std::function<Eigen::Matrix2d(size_t, const Vec2&)>;
 
 // Instead of a metric: the Jacobian of local face t's map to the reference, linearized at the
 // current uv, vec(J_t) = a x + b (x: the face's corner uv, as jacobian_matrix); refine_patch's
-// NodeMetric::Composition.
+// composition.
 using LinearizeFn = std::function<void(size_t, Mat46&, Eigen::Vector4d&)>;
 
 // The metric of a problem whose faces lie in their own patches' unit squares: per patch, the
@@ -701,100 +701,6 @@ std::vector<PatchProblem> build_problems(const dissect::Dissection& d) {
   return probs;
 }
 
-// The sliding problem of a mesh: every vertex on exactly one patch side (in two patches, not a
-// corner, seed or feature, its wedges consistent, its side coordinate in the two patches s and s
-// or 1 - s) gets one unknown; the faces are all faces around them, in both patches.
-PatchProblem build_side_problem(const dissect::Dissection& d) {
-  const auto& chart = d.chart;
-  const int nv = chart.mesh.num_vertices();
-  std::vector<std::array<int, 2>> patches(nv, {-1, -1});
-  std::vector<char> bad(nv, 0);
-  std::vector<std::array<Vec2, 2>> wedge(nv);
-  for (int f = 0; f < chart.mesh.num_faces(); ++f) {
-    const int p = chart.face_patch[f];
-    for (int k = 0; k < 3; ++k) {
-      const int v = chart.mesh.faces[f][k];
-      auto& ps = patches[v];
-      int slot = ps[0] == p ? 0 : ps[1] == p ? 1 : -1;
-      if (slot < 0) {
-        if (ps[0] < 0) slot = 0;
-        else if (ps[1] < 0) slot = 1;
-        else {
-          bad[v] = 1;  // three patches or more: a corner
-          continue;
-        }
-        ps[slot] = p;
-        wedge[v][slot] = chart.face_uv[f][k];
-      } else if (wedge[v][slot] != chart.face_uv[f][k]) {
-        bad[v] = 1;
-      }
-    }
-  }
-  for (int s : d.seeds)
-    if (s >= 0 && s < nv) bad[s] = 1;
-  for (const auto& f : d.features)
-    if (f.vertex >= 0 && f.vertex < nv) bad[f.vertex] = 1;
-  for (const auto& p : chart.patches)
-    for (int c : p.corners)
-      if (c >= 0 && c < nv) bad[c] = 1;
-  // The moving axis of a wedge on a side: the other coordinate is exactly 0 or 1, this one inside.
-  auto moving_axis = [](const Vec2& uv) {
-    const bool fx = uv.x() == 0 || uv.x() == 1, fy = uv.y() == 0 || uv.y() == 1;
-    const bool ix = uv.x() > 0 && uv.x() < 1, iy = uv.y() > 0 && uv.y() < 1;
-    if (fx && iy) return 1;
-    if (fy && ix) return 0;
-    return -1;
-  };
-  std::vector<int> var(nv, -1);
-  std::vector<std::array<Vec2, 2>> basis(nv);
-  PatchProblem pr;
-  for (int v = 0; v < nv; ++v) {
-    if (bad[v] || patches[v][1] < 0) continue;
-    const int lo = patches[v][0] < patches[v][1] ? 0 : 1, hi = 1 - lo;
-    const int a0 = moving_axis(wedge[v][lo]), a1 = moving_axis(wedge[v][hi]);
-    if (a0 < 0 || a1 < 0) continue;
-    const double s0 = wedge[v][lo][a0], s1 = wedge[v][hi][a1];
-    double sign = 0;
-    if (std::abs(s1 - s0) <= 1e-9) sign = 1;
-    else if (std::abs(s1 - (1 - s0)) <= 1e-9) sign = -1;
-    else continue;
-    var[v] = pr.unknowns++;
-    basis[v][lo] = a0 == 0 ? Vec2(1, 0) : Vec2(0, 1);
-    basis[v][hi] = sign * (a1 == 0 ? Vec2(1, 0) : Vec2(0, 1));
-  }
-  if (pr.unknowns == 0) return pr;
-  std::unordered_map<long long, int> local;
-  for (int f = 0; f < chart.mesh.num_faces(); ++f) {
-    const auto& t = chart.mesh.faces[f];
-    if (var[t[0]] < 0 && var[t[1]] < 0 && var[t[2]] < 0) continue;
-    const int p = chart.face_patch[f];
-    std::array<int, 3> c{};
-    for (int k = 0; k < 3; ++k) {
-      const int v = t[k];
-      const long long key = static_cast<long long>(v) * static_cast<long long>(chart.patches.size()) + p;
-      auto [it, added] = local.try_emplace(key, static_cast<int>(pr.vertices.size()));
-      if (added) {
-        pr.vertices.push_back(v);
-        pr.uv.push_back(chart.face_uv[f][k]);
-        pr.var.push_back(var[v]);
-        pr.dims.push_back(var[v] >= 0 ? 1 : 0);
-        pr.basis.push_back(var[v] >= 0 ? basis[v][patches[v][0] == p ? 0 : 1] : Vec2::Zero());
-      }
-      c[k] = it->second;
-    }
-    pr.faces.push_back(f);
-    pr.face_patch.push_back(p);
-    pr.tri.push_back(c);
-    double area = 0;
-    const Eigen::Matrix2d dm =
-        local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], area);
-    pr.dm_inv.push_back(dm.inverse());
-    pr.area.push_back(area);
-    pr.total_area += area;
-  }
-  return pr;
-}
-
 // Refines a problem's free (u, v) (all inside [0, hi.x] x [0, hi.y]) under `metric`.
 PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const RefineOptions& options, bool optimize,
                           const Vec2& hi = Vec2(1, 1), const Vec2& lo = Vec2(0, 0),
@@ -1096,22 +1002,6 @@ MeshResult run_mesh(dissect::Dissection& b, const std::vector<ReferencePatch>& r
     out.area = area;
   };
   note(interior_pass(b, refs, scale, options, optimize, context, pull), true);
-  if (optimize && options.slide_borders && options.iterations > 0) {
-    PatchProblem sides = build_side_problem(b);
-    // The pose pull on a sliding wedge: toward the reference's nearest point in the wedge's own
-    // patch, seen along its side (the solver projects the pull on the side's direction).
-    if (pull)
-      add_pull(sides, b.chart, *pull,
-               [&](int p, const Vec3& y, const Vec3& n) { return nearest_on_patch(*pull, p, y, n); });
-    const PatchResult r = solve_problem(sides, patch_metric(sides, refs, scale), options, true);
-    out.steps += r.steps;
-    if (r.changed) {
-      write_back(sides, b.chart);
-      for (int p : sides.face_patch) changed[p] = 1;
-      out.free += sides.unknowns;
-      note(interior_pass(b, refs, scale, options, true, context, pull), false);
-    }
-  }
   if (!optimize) return out;
   for (int p = 0; p < np; ++p) out.refined += changed[p];
   update_figures(b, changed);
@@ -1577,31 +1467,7 @@ Vec2 half_step_dir(int a, int k) {
   return Vec2(std::cos(t), std::sin(t));
 }
 
-Vec2 rotate(const Vec2& p, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return Vec2(c * p.x() - s * p.y(), s * p.x() + c * p.y());
-}
-
 }  // namespace
-
-Vec2 cone_glue(const Vec2& q, int k, int sector) {
-  const double a = 4.0 / k;
-  if (q.x() == 0 && q.y() == 0) return Vec2::Zero();
-  if (q.y() == 0) return std::pow(q.x(), a) * half_step_dir(2 * sector, k);
-  if (q.x() == 0) return std::pow(q.y(), a) * half_step_dir(2 * (sector + 1), k);
-  const double r = std::pow(std::hypot(q.x(), q.y()), a);
-  const double t = a * std::atan2(q.y(), q.x()) + 2 * M_PI * sector / k;
-  return Vec2(r * std::cos(t), r * std::sin(t));
-}
-
-Vec2 cone_unglue(const Vec2& g, int k, int sector) {
-  const Vec2 w = rotate(g, -2 * M_PI * sector / k);
-  const double r = std::hypot(w.x(), w.y());
-  if (r == 0) return Vec2::Zero();
-  const double b = k / 4.0;
-  const double rr = std::pow(r, b), t = b * std::atan2(w.y(), w.x());
-  return Vec2(rr * std::cos(t), rr * std::sin(t));
-}
 
 Vec2 sector_glue(const Vec2& q, int k, int sector) {
   if (q.x() == 0 && q.y() == 0) return Vec2::Zero();
@@ -1696,12 +1562,9 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
                       const PosePull* pull) {
   CornerCut out;
   const int k = static_cast<int>(star.patches.size());
-  const bool power = options.corner_chart == CornerChart::Power;
-  auto glue = [&](const Vec2& q, int j) { return power ? cone_glue(q, k, j) : sector_glue(q, k, j); };
-  auto unglue = [&](const Vec2& g, int j) { return power ? cone_unglue(g, k, j) : sector_unglue(g, k, j); };
-  // The side coordinate of a glued point at distance r from the origin on a ray.
-  auto side_coordinate = [&](double r) { return power ? std::pow(r, k / 4.0) : r; };
-  std::vector<Eigen::Matrix2d> sector_inverse(k);  // the sector glue's inverse Jacobian (CornerChart::Sector)
+  auto glue = [&](const Vec2& q, int j) { return sector_glue(q, k, j); };
+  auto unglue = [&](const Vec2& g, int j) { return sector_unglue(g, k, j); };
+  std::vector<Eigen::Matrix2d> sector_inverse(k);  // the sector glue's inverse Jacobian
   for (int j = 0; j < k; ++j) {
     Eigen::Matrix2d d;
     d.col(0) = half_step_dir(2 * j, k);
@@ -1764,22 +1627,15 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
     return out.with(CornerOutcome::Irregular);
 
   // The reference's metric glued the same way: M_glued = C^T (A M A^T) C with A the turn and C the
-  // Jacobian of the inverse power map (never evaluated at the origin itself: face centroids).
+  // Jacobian of the inverse sector glue (evaluated at face centroids).
   double area_a = 0;
   for (int p : star.patches) area_a += refs[p].area();
   const double scale = area_a > 0 ? pr.total_area / area_a : 1.0;
   std::vector<Eigen::Matrix2d> lin(k);
   for (int j = 0; j < k; ++j) lin[j] = Glue{star.patches[j], turns[j], 0.0}.linear();
   // A metric ms of patch star.patches[j] at glued point g, in glued (u, v).
-  auto glued_metric = [&](int j, const Vec2& g, const Eigen::Matrix2d& ms) {
-    Eigen::Matrix2d c = sector_inverse[j];
-    if (power) {
-      const Vec2 w = rotate(g, -2 * M_PI * j / k);
-      const double b = k / 4.0;
-      const double r = std::max(std::hypot(w.x(), w.y()), 1e-9);
-      const double mag = b * std::pow(r, b - 1), phi = (b - 1) * std::atan2(w.y(), w.x()) - 2 * M_PI * j / k;
-      c << mag * std::cos(phi), -mag * std::sin(phi), mag * std::sin(phi), mag * std::cos(phi);
-    }
+  auto glued_metric = [&](int j, const Eigen::Matrix2d& ms) {
+    const Eigen::Matrix2d& c = sector_inverse[j];
     return Eigen::Matrix2d(c.transpose() * lin[j] * ms * lin[j].transpose() * c);
   };
   auto hints = std::make_shared<std::vector<int>>(pr.faces.size() * k, -1);
@@ -1789,7 +1645,7 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
     const int j = std::clamp(static_cast<int>(std::floor(ang / (2 * M_PI / k))), 0, k - 1);
     const Vec2 q = unglue(g, j);
     const Vec2 s = turn_square(q.cwiseMax(0.0).cwiseMin(1.0), 4 - turns[j]);
-    return Eigen::Matrix2d(scale * glued_metric(j, g, refs[star.patches[j]].metric(s, (*hints)[t * k + j])));
+    return Eigen::Matrix2d(scale * glued_metric(j, refs[star.patches[j]].metric(s, (*hints)[t * k + j])));
   };
   if (pull) {
     // The pose pull toward the nearest of the reference's k patches around the corner, glued.
@@ -1798,7 +1654,7 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
           *pull, k, y, n, [&](int j) { return star.patches[j]; },
           [&](int j, const PullTarget& t) {
             const Vec2 g = glue(turn_square(t.uv, turns[j]), j);
-            return PullTarget{g, glued_metric(j, g, t.metric), t.distance};
+            return PullTarget{g, glued_metric(j, t.metric), t.distance};
           });
     });
   }
@@ -2021,7 +1877,7 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
   if (failed) return out.with(CornerOutcome::Skipped);
 
   // Each piece's (u, v) in its patch: held vertices keep their wedges, points on a ray or at the
-  // origin go exactly onto the square's sides, the rest through the inverse power map.
+  // origin go exactly onto the square's sides, the rest through the inverse glue.
   for (size_t i = 0; i < sc.pieces.size(); ++i) {
     const int j = piece_sector[i];
     std::array<Vec2, 3> q{};
@@ -2033,8 +1889,8 @@ CornerCut plan_corner(const dissect::Chart& chart, const ChartIndex& index, cons
         continue;
       }
       if (tag[l] == kOrigin) s = Vec2::Zero();
-      else if (tag[l] == 2 * j) s = Vec2(side_coordinate(uv[l].norm()), 0);
-      else if (tag[l] == 2 * ((j + 1) % k)) s = Vec2(0, side_coordinate(uv[l].norm()));
+      else if (tag[l] == 2 * j) s = Vec2(uv[l].norm(), 0);
+      else if (tag[l] == 2 * ((j + 1) % k)) s = Vec2(0, uv[l].norm());
       else s = unglue(uv[l], j);
       if (!(s.x() >= -1e-9 && s.y() >= -1e-9 && s.x() <= 1 + 1e-9 && s.y() <= 1 + 1e-9))
         return out.with(CornerOutcome::Skipped);
@@ -2213,18 +2069,14 @@ double sym_dirichlet(const Eigen::Matrix2d& J, Eigen::Vector4d* gradient, Eigen:
 
 namespace {
 
-// The reference patch of refine_patch as it is, for NodeMetric::Face and ::Composition: its uv
-// triangles located exactly (a uniform grid over the unit square, about one cell per face), the
-// metric of each face unclamped but for a floor of 1e-12 x the patch's mean that keeps it positive
-// definite (a face with a zero-area 3D triangle), and the 3D point at any uv.
+// The reference patch of refine_patch as it is: its uv triangles located exactly (a uniform grid
+// over the unit square, about one cell per face), and the 3D point and Jacobian at any uv.
 class ExactReference {
  public:
   ExactReference(const param::PatchMesh& ref, const std::vector<Vec2>& uv) : ref_(ref) {
     const size_t nf = ref.faces.size();
-    metric_.assign(nf, Eigen::Matrix2d::Identity());
     jacobian_.assign(nf, Mat32::Zero());
     std::vector<char> positive(nf, 0);
-    double total_uv = 0;
     for (size_t f = 0; f < nf; ++f) {
       const auto& t = ref.faces[f];
       Mat32 e;
@@ -2237,13 +2089,9 @@ class ExactReference {
       const double auv = 0.5 * ds.determinant();
       if (!(auv > param::kZeroUvArea)) continue;
       const Mat32 g = e * ds.inverse();
-      metric_[f] = g.transpose() * g;
       jacobian_[f] = g;
       positive[f] = 1;
-      total_uv += auv;
     }
-    mean_ = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
-    for (size_t f = 0; f < nf; ++f) metric_[f] = positive[f] ? floored(metric_[f]) : mean_ * Eigen::Matrix2d::Identity();
     std::vector<std::array<Vec2, 3>> tris(nf);
     for (size_t f = 0; f < nf; ++f) tris[f] = {uv[ref.faces[f][0]], uv[ref.faces[f][1]], uv[ref.faces[f][2]]};
     locator_.emplace(std::move(tris), positive, true);
@@ -2251,21 +2099,11 @@ class ExactReference {
 
   double area() const { return area_; }
 
-  // Eigenvalues floored at 1e-12 x the patch's mean (no upper clamp).
-  Eigen::Matrix2d floored(const Eigen::Matrix2d& m) const { return clamp_metric(m, 1e-12 * mean_, kInf); }
-
   // The face holding q (clamped to the square; the face where q is least outside when it lies in
   // none, e.g. by rounding on an edge) and q's barycentric coordinates in it, clamped to the
   // face; -1 when the patch has no positive uv face. `hint`: a face to try first, updated.
   int locate(const Vec2& q_in, int& hint, Vec3& bary) const {
     return locator_->locate(q_in.cwiseMax(0.0).cwiseMin(1.0), hint, bary);
-  }
-
-  // The reference's metric at q: that of the face holding q (piecewise constant).
-  Eigen::Matrix2d metric(const Vec2& q, int& hint) const {
-    Vec3 b;
-    const int f = locate(q, hint, b);
-    return f < 0 ? Eigen::Matrix2d(mean_ * Eigen::Matrix2d::Identity()) : metric_[f];
   }
 
   // The reference's 3D point at q (linear in the face holding q); false when there is none.
@@ -2287,9 +2125,8 @@ class ExactReference {
 
  private:
   const param::PatchMesh& ref_;
-  std::vector<Eigen::Matrix2d> metric_;
   std::vector<Mat32> jacobian_;
-  double area_ = 0, mean_ = 1;
+  double area_ = 0;
   std::optional<UvLocator> locator_;
 };
 
@@ -2306,7 +2143,7 @@ Mat46 jacobian_matrix(const std::array<Eigen::Matrix2d, 3>& q, const Eigen::Matr
   return a;
 }
 
-// NodeMetric::Composition for a one-patch problem: per face t of B, the composed map B -> uv -> A
+// The composition for a one-patch problem: per face t of B, the composed map B -> uv -> A
 // on t is B's triangle onto the triangle of A's points at t's three uv corners (located exactly in
 // A's uv triangles). Its Jacobian, in an orthonormal frame R of that image triangle, linearized at
 // the current uv with each corner moving along the A face that holds it (x_k + G_k du_k):
@@ -2414,23 +2251,6 @@ std::optional<PatchProblem> node_problem(const char* who, const param::PatchMesh
   return pr;
 }
 
-// The reference's patch as a one-patch chart (refine_maps's metric and location grid).
-std::vector<ReferencePatch> one_patch_reference(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv) {
-  dissect::Chart chart;
-  chart.mesh.positions = ref.positions;
-  chart.mesh.faces = ref.faces;
-  chart.face_patch.assign(ref.faces.size(), 0);
-  chart.face_uv.resize(ref.faces.size());
-  std::vector<int> ref_faces(ref.faces.size());
-  for (size_t f = 0; f < ref.faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) chart.face_uv[f][k] = ref_uv[ref.faces[f][k]];
-    ref_faces[f] = static_cast<int>(f);
-  }
-  std::vector<ReferencePatch> refs;
-  refs.emplace_back(chart, std::move(ref_faces));
-  return refs;
-}
-
 }  // namespace
 
 bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
@@ -2442,30 +2262,15 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   auto problem = node_problem("refine_patch", ref, ref_uv, patch, uv, held, options);
   if (!problem) return false;
   PatchProblem& pr = *problem;
-  PatchResult r;
-  if (node.metric == NodeMetric::Vertex) {
-    const std::vector<ReferencePatch> refs = one_patch_reference(ref, ref_uv);
-    const std::vector<double> scale{refs[0].area() > 0 ? pr.total_area / refs[0].area() : 1.0};
-    r = solve_problem(pr, patch_metric(pr, refs, scale), options, true);
-  } else {
-    const ExactReference exact(ref, ref_uv);
-    const double scale = exact.area() > 0 ? pr.total_area / exact.area() : 1.0;
-    if (node.metric == NodeMetric::Face) {
-      auto hints = std::make_shared<std::vector<int>>(pr.faces.size(), -1);
-      const MetricFn metric = [&exact, scale, hints](size_t t, const Vec2& q) {
-        return Eigen::Matrix2d(scale * exact.metric(q, (*hints)[t]));
-      };
-      r = solve_problem(pr, metric, options, true);
-    } else {
-      const LinearizeFn linearize = composition_linearization(pr, exact, scale);
-      const MetricFn unused = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
-      if (node.max_start_distortion > 0) {
-        const PatchResult start = solve_problem(pr, unused, options, false, Vec2(1, 1), Vec2(0, 0), &linearize);
-        if (!(start.area > 0) || start.energy_before / start.area / 4 > node.max_start_distortion) return false;
-      }
-      r = solve_problem(pr, unused, options, true, Vec2(1, 1), Vec2(0, 0), &linearize);
-    }
+  const ExactReference exact(ref, ref_uv);
+  const double scale = exact.area() > 0 ? pr.total_area / exact.area() : 1.0;
+  const LinearizeFn linearize = composition_linearization(pr, exact, scale);
+  const MetricFn unused = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
+  if (node.max_start_distortion > 0) {
+    const PatchResult start = solve_problem(pr, unused, options, false, Vec2(1, 1), Vec2(0, 0), &linearize);
+    if (!(start.area > 0) || start.energy_before / start.area / 4 > node.max_start_distortion) return false;
   }
+  const PatchResult r = solve_problem(pr, unused, options, true, Vec2(1, 1), Vec2(0, 0), &linearize);
   if (!r.changed) return false;
   uv = pr.uv;
   return true;

@@ -1,5 +1,5 @@
 #pragma once
-// Map refinement after the common dissection (issue 17, item 3).
+// Map refinement after the common dissection.
 //
 // A common dissection maps every mesh of a set onto the same patches; the inter-surface map from
 // mesh A to mesh B is point on A -> (patch, u, v) by A's chart -> the point of B at (patch, u, v)
@@ -21,10 +21,8 @@
 //    Schaefer 2015) and backtracked (Armijo); the metric is re-evaluated at the new uv centroids
 //    after every step.
 //  - Held: patch corners, seeds, features, any vertex whose wedges in its patch disagree, and
-//    (unless RefineOptions::slide_borders) every patch-side vertex. Patch-interior vertices move
-//    inside their own patch; with slide_borders, side vertices slide along their side (one
-//    unknown shared by the two patches), between two interior passes. In these passes patch
-//    curves on the surface never move (across_borders below moves them).
+//    every patch-side vertex. Patch-interior vertices move inside their own patch; in these
+//    passes patch curves on the surface never move (across_borders below moves them).
 //  - Safety: a patch keeps its refined (u, v) only if every uv face stays positive (signed area
 //    above param::kZeroUvArea) and the energy went down; otherwise it is left as it was. Patches
 //    with a flipped or zero-area uv face to start with are not touched.
@@ -40,13 +38,13 @@
 // Corner moves (RefineOptions::move_corners): after a first interior pass, every patch corner of
 // every mesh but the reference (not a seed or a feature, met by k >= 3 distinct patches once each)
 // has its k patches glued into one chart around it (each square turned so that the corner is at
-// the origin, then an affine sector or the power map z^(4/k), see CornerChart), B's union refined
+// the origin, then an affine map onto its sector), B's union refined
 // with its outer border held and the corner and its sides free, and the union cut again along the
 // k rays from the origin; the new corner is the chart vertex at the origin. Corners in base-domain
 // order, stars that share no patch planned in parallel and committed in order.
 //
 // In the interior passes patches are independent (their borders are held), so they run in
-// parallel; the sliding pass is one problem. The result does not depend on the thread count.
+// parallel. The result does not depend on the thread count.
 
 #include <vector>
 
@@ -55,29 +53,15 @@
 
 namespace qs::maprefine {
 
-/// The chart of a corner's star (RefineOptions::corner_chart).
-enum class CornerChart {
-  /// Patch j's square goes onto the parallelogram spanned by the rays at angles 2 pi j / k and
-  /// 2 pi (j+1) / k (an affine map per patch: a chart face stays a positive face, and the energy
-  /// in the glued chart is exactly the energy in the patches).
-  Sector,
-  /// The power map z -> z^(4/k) of Schmidt et al. 2019 (conformal away from the corner, but not
-  /// affine: a large chart face near the corner can fold in the glued chart, and such a corner is
-  /// left as it was).
-  Power,
-};
-
 /// The length at which RefineOptions::pose_pull costs as much per unit area as its weight: 1% of
 /// the reference's bounding-box diagonal.
 inline constexpr double kPullLength = 0.01;
 
-/// qs-dissect's RefineOptions::pose_pull for meshes in one pose when --refine-pose-pull is not
-/// given.
+/// The pipeline's RefineOptions::pose_pull for meshes in one pose (qs::pipeline::DissectConfig).
 inline constexpr double kDefaultPosePull = 10.0;
-/// ... and its RefineOptions::border_iterations with that pull when --refine-border-iterations is
-/// not given (1 otherwise): with the pull, the sides carry the patch curves toward the first mesh's
-/// (README, "Same pose": human-same's worst point 3.02 -> 2.02% at 3 steps; 1.81 -> 1.40% at 5
-/// once the node maps are untangled).
+/// ... and its RefineOptions::border_iterations with that pull: with the pull, the sides carry
+/// the patch curves toward the first mesh's (human-same's worst point 1.81 -> 1.40% at 5 steps
+/// instead of 3; docs/algorithms.md, "Same pose").
 inline constexpr int kPoseBorderIterations = 5;
 
 struct RefineOptions {
@@ -86,13 +70,7 @@ struct RefineOptions {
   /// A patch stops when a step lowers its energy by less than this fraction. \pre >= 0
   double tolerance = 1e-5;
   int threads = 0;           ///< 0: all cores; the result does not depend on it
-  /// Also let patch-side vertices slide along their side (one unknown each, shared by the two
-  /// patches of the side; corners, seeds and features stay), between two passes over the patch
-  /// interiors. The sides' curves on the surface do not move, only where along them (u, v) lands.
-  /// Off by default: on the correspondence benchmark it lowers the distortion energy but changes
-  /// no mean error by more than 0.02% of the diagonal, at 9-17 times the time on the human pairs.
-  bool slide_borders = false;
-  /// Move the patch curves too (`qs-dissect --refine-across-borders`): for every side shared by
+  /// Move the patch curves too: for every side shared by
   /// two patches P and Q (and no other side of theirs), in patch order, glue P's and Q's squares
   /// along it into one chart on [0,2] x [0,1], refine B's (u, v) on the union against the
   /// reference's metric glued the same way (the union's border, corners, seeds and features held,
@@ -100,42 +78,35 @@ struct RefineOptions {
   /// vertices where the line crosses an edge (exactly on the surface, float64 uv), the old side
   /// vertices stay as ordinary vertices. A side is left as it was when the union is folded to
   /// start with, gains nothing, or a piece of the cut would not be a positive uv triangle. Then
-  /// the interior pass as without it. On by default since issue 13 (one Newton step per side,
-  /// `border_iterations`): on the example set the cat's level-4 remesh faces under 10 degrees go
-  /// 2.67 -> 1.70% (with the snap guard of plan_side), the generated pairs' mean correspondence error falls by 0.04-0.07%, at at most
-  /// the dissection's time on the shared sets (see the README).
+  /// the interior pass as without it.
   bool across_borders = true;
   /// With across_borders: passes over the shared sides (a pass that changes no side ends them).
   /// \pre >= 0
   int border_sweeps = 1;
   /// With across_borders: Newton steps per glued pair of patches at most (and at most
-  /// `iterations`); the final interior pass polishes. Default 1 (3 before it was on by default:
-  /// the example set's cat 1.89% of level-4 faces under 10 degrees instead of 1.79%, at 1.5 times
-  /// the time; both before the snap guard). \pre >= 0
+  /// `iterations`); the final interior pass polishes. \pre >= 0
   int border_iterations = 1;
-  /// Move the patch corners too (`qs-dissect --refine-corners`), after a first interior pass and
+  /// Move the patch corners too, after a first interior pass and
   /// before the across-border and final interior passes: every patch corner of a mesh but the reference that is not a seed or a
   /// feature, met by k >= 3 distinct patches once each, has its k patches glued into one disk
-  /// chart (each square turned so that the corner is at its origin, then mapped by the power map
-  /// z -> z^(4/k) rotated to its sector, a cone chart), B's (u, v) refined on the union against
+  /// chart (each square turned so that the corner is at its origin, then mapped affinely onto the
+  /// sector between the rays at angles 2 pi j / k and 2 pi (j+1) / k), B's (u, v) refined on the union against
   /// the reference's metric glued the same way (the union's outer border held; the corner and
   /// the vertices of its k sides free), and the union cut again along the k rays from the origin:
   /// the new corner is the chart vertex at the origin (a vertex snapped there, or a new vertex in
   /// the face that holds it), new chart vertices where a ray crosses an edge (exactly on the
   /// surface). A corner is left as it was when its star is irregular, the union is folded, the
   /// energy does not go down, or a piece of the cut is not a positive uv triangle inside its
-  /// square. Off by default (see the README for what it measured).
+  /// square. Off by default: it lowers the error of pairs of different shapes, at 1.2-2.2 times
+  /// the dissection's time (docs/tools/qs-dissect.md).
   bool move_corners = false;
   /// With move_corners: passes over the corners (in base-domain order; a pass that moves none
   /// ends them). \pre >= 0
   int corner_sweeps = 1;
   /// With move_corners: Newton steps per corner star at most (and at most `iterations`). \pre >= 0
   int corner_iterations = 5;
-  /// With move_corners: how the patches around a corner are glued into one chart (see CornerChart).
-  CornerChart corner_chart = CornerChart::Sector;
-  /// The pose pull (qs-dissect, for meshes in one pose): the interior passes, the side moves of
-  /// across_borders, the corner moves of move_corners and the sliding pass of slide_borders (a
-  /// side vertex toward the nearest point in each of its two patches, along its side) also pull
+  /// The pose pull (for meshes in one pose): the interior passes, the side moves of
+  /// across_borders and the corner moves of move_corners also pull
   /// every free vertex of B toward the reference's point nearest to it, B moved into the
   /// reference's frame by the landmarks' similarity (Umeyama on the seeds and features), the
   /// nearest point taken in the vertex's own patch (in the nearest of the two patches of a side,
@@ -201,37 +172,20 @@ struct RefineReport {
 RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options = {},
                          const Context& context = {});
 
-/// How refine_patch sees the reference's map (issue 17: is the metric's fidelity why refining the
-/// parents before their split failed on the bodies, whose seed and limb nodes have L2 stretch
-/// 160-38000?). Measured in the README ("Map refinement", --refine-before-split).
-enum class NodeMetric {
-  /// refine_maps's metric: per reference face, eigenvalues clamped to [1e-6, 1e6] x the patch's
-  /// mean, averaged at the vertices by uv area, interpolated linearly at B's uv centroids.
-  Vertex,
-  /// The metric of the reference face that holds B's face's uv centroid (located exactly),
-  /// piecewise constant, eigenvalues only floored at 1e-12 x the patch's mean.
-  Face,
-  /// The composition B -> uv -> A itself, no metric field: per face of B, A's 3D points at its
-  /// three uv corners (located exactly in A's uv triangles) form the image triangle, and the
-  /// energy is the symmetric Dirichlet of B's triangle onto it. The solver linearizes it at the
-  /// current uv, each corner moving along the A face that holds it, so its gradient is exact.
-  Composition,
-};
-
-/// How refine_patch refines one node (the experiment of `qs-dissect --refine-before-split`).
+/// How refine_patch refines one node (DissectOptions::refine_before_split).
 struct NodeRefineOptions {
-  NodeMetric metric = NodeMetric::Vertex;  ///< how the reference is seen
-  /// With NodeMetric::Composition: a node whose composed map starts with a normalized distortion
+  /// A node whose composed map starts with a normalized distortion
   /// (area-weighted symmetric Dirichlet / 4; 1 = isometric) above this is left as it is. On the
   /// bodies' seed and limb nodes (10^4..10^9) the refinement lowers that energy by orders of
-  /// magnitude without moving the map's points closer to the reference's (README, "Map
-  /// refinement"), and those nodes took most of its time. 0: no limit. \pre >= 0
+  /// magnitude without moving the map's points closer to the reference's, and those nodes took
+  /// most of its time. 0: no limit. \pre >= 0
   double max_start_distortion = 10;
 };
 
 /// Refines one patch of one mesh against the same patch of the reference, as refine_maps refines a
-/// patch's interior (the same energy, solver and safety rules; the reference seen as
-/// `node.metric` says, by default refine_maps's metric): `patch`'s (u, v) in `uv` move, its
+/// patch's interior (the same solver and safety rules; the energy is the symmetric Dirichlet
+/// energy of the composed map B -> uv -> A itself, A's points located exactly in its uv
+/// triangles, linearized at the current uv): `patch`'s (u, v) in `uv` move, its
 /// boundary loop and the vertices with held[v] != 0 stay. Keeps the result only if every uv face
 /// stays positive, inside the square, and the energy went down. Returns whether uv changed.
 /// \pre ref_uv.size() == ref.positions.size(), uv.size() == held.size() == patch.positions.size(),
@@ -242,17 +196,16 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
                   const NodeRefineOptions& node = {});
 
 /// refine_patch with `options` and `node` as a dissect::NodeMapRefiner: the value to put in
-/// DissectOptions::refine_before_split (`qs-dissect --refine-before-split
-/// [--refine-before-split-metric vertex|face|composition]`).
+/// DissectOptions::refine_before_split.
 dissect::NodeMapRefiner node_refiner(const RefineOptions& options = {}, const NodeRefineOptions& node = {});
 
-/// untangle_patch's pull (DissectOptions::same_pose_untangle in qs-dissect): a vertex 6e-4 of the
-/// square from its target costs as much as its area's distortion at rest (4 per unit area). Measured on
-/// 18 real meshes against their re-tessellation (README, "Same pose"): 10^5 left the camel's
+/// untangle_patch's pull (DissectOptions::same_pose_untangle): a vertex 6e-4 of the square from
+/// its target costs as much as its area's distortion at rest (4 per unit area). Measured on 18
+/// real meshes against their re-tessellation (docs/algorithms.md, "Same pose"): 10^5 left the camel's
 /// tangles, 10^6 and 10^7 mend them, 10^7 is the better on polygirl (0.36 -> 0.25% mean), 10^8
 /// worse on the camel.
 inline constexpr double kUntanglePull = 1e7;
-/// Newton steps of a polish by untangler() at most (README, "Same pose": a body pair with thumb
+/// Newton steps of a polish by untangler() at most (a body pair with thumb
 /// seeds 0.410 / 3.13% mean / max in 1.31 s with 30 steps, 0.415 / 3.24% in 0.97 s with 10, 0.435
 /// / 4.69% in 0.92 s with 5; 0.428 / 4.68% in 0.75 s without the polish).
 inline constexpr int kPolishIterations = 10;
@@ -280,14 +233,8 @@ dissect::NodeMapPuller untangler(const RefineOptions& options = {}, double pull 
 /// energy_after): for tests and reports. \pre as refine_maps.
 double map_energy(const dissect::Dissection& a, const dissect::Dissection& b);
 
-/// The cone glue of a patch corner met by k patches (RefineOptions::move_corners): a point q of
-/// the unit square turned so that the corner is at the origin and its two sides lie along +x and
-/// +y goes to r^(4/k) (cos, sin)(4 theta / k + 2 pi sector / k), (r, theta) the polar coordinates
-/// of q; cone_unglue is its inverse on the sector. Points on the axes go exactly onto the rays.
-/// Exposed for tests. \pre k >= 3, 0 <= sector < k.
-Vec2 cone_glue(const Vec2& q, int k, int sector);
-Vec2 cone_unglue(const Vec2& g, int k, int sector);
-/// The sector glue (CornerChart::Sector): q goes to q.x a + q.y b, a and b the unit vectors at
+/// The sector glue of a patch corner met by k patches (RefineOptions::move_corners): a point q
+/// of the unit square turned so that the corner is at the origin goes to q.x a + q.y b, a and b the unit vectors at
 /// angles 2 pi sector / k and 2 pi (sector + 1) / k; sector_unglue is its inverse. Exposed for tests.
 Vec2 sector_glue(const Vec2& q, int k, int sector);
 Vec2 sector_unglue(const Vec2& g, int k, int sector);
