@@ -1,4 +1,4 @@
-// Benchmark: normal-map baking (issue 6).
+// Benchmark: normal-map baking.
 //  1. Bake time of all tiles of a ~30-patch mesh per tile size (64..512): max_planck_11k dissected
 //     at tau 1.32 (34 patches), uniform level 3; best of 9 runs (3 at 512) of bake_normal_map (the chart
 //     sampler is built once beforehand, as qs-bake does). Target: 30 patches at 256 x 256 under

@@ -1,4 +1,4 @@
-// qs-dfi benchmark (issue 16): for each pair of ../shared/meshes and each method (the
+// qs-dfi benchmark: for each pair of ../shared/meshes and each method (the
 // skeleton-guided warp with per-part transport, the same with one global transport, the plain
 // blend; "/parts" or "/linear" says which warp ran), the correspondence (distance fields,
 // skeletons, matching, harmonic fields, transport, warp) and every frame at a 150^3 grid (targets: correspondence < 60 s, < 10 s per frame on a

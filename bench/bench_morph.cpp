@@ -1,4 +1,4 @@
-// Morph benchmarks (issue 7): 100 frames of a ~50k-vertex morph written as OBJ and as binary PLY
+// Morph benchmarks: 100 frames of a ~50k-vertex morph written as OBJ and as binary PLY
 // (target < 1 s), building + writing a GLB with 8 morph targets, and one --frame-maps normal map.
 // Shapes made in code: cube_sphere(91) (49,688 vertices, 99,372 faces) and displaced copies.
 #include <unistd.h>

@@ -1,4 +1,4 @@
-// Where the slivers of the default remesh are (issue 13): for every mesh of a folder (at the default
+// Where the slivers of the default remesh are: for every mesh of a folder (at the default
 // dissection), the level-n anisotropic even remesh's faces with a smallest angle under a bound,
 // sorted by what their cell is and what the chart's map does inside it:
 //   cell      2 (cut in two), 3 (one hanging vertex), fan (a fan around the centre);

@@ -1,4 +1,4 @@
-// The dissection's stop rules against even sampling (issue 13, item 3): for each mesh and each variant
+// The dissection's stop rules against even sampling: for each mesh and each variant
 // of the stop and split rules, the leaves (patches, how many are left over tau and the share of the
 // surface they hold, the largest stretch), the dissection time, and the default remesh of qs-remesh
 // (`--level 5`: the even remesh with anisotropic cells, remesh_even_anisotropic): its vertex-density

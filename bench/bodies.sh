@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Bodies with long limbs (issue 12, item 6): the registered human pair with one mesh re-tessellated,
+# Bodies with long limbs: the registered human pair with one mesh re-tessellated,
 # seeds at the middle finger tips or the thumbs and the big toes (features: nose, head top, heels),
 # and polygirl_20k alone; each dissected with qs-dissect at the default options, then its leaves
 # summarized (bench/leafstats.py: patches, leaves over tau, the largest over-tau leaf's share of

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Correspondence benchmark (issue 17): every pair is dissected with qs-dissect as a user would
+# Correspondence benchmark: every pair is dissected with qs-dissect as a user would
 # (landmarks given), then measured with `qs-metro --correspondence` against its exact ground truth.
 #
 #   usage: bench/correspondence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-correspondence)

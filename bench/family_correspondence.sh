@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Correspondence of generated families dissected together (issue 17, beyond bench/correspondence.sh's
+# Correspondence of generated families dissected together (beyond bench/correspondence.sh's
 # fam4/fam8 at variation 1): families of 4-8 shapes up to the largest variation qs-family makes,
 # each dissected with qs-dissect as a user would (landmarks beside the meshes), then measured with
 # `qs-metro --correspondence` (shape00 against every other shape, chart map, per unit area).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Dissects the four pairs of issue 15 (pig_4k + cow2_9k, horse_5k + camel_4k_fixed, cat_sumner +
+# Dissects four pairs (pig_4k + cow2_9k, horse_5k + camel_4k_fixed, cat_sumner +
 # lion_sumner with their markers, the example's koala_7k + cat_16k) and runs qs-bench-merge on them.
 #   usage: bench/merge_pairs.sh [MESH_DIR] [WORKDIR]   (defaults ../shared/meshes, out/bench-merge)
 set -euo pipefail

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Real meshes against their own re-tessellation (issue 17: "a mesh against its own re-tessellation
+# Real meshes against their own re-tessellation ("a mesh against its own re-tessellation
 # at most 0.2% mean"), with landmarks picked as a user might, not at finger tips: the vertices at
 # the extremes of the mesh's principal axes. Each mesh is re-tessellated by `qs-family
 # retessellate` (exact map kept), the pair dissected with qs-dissect as a user would and measured

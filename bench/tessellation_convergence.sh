@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Tessellation convergence (issue 17, item 2): does the common map of a surface and its own
+# Tessellation convergence: does the common map of a surface and its own
 # re-tessellation approach the identity as both get finer?
 #
 #   usage: bench/tessellation_convergence.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-convergence)

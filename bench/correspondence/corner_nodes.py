@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Where do the patch corners of two charts of ONE surface part (issue 17)?
+"""Where do the patch corners of two charts of ONE surface part?
 
 usage: corner_nodes.py DISSECTION_DIR [--nodes]
 

@@ -1,4 +1,4 @@
-// Geodesic seed curves (issue 17): straighten_seed_loop on surfaces whose geodesics are known, its
+// Geodesic seed curves: straighten_seed_loop on surfaces whose geodesics are known, its
 // loop invariants, and what it buys the dissection: one surface tessellated twice maps closer to
 // the identity.
 

@@ -1,4 +1,4 @@
-// Bodies with long limbs (issue 12, item 6): seeds at the limb tips put every limb at a patch corner,
+// Bodies with long limbs: seeds at the limb tips put every limb at a patch corner,
 // where a quinary split can only slice it lengthwise. The stop rules keep such a layout small and
 // leave no large leaf over tau: a small over-tau patch is not split (min_split_area), a large one
 // still over tau after the repair is split even without progress (force_split_area).

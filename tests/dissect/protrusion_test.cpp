@@ -1,4 +1,4 @@
-// Squeezed protrusions (issue 13, DissectOptions::protrusion_stretch): a node whose map squeezes a
+// Squeezed protrusions (DissectOptions::protrusion_stretch): a node whose map squeezes a
 // protrusion into a point of the square is split with the protrusion in its centre child (the
 // peak_margin clamp alone can leave it in an outer child, split after split around the same two
 // corners, and the children there end as strips). Only such nodes change: a shape without

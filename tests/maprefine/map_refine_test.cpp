@@ -101,7 +101,7 @@ int folded_faces(const qs::dissect::Chart& chart) {
 
 // Refines `set` with options at 1 and at 4 threads: the two results must be bit-identical, unfolded
 // and sampleable. Returns the 1-thread report and leaves the 1-thread result in `set`.
-// The refinement inside the patches only (across_borders is on by default since issue 13).
+// The refinement inside the patches only (across_borders is on by default).
 mr::RefineOptions inside_only() {
   mr::RefineOptions o;
   o.across_borders = false;
@@ -501,7 +501,7 @@ TEST(RefineAcrossBorders, MovesThePatchCurvesBijectivelyAndLowersTheErrorOfARete
   mr::refine_maps(inside, inside_only());  // patch interiors only
   auto across = dissected;
   mr::RefineOptions o;
-  ASSERT_TRUE(o.across_borders);  // the default since issue 13
+  ASSERT_TRUE(o.across_borders);  // the default
   const auto report = mr::refine_maps(across, o);
   const auto& r = report.meshes[1];
   EXPECT_GT(r.sides_refined, 0);

@@ -117,7 +117,7 @@ inline const qs::dissect::Dissection& star_dissection() {
   static const auto d = [] {
     qs::dissect::DissectOptions o;
     o.tau = 1.4;
-    // The maps these tests were written for (the dissection defaults before issues 13/17): with the
+    // The maps these tests were written for: with the
     // default cotangent maps some level-3 cells of AdaptiveRemesh.TinyEpsilon... lie inside one flat
     // input triangle (error 0, not "unresolved" at epsilon 1e-12).
     o.geodesic_seed_curves = false;

@@ -366,7 +366,7 @@ TEST(ChartSampler, GridLocationAgreesWithPointLocation) {
     }
 }
 
-// --- Grid relaxation (UniformOptions::relax, issue 13) ---
+// --- Grid relaxation (UniformOptions::relax) ---
 
 namespace {
 

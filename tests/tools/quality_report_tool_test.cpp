@@ -64,7 +64,7 @@ TEST_F(QualityReport, RemeshReportsAnglesDensityAndErrorSamples) {
   EXPECT_THAT(r.out, HasSubstr("vertices per unit area, 5th-95th percentile"));
   EXPECT_THAT(r.out, HasSubstr("(5000 samples per direction)"));
   const auto j = read_json(out / "remesh.json");
-  EXPECT_EQ(j["mode"], "even");  // --level n: the even remesh with anisotropic cells (issue 13)
+  EXPECT_EQ(j["mode"], "even");  // --level n: the even remesh with anisotropic cells
   EXPECT_EQ(j["even"]["cells"], "aniso");
   EXPECT_EQ(j["diagonals"], "templates");
   const auto& m = j["meshes"][0];

@@ -83,7 +83,7 @@ TEST_F(RemeshTool, PairGetsIdenticalFaceListsAndErrorsFallWithLevel) {
   EXPECT_EQ(run_tool("qs-remesh", d.string() + " --level 2 --cells square --diagonals pattern").exit, 1);
 }
 
-// --level n alone is the even remesh with anisotropic cells (issue 13); --uniform (or a uniform-grid
+// --level n alone is the even remesh with anisotropic cells; --uniform (or a uniform-grid
 // option) gives the square grid, --cells square the even remesh's square quadtree cells.
 TEST_F(RemeshTool, LevelDefaultsToTheAnisotropicEvenRemesh) {
   qs::io::write_mesh(dir_ / "a.obj", qs::shapes::ellipsoid(2.5, 1, 0.6, 4));

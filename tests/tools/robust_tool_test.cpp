@@ -1,4 +1,4 @@
-// Issue 18: hostile input and unlucky output paths, as a user meets them with the tools. Each case
+// Hostile input and unlucky output paths, as a user meets them with the tools. Each case
 // gets its documented exit code (1 usage, 2 invalid input, 3 i/o), a short message naming the file,
 // never a crash or exit 70, and after a failure the output folder is exactly as before the run.
 #include <gmock/gmock.h>

@@ -1,5 +1,5 @@
 #pragma once
-// How good is a dissection's correspondence? Measured against ground truth (issue 17).
+// How good is a dissection's correspondence? Measured against ground truth.
 //
 // Ground truth: every mesh of a set maps exactly to one common domain (README "Correspondence"):
 //  - "sphere" map files (qs-family generate): a point with weights b on face (p, q, r) has the

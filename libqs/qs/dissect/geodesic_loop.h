@@ -1,5 +1,5 @@
 #pragma once
-// Geodesic seed curves (issue 17): the four edge paths of a seed loop straightened into locally
+// Geodesic seed curves: the four edge paths of a seed loop straightened into locally
 // shortest curves on the surface and cut into the mesh, so that the seed loop is (nearly) the
 // same curve for any tessellation of a surface, not a zig-zag along whichever edges it has.
 

@@ -193,7 +193,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
   seeds_ = seeds;
   TriMesh tm = cm_.to_trimesh();
   if (opt_.geodesic_seed_curves) {
-    // Issue 17: the four curves become geodesics cut into the mesh, the same curves on the surface
+    // The four curves become geodesics cut into the mesh, the same curves on the surface
     // for any tessellation. New vertices are appended, so input and feature ids stay valid.
     if (!straightened) straightened = straighten(loop);
     GeodesicLoop& g = *straightened;

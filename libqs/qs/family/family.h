@@ -1,6 +1,6 @@
 #pragma once
 // A family of smooth genus-0 shapes with limbs and an exact map between any two of them, for the
-// set-dissection tests and the correspondence benchmark (issues 12 and 17).
+// set-dissection tests and the correspondence benchmark.
 //
 // Every shape is the image of the unit sphere under its own smooth map S_i: S^2 -> R^3,
 //   S_i(d) = G_i( r_i(d) d + sum_k bend_ik(d) ),

@@ -1,5 +1,5 @@
 #pragma once
-// Shape and sampling measures of a remesh (issue 13): the smallest-angle distribution of its
+// Shape and sampling measures of a remesh: the smallest-angle distribution of its
 // triangles, and how evenly samples (remesh vertices, normal-map texels) cover the surface.
 
 #include <vector>

@@ -57,7 +57,7 @@ enum class DiagonalRule {
 struct UniformOptions {
   bool quads = false;  ///< also fill SemiRegularConnectivity::quads with the grid cells
   DiagonalRule diagonals = DiagonalRule::Pattern;  ///< how cells are cut (quads are not affected)
-  /// Grid relaxation (issue 13), in [0, kMaxGridRelax]; 0 keeps the regular grid u = i / N.
+  /// Grid relaxation, in [0, kMaxGridRelax]; 0 keeps the regular grid u = i / N.
   /// The connectivity does not change, only the (u, v) in vertex_uv and the positions: every
   /// base edge gets a 1D map of its N + 1 samples, a property of the EDGE (both its patches use
   /// it, so shared side samples stay identical), and an interior grid point (i, j) blends the
