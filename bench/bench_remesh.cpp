@@ -3,7 +3,7 @@
 // original (two-sided mean and max, % of the original's bounding-box diagonal). Per mesh a
 // "report" line times qs-remesh's error report at level 5 (qs-remesh --error: 20000 samples per
 // direction, the original's vertices for the maximum) against the level-5 remesh itself, and the
-// even remesh (qs-remesh --level 5 --even).
+// even remesh (qs-remesh --level 5).
 //   usage: qs-bench-remesh [MESH_DIR] [TAU] [MAX_AREA] [STRETCH_ROUNDS]
 //   (defaults ../shared/meshes, 3, 0.15, 0: qs-dissect --max-area 0.15, the remeshing recipe)
 
