@@ -245,3 +245,34 @@ TEST_F(DissectTool, JsonSummary) {
   EXPECT_EQ(j["meshes"][0]["chart"], "blob.chart.ply");
   EXPECT_TRUE(j["bijective"].get<bool>());
 }
+
+// Seeds given in an order whose loop winds around the shape: taken in the set's shortest cyclic
+// order, the same for every mesh, and said in the report; the result equals the belt order's.
+TEST_F(DissectTool, WindingSeedOrderIsReorderedAndReported) {
+  const qs::TriMesh m = qs::shapes::ellipsoid(1.0, 0.8, 2.5, 4);
+  const std::string fa = write("a.obj", m), fb = write("b.obj", m);
+  int s[4] = {0, 0, 0, 0};
+  const qs::Vec3 dirs[4] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};  // +x, -x, +y, -y: winds
+  for (int i = 0; i < 4; ++i)
+    for (int v = 0; v < m.num_vertices(); ++v)
+      if (m.positions[v].dot(dirs[i]) > m.positions[s[i]].dot(dirs[i])) s[i] = v;
+  auto seeds = [&](int a, int b, int c, int d) {
+    return "{\"seeds\": [" + std::to_string(s[a]) + ", " + std::to_string(s[b]) + ", " + std::to_string(s[c]) + ", " +
+           std::to_string(s[d]) + "]}";
+  };
+  std::ofstream(dir_ / "a.landmarks.json") << seeds(0, 1, 2, 3);
+  std::ofstream(dir_ / "b.landmarks.json") << seeds(0, 1, 2, 3);
+  const RunResult wound = run_tool("qs-dissect", fa + " " + fb + " -o " + (dir_ / "wound").string());
+  ASSERT_EQ(wound.exit, 0) << wound.out;
+  EXPECT_THAT(wound.out, HasSubstr("seed order: the seeds taken as s0 s2 s1 s3"));
+  std::ofstream(dir_ / "a.landmarks.json") << seeds(0, 2, 1, 3);
+  std::ofstream(dir_ / "b.landmarks.json") << seeds(0, 2, 1, 3);
+  const RunResult belt = run_tool("qs-dissect", fa + " " + fb + " -o " + (dir_ / "belt").string());
+  ASSERT_EQ(belt.exit, 0) << belt.out;
+  EXPECT_THAT(belt.out, ::testing::Not(HasSubstr("seed order:")));
+  auto bytes = [](const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  EXPECT_EQ(bytes(dir_ / "wound" / "a.chart.ply"), bytes(dir_ / "belt" / "a.chart.ply"));
+}
