@@ -46,7 +46,9 @@ TEST(Pose, FindsTheLimbsOfAGeneratedAnimal) {
   // Limbs first, then the other extremities, each by prominence.
   for (std::size_t k = 1; k < ext.size(); ++k) {
     EXPECT_GE(ext[k - 1].limb_radius > 0, ext[k].limb_radius > 0);
-    if ((ext[k - 1].limb_radius > 0) == (ext[k].limb_radius > 0)) EXPECT_GE(ext[k - 1].prominence, ext[k].prominence);
+    if ((ext[k - 1].limb_radius > 0) == (ext[k].limb_radius > 0)) {
+      EXPECT_GE(ext[k - 1].prominence, ext[k].prominence);
+    }
   }
 }
 
@@ -81,7 +83,9 @@ TEST(Pose, KeepsConnectivityMovesHandlesRigidlyAndLeavesTheRestInPlace) {
     for (int v : l.region) moved[v] = 1;
   }
   for (int v = 0; v < mesh.num_vertices(); ++v) {
-    if (!moved[v]) EXPECT_EQ(pose.mesh.positions[v], mesh.positions[v]) << "fixed vertex " << v;
+    if (!moved[v]) {
+      EXPECT_EQ(pose.mesh.positions[v], mesh.positions[v]) << "fixed vertex " << v;
+    }
   }
   EXPECT_TRUE(qs::family::folded_faces(mesh, pose.mesh).empty());
   EXPECT_LT(pose.max_handle_error, 1e-6 * diag);
