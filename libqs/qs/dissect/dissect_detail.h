@@ -313,7 +313,8 @@ class SetDissector {
   void seed_posed(std::vector<SeedLoop>& loops, std::array<std::vector<Node>, 2>& roots, DissectionSet& out);
   // DissectOptions::intrinsic_loops: routes every mesh's loop but the first's along the first's
   // in geodesic coordinates; returns how many were routed so (the others keep their own).
-  int route_intrinsic(std::vector<SeedLoop>& loops) const;
+  // `discrepancy` gets per mesh how far its landmarks' geodesic distances are from mesh 0's.
+  int route_intrinsic(std::vector<SeedLoop>& loops, std::vector<double>& discrepancy) const;
   // The inner corners of a split at (peak, w) in every mesh (mesh 0: the common ones; mesh i: its
   // points nearest mesh 0's, see same_pose), or empty when a mesh has none that make a split.
   std::vector<std::array<Vec2, 4>> posed_corners(const std::vector<Param>& ps, const Vec2& peak, double w) const;
@@ -373,6 +374,9 @@ constexpr double kPoseLoopSigma = 0.005;
 /// coordinates (distances over the square root of the area), of the band around the first mesh's
 /// loop that another mesh's loop is routed in.
 constexpr double kIntrinsicLoopSigma = 0.2;
+/// ... used only for a mesh whose landmarks' geodesic distances to each other differ from the
+/// first mesh's by at most this fraction of their sum (one shape in another pose).
+constexpr double kIntrinsicLoopIsometry = 0.1;
 /// same_pose: posed inner corners stay this far inside the square.
 constexpr double kSamePoseMargin = 0.03;
 

@@ -286,6 +286,10 @@ struct DissectionSet {
   std::array<int, 4> seed_order{0, 1, 2, 3};
   std::array<double, 3> seed_loop_lengths{};
   int intrinsic_loops = 0;  ///< meshes but the first whose loop follows the first's (intrinsic_loops)
+  /// Per mesh, how far its landmarks' geodesic distances to each other are from the first
+  /// mesh's (a fraction of their sum; empty when not measured): intrinsic_loops routes only
+  /// meshes within 10%, one shape in another pose.
+  std::vector<double> landmark_discrepancy;
 };
 
 /// How far a set is from one pose: for every mesh but the first, the least-squares similarity

@@ -322,7 +322,25 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
   return out;
 }
 
-int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops) const {
+namespace {
+
+// How far two meshes are from one shape in two poses: the landmarks' geodesic distances to each
+// other (over the square root of the area) differ by this fraction of their sum.
+double landmark_discrepancy(const GeodesicCoordinates& a, const std::vector<int>& la, const GeodesicCoordinates& b,
+                            const std::vector<int>& lb) {
+  double diff = 0, sum = 0;
+  for (size_t p = 0; p < la.size(); ++p)
+    for (size_t q = p + 1; q < la.size(); ++q) {
+      const double da = a.at(la[q])[p], db = b.at(lb[q])[p];
+      diff += std::abs(da - db);
+      sum += da;
+    }
+  return sum > 0 && std::isfinite(diff) ? diff / sum : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops, std::vector<double>& discrepancy) const {
   const size_t nm = meshes_.size();
   // The landmarks every mesh has: the four seeds, then the features present in all meshes.
   std::vector<size_t> common;
@@ -337,15 +355,24 @@ int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops) const {
     return l;
   };
   const TriMesh m0 = meshes_[0].trimesh();
-  const auto reference = loop_coordinates(geodesic_coordinates(m0, landmarks(0)), loops[0]);
+  const std::vector<int> l0 = landmarks(0);
+  const GeodesicCoordinates c0 = geodesic_coordinates(m0, l0);
+  const auto reference = loop_coordinates(c0, loops[0]);
   const std::vector<int> want = meshes_[0].feature_sides(loops[0]);
   std::vector<char> routed(nm, 0);
+  discrepancy.assign(nm, 0.0);
   parallel_for(static_cast<int>(nm) - 1, ctx_, [&](int t) {
     const size_t i = static_cast<size_t>(t) + 1;
     const TriMesh mi = meshes_[i].trimesh();
+    const std::vector<int> li = landmarks(i);
+    const GeodesicCoordinates ci = geodesic_coordinates(mi, li);
+    // Geodesic coordinates correspond only between near-isometric surfaces (one shape in two
+    // poses); other shapes keep their own shortest loops.
+    discrepancy[i] = landmark_discrepancy(c0, l0, ci, li);
+    if (!(discrepancy[i] <= kIntrinsicLoopIsometry)) return;
     try {
-      SeedLoop l = trace_intrinsic_loop(mi, loops[i].seeds, geodesic_coordinates(mi, landmarks(i)), reference,
-                                        kIntrinsicLoopSigma, meshes_[i].feature_vertices());
+      SeedLoop l = trace_intrinsic_loop(mi, loops[i].seeds, ci, reference, kIntrinsicLoopSigma,
+                                        meshes_[i].feature_vertices());
       if (meshes_[i].feature_sides(l) != want) return;
       loops[i] = std::move(l);
       routed[i] = 1;
@@ -396,7 +423,8 @@ DissectionSet SetDissector::run() {
     });
   }
   DissectionSet out;
-  if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops) out.intrinsic_loops = route_intrinsic(loops);
+  if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops)
+    out.intrinsic_loops = route_intrinsic(loops, out.landmark_discrepancy);
   std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
   if (opt_.same_pose && nm > 1) {
     seed_posed(loops, roots, out);

@@ -243,9 +243,16 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << " in every mesh, the set's shortest loop (in the given order the loop is " << std::setprecision(3)
          << 100 * (len[0] / best - 1) << "% longer and winds around the shape)\n";
   }
-  if (inputs.size() > 1 && !posed && opt.intrinsic_loops)
+  if (inputs.size() > 1 && !posed && opt.intrinsic_loops && !sets.landmark_discrepancy.empty()) {
+    const auto& d = sets.landmark_discrepancy;
     text << "seed loops: " << sets.intrinsic_loops << " of " << inputs.size() - 1
-         << " routed along the first mesh's in geodesic coordinates of the landmarks (the others their own shortest)\n";
+         << " routed along the first mesh's in geodesic coordinates of the landmarks (the landmarks' geodesic "
+            "distances differ from the first mesh's by "
+         << std::setprecision(3) << 100 * *std::min_element(d.begin() + 1, d.end()) << "-"
+         << 100 * *std::max_element(d.begin() + 1, d.end())
+         << "%; a mesh over 10%, not the first's shape in another pose, or whose loop would move a feature to the "
+            "other side keeps its own shortest loop)\n";
+  }
   if (inputs.size() > 1)
     text << "set: " << inputs.size() << " meshes, " << out[0].dissection.chart.patches.size() << " common patches, "
          << sets.tree.size() << " tree nodes, " << sets.warp_events << " warp flip events, max stretch "
