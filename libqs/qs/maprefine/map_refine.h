@@ -1,50 +1,13 @@
 #pragma once
-// Map refinement after the common dissection.
-//
-// A common dissection maps every mesh of a set onto the same patches; the inter-surface map from
-// mesh A to mesh B is point on A -> (patch, u, v) by A's chart -> the point of B at (patch, u, v)
-// by B's chart. refine_maps() moves the chart (u, v) of B's patch-interior vertices so that the map
-// B -> A (and so its inverse A -> B) has low isometric distortion, in the spirit of Schmidt et al.
-// 2019 ("Distortion-minimizing injective maps between surfaces"), restricted to one patch at a time:
-//
-//  - Reference: one mesh of the set (RefineOptions::reference, default mesh 0) is not moved; every
-//    other mesh is refined against it. The reference's chart gives, per patch, the metric of its
-//    surface in (u, v): M(uv) = (dA/duv)^T (dA/duv), per chart face, averaged at the vertices (uv
-//    area weights) and interpolated linearly, scaled per patch by area_B(patch) / area_A(patch) so
-//    that a map that is isometric up to the patch's size scores best.
-//  - Energy of B's patch: sum over B's faces t of area_B(t) * symDirichlet(J_t) with
-//    J_t = L^T (d uv / dB on t), M = L L^T at t's uv centroid, symDirichlet(J) = |J|^2 + |J^-1|^2
-//    (4 for a rotation; reported normalized: 1 = isometric). It goes to infinity as a uv triangle
-//    degenerates, a barrier against folds.
-//  - Solver: projected Newton (per-face 4x4 Hessian of symDirichlet made positive semi-definite
-//    analytically), sparse LDLT, step capped at 0.8 of the largest flip-free step (Smith and
-//    Schaefer 2015) and backtracked (Armijo); the metric is re-evaluated at the new uv centroids
-//    after every step.
-//  - Held: patch corners, seeds, features, any vertex whose wedges in its patch disagree, and
-//    every patch-side vertex. Patch-interior vertices move inside their own patch; in these
-//    passes patch curves on the surface never move (across_borders below moves them).
-//  - Safety: a patch keeps its refined (u, v) only if every uv face stays positive (signed area
-//    above param::kZeroUvArea) and the energy went down; otherwise it is left as it was. Patches
-//    with a flipped or zero-area uv face to start with are not touched.
-//
-// Across patch borders (RefineOptions::across_borders): the patch curves of every mesh but the
-// reference move too. Side by side (a few sweeps, sides in patch order), the two patches P and Q
-// of a side are glued into one chart on [0,2] x [0,1] (Q's square turned and shifted so that its
-// side lies on P's), B's union is refined as above with its outer border held and the side's
-// vertices free, and cut again along u = 1: new chart vertices where that line crosses B's edges
-// (3D points on the edges, so the surface is unchanged), faces split there, the old side
-// vertices kept as ordinary vertices. Corners, seeds, features and the reference stay exactly.
-//
-// Corner moves (RefineOptions::move_corners): after a first interior pass, every patch corner of
-// every mesh but the reference (not a seed or a feature, met by k >= 3 distinct patches once each)
-// has its k patches glued into one chart around it (each square turned so that the corner is at
-// the origin, then an affine map onto its sector), B's union refined
-// with its outer border held and the corner and its sides free, and the union cut again along the
-// k rays from the origin; the new corner is the chart vertex at the origin. Corners in base-domain
-// order, stars that share no patch planned in parallel and committed in order.
-//
-// In the interior passes patches are independent (their borders are held), so they run in
-// parallel. The result does not depend on the thread count.
+// Map refinement after the common dissection: refine_maps() moves the chart (u, v) of every mesh
+// of a set but the reference so that its map to the reference (point -> (patch, u, v) -> point)
+// has low isometric distortion: the symmetric Dirichlet energy against the reference's metric,
+// minimized patch by patch by projected Newton with a flip-free line search, in the spirit of
+// Schmidt et al. 2019 ("Distortion-minimizing injective maps between surfaces") and Smith and
+// Schaefer 2015 (the flip-free step). Optionally the patch curves (across_borders) and the patch
+// corners (move_corners) move too, on charts glued across sides and around corners. A change is
+// kept only if every uv face stays positive and the energy goes down. The result does not depend
+// on the thread count. The method: docs/algorithms.md, "Map refinement".
 
 #include <vector>
 
@@ -59,9 +22,7 @@ inline constexpr double kPullLength = 0.01;
 
 /// The pipeline's RefineOptions::pose_pull for meshes in one pose (qs::pipeline::DissectConfig).
 inline constexpr double kDefaultPosePull = 10.0;
-/// ... and its RefineOptions::border_iterations with that pull: with the pull, the sides carry
-/// the patch curves toward the first mesh's (human-same's worst point 1.81 -> 1.40% at 5 steps
-/// instead of 3; docs/algorithms.md, "Same pose").
+/// ... and its RefineOptions::border_iterations with that pull (docs/algorithms.md, "Map refinement").
 inline constexpr int kPoseBorderIterations = 5;
 
 struct RefineOptions {
@@ -70,15 +31,11 @@ struct RefineOptions {
   /// A patch stops when a step lowers its energy by less than this fraction. \pre >= 0
   double tolerance = 1e-5;
   int threads = 0;           ///< 0: all cores; the result does not depend on it
-  /// Move the patch curves too: for every side shared by
-  /// two patches P and Q (and no other side of theirs), in patch order, glue P's and Q's squares
-  /// along it into one chart on [0,2] x [0,1], refine B's (u, v) on the union against the
-  /// reference's metric glued the same way (the union's border, corners, seeds and features held,
-  /// the side's own vertices free), then cut B's union along u = 1 into the new P and Q: new chart
-  /// vertices where the line crosses an edge (exactly on the surface, float64 uv), the old side
-  /// vertices stay as ordinary vertices. A side is left as it was when the union is folded to
-  /// start with, gains nothing, or a piece of the cut would not be a positive uv triangle. Then
-  /// the interior pass as without it.
+  /// Move the patch curves too: every side shared by two patches (and no other side of theirs),
+  /// in patch order, is refined on the two squares glued into one chart on [0,2] x [0,1] (the
+  /// union's border, corners, seeds and features held) and the union cut again along u = 1 (new
+  /// chart vertices exactly on the surface). A side is left as it was when the union is folded,
+  /// gains nothing, or a piece of the cut is not a positive uv triangle.
   bool across_borders = true;
   /// With across_borders: passes over the shared sides (a pass that changes no side ends them).
   /// \pre >= 0
@@ -86,19 +43,13 @@ struct RefineOptions {
   /// With across_borders: Newton steps per glued pair of patches at most (and at most
   /// `iterations`); the final interior pass polishes. \pre >= 0
   int border_iterations = 1;
-  /// Move the patch corners too, after a first interior pass and
-  /// before the across-border and final interior passes: every patch corner of a mesh but the reference that is not a seed or a
-  /// feature, met by k >= 3 distinct patches once each, has its k patches glued into one disk
-  /// chart (each square turned so that the corner is at its origin, then mapped affinely onto the
-  /// sector between the rays at angles 2 pi j / k and 2 pi (j+1) / k), B's (u, v) refined on the union against
-  /// the reference's metric glued the same way (the union's outer border held; the corner and
-  /// the vertices of its k sides free), and the union cut again along the k rays from the origin:
-  /// the new corner is the chart vertex at the origin (a vertex snapped there, or a new vertex in
-  /// the face that holds it), new chart vertices where a ray crosses an edge (exactly on the
-  /// surface). A corner is left as it was when its star is irregular, the union is folded, the
-  /// energy does not go down, or a piece of the cut is not a positive uv triangle inside its
-  /// square. Off by default: it lowers the error of pairs of different shapes, at 1.2-2.2 times
-  /// the dissection's time (docs/tools/qs-dissect.md).
+  /// Move the patch corners too (after a first interior pass, before the across-border and final
+  /// interior passes): every corner that is not a seed or a feature, met by k >= 3 distinct
+  /// patches once each, is refined on its k squares glued into one disk chart (sector_glue; the
+  /// outer border held) and the union cut again along the k rays from the origin; the new corner
+  /// is the chart vertex at the origin. A corner is left as it was when its star is irregular, the
+  /// union is folded, the energy does not go down, or a piece of the cut is not a positive uv
+  /// triangle inside its square. Off by default (its cost: docs/tools/qs-dissect.md).
   bool move_corners = false;
   /// With move_corners: passes over the corners (in base-domain order; a pass that moves none
   /// ends them). \pre >= 0
@@ -166,7 +117,8 @@ struct RefineReport {
 /// (patch, corner) incidence stay), and the chart gains vertices and faces as with across_borders.
 /// \pre the meshes come from one dissect_set (same patches in the same order, base domains
 /// identical). \throws InvalidInput for an empty set, a reference out of range, options out of
-/// range (iterations, tolerance, border or corner sweeps or iterations below 0) or charts that do not share their patches (naming the mesh and patch count);
+/// range (iterations, tolerance, border or corner sweeps or iterations below 0) or charts that do
+/// not share their patches (naming the mesh and patch count);
 /// Error(Internal "cancelled") when context's cancel flag is raised.
 /// Progress stage: "refine maps".
 RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineOptions& options = {},
@@ -174,11 +126,9 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
 
 /// How refine_patch refines one node (DissectOptions::refine_before_split).
 struct NodeRefineOptions {
-  /// A node whose composed map starts with a normalized distortion
-  /// (area-weighted symmetric Dirichlet / 4; 1 = isometric) above this is left as it is. On the
-  /// bodies' seed and limb nodes (10^4..10^9) the refinement lowers that energy by orders of
-  /// magnitude without moving the map's points closer to the reference's, and those nodes took
-  /// most of its time. 0: no limit. \pre >= 0
+  /// A node whose composed map starts with a normalized distortion (area-weighted symmetric
+  /// Dirichlet / 4; 1 = isometric) above this is left as it is (docs/algorithms.md, "Map refinement").
+  /// 0: no limit. \pre >= 0
   double max_start_distortion = 10;
 };
 
@@ -200,14 +150,10 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
 dissect::NodeMapRefiner node_refiner(const RefineOptions& options = {}, const NodeRefineOptions& node = {});
 
 /// untangle_patch's pull (DissectOptions::same_pose_untangle): a vertex 6e-4 of the square from
-/// its target costs as much as its area's distortion at rest (4 per unit area). Measured on 18
-/// real meshes against their re-tessellation (docs/algorithms.md, "Same pose"): 10^5 left the camel's
-/// tangles, 10^6 and 10^7 mend them, 10^7 is the better on polygirl (0.36 -> 0.25% mean), 10^8
-/// worse on the camel.
+/// its target costs as much as its area's distortion at rest (4 per unit area); chosen by
+/// measurement (docs/algorithms.md, "Map refinement").
 inline constexpr double kUntanglePull = 1e7;
-/// Newton steps of a polish by untangler() at most (a body pair with thumb
-/// seeds 0.410 / 3.13% mean / max in 1.31 s with 30 steps, 0.415 / 3.24% in 0.97 s with 10, 0.435
-/// / 4.69% in 0.92 s with 5; 0.428 / 4.68% in 0.75 s without the polish).
+/// Newton steps of a polish by untangler() at most.
 inline constexpr int kPolishIterations = 10;
 
 /// Moves a patch's bijective map `uv` toward target (u, v) without folding it: the free vertices
