@@ -297,7 +297,7 @@ int run_pose(const std::string& input, const std::optional<std::string>& landmar
 
 
 int main(int argc, char** argv) {
-  CLI::App app{"Test data with exact ground truth for the correspondence benchmark (README \"Correspondence\").\n"
+  CLI::App app{"Test data with exact ground truth for the correspondence benchmark (docs/correspondence.md).\n"
                "Exit codes: 0 written, 1 usage, 2 invalid input, 3 i/o, 4 unusable re-tessellation or no limb posed.",
                "qs-family"};
   app.require_subcommand(1);

@@ -7,7 +7,7 @@
 // non-manifold, several components, any genus) are measured anyway, with a note.
 //
 // --correspondence DIR: a qs-dissect folder measured against ground truth (map files, or identical
-// face lists): qs::correspondence, README "Correspondence". Exit 2 also for meshes without a
+// face lists): qs::correspondence, docs/correspondence.md. Exit 2 also for meshes without a
 // common domain or a map of another mesh.
 
 #include <cstdio>
@@ -364,7 +364,7 @@ int main(int argc, char** argv) {
   app.add_option("B", file_b, "Second mesh");
   app.add_option("--correspondence", correspondence,
                  "Measure the correspondence of a qs-dissect folder against ground truth instead (no A, B): "
-                 "the first mesh against every other (README \"Correspondence\")");
+                 "the first mesh against every other (docs/correspondence.md)");
   app.add_option("--level", level, "With --correspondence: map through B's uniform level-N common remesh "
                                   "(1..12) instead of the charts' continuous map (0, the default)")
       ->check(CLI::Range(0, 12));
