@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
                "qs-bake"};
   std::string folder, outdir, dissection, space = "tangent", green = "opengl", tiles = "area";
   std::vector<std::string> formats;
-  int size = 256, gutter = 4, samples = 100000;
+  int size = 256, gutter = 4, samples = 100000, threads = 0;
   bool quiet = false;
   double max_memory = qs::tools::kDefaultMaxMemoryGiB;
   app.add_option("remesh", folder, "A qs-remesh output folder (remesh.json + meshes)")->required();
@@ -109,6 +109,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 100000000));
   app.add_option("-o,--output", outdir, "Output folder (default: <remesh>/bake-<size>)");
   qs::tools::add_max_memory_option(app, max_memory);
+  app.add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
@@ -207,7 +210,8 @@ int main(int argc, char** argv) {
       auto t = Clock::now();
       qs::bake::BakeOptions mesh_opt = opt;
       mesh_opt.original_vertices = ds.meshes[i].input_vertices;  // the chart keeps the input's vertices first
-      qs::Context ctx;  // progress on a terminal only
+      qs::Context ctx;
+      ctx.threads = threads;  // progress on a terminal only
       if (!quiet && ::isatty(2))
         ctx.progress = [&](const std::string&, double f) {
           std::cerr << "\r  " << stem << ": baking " << static_cast<int>(100 * f) << "%" << (f >= 1 ? "\r\033[K" : "")

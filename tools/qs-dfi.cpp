@@ -136,14 +136,15 @@ int main(int argc, char** argv) {
                                                        "field on a grid R times finer (default 3; 1: the morph's grid)")
       ->check(CLI::Range(1, 8));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
-  app.add_option("-o,--outdir", outdir, "Output folder (default dfi-out; created)");
+  app.add_option("-o,--output", outdir, "Output folder (default dfi-out; created)");
   app.add_option("--format", format, "Frame format: obj (default) or ply")->check(CLI::IsMember({"obj", "ply"}));
   app.add_option("--glb", glb, "Also write a GLB that plays the frames (one node per frame, stepped scale)");
   app.add_option("--fps", fps, "Frames per second of the GLB animation (default 12)")->check(CLI::PositiveNumber);
   app.add_option("--band", band, "Cells around the surface with exact distances (default 3; 0: exact "
                                  "everywhere, slow)")->check(CLI::Range(0, 64));
-  app.add_option("--threads", threads, "Worker threads (default: all cores); output does not depend on it")
-      ->check(CLI::NonNegativeNumber);
+  app.add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
@@ -151,6 +152,7 @@ int main(int argc, char** argv) {
     const Shape source = load(source_file, "source");
     const Shape target = load(target_file, "target");
     qs::Context ctx;
+    ctx.threads = threads;
     qs::dfi::MorphOptions opt;
     opt.grid = grid;
     opt.align = align == "similarity" ? qs::dfi::Align::Similarity : qs::dfi::Align::None;

@@ -48,8 +48,9 @@ void make_dir(const fs::path& dir) {
 }
 
 int run_generate(const qs::family::FamilyOptions& opt, const std::string& outdir, const std::string& format,
-                 bool quiet) {
+                 int threads, bool quiet) {
   qs::Context ctx;
+  ctx.threads = threads;
   const qs::family::Family fam = qs::family::generate_family(opt, ctx);
   const fs::path dir(outdir);
   make_dir(dir);
@@ -296,13 +297,14 @@ int run_pose(const std::string& input, const std::optional<std::string>& landmar
 
 
 int main(int argc, char** argv) {
-  CLI::App app{"Test data with exact ground truth for the correspondence benchmark (README \"Correspondence\").\n"
+  CLI::App app{"Test data with exact ground truth for the correspondence benchmark (docs/correspondence.md).\n"
                "Exit codes: 0 written, 1 usage, 2 invalid input, 3 i/o, 4 unusable re-tessellation or no limb posed.",
                "qs-family"};
   app.require_subcommand(1);
   qs::family::FamilyOptions fopt;
   std::string outdir, format = "obj";
   bool quiet = false;
+  int threads = 0;
   auto* gen = app.add_subcommand("generate", "N smooth genus-0 shapes with limbs, own tessellations, landmarks "
                                              "and map files to a common parameter sphere");
   gen->add_option("-n,--shapes", fopt.shapes, "Number of shapes (1..256)")->capture_default_str();
@@ -316,7 +318,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"obj", "off", "ply"}))
       ->capture_default_str();
   gen->add_option("-o,--output", outdir, "Output folder")->required();
-  gen->add_flag("--quiet", quiet, "Print nothing on success");
+  gen->add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
+  gen->add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   std::string input, output;
   std::optional<std::string> landmark_file;
@@ -332,7 +337,7 @@ int main(int argc, char** argv) {
                 "surface bends, so fingers and toes keep their shape; slower)");
   ret->add_option("-o,--output", output, "Output mesh (.obj .off .ply); OUT.map.json and OUT.landmarks.json beside it")
       ->required();
-  ret->add_flag("--quiet", quiet, "Print nothing on success");
+  ret->add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   PoseArgs pargs;
   auto* pose = app.add_subcommand("pose", "Pose a mesh: limbs found at its extremities bent or turned as rigidly as "
@@ -359,10 +364,10 @@ int main(int argc, char** argv) {
                    "Output mesh (.obj .off .ply); OUT.landmarks.json, OUT.source.landmarks.json (the same for MESH) "
                    "and OUT.pose.json beside it")
       ->required();
-  pose->add_flag("--quiet", quiet, "Print nothing on success");
+  pose->add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
-    if (gen->parsed()) return run_generate(fopt, outdir, format, quiet);
+    if (gen->parsed()) return run_generate(fopt, outdir, format, threads, quiet);
     if (pose->parsed()) {
       if (pargs.opt.min_angle_deg < pargs.opt.smallest_angle_deg) pargs.opt.smallest_angle_deg = pargs.opt.min_angle_deg;
       return run_pose(input, landmark_file, pargs, output, quiet);

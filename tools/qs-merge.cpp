@@ -58,9 +58,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 60.0));
   app.add_flag("--fan", fan, "Cut every overlay polygon by a fan from its first vertex (default: the cut that "
                              "maximizes the smallest uv angle)");
-  app.add_option("--threads", threads, "Worker threads (0: one per hardware thread); the files are the same for any count")
+  app.add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 1024));
+      ->check(CLI::Range(0, 4096));
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {

@@ -7,7 +7,7 @@
 // non-manifold, several components, any genus) are measured anyway, with a note.
 //
 // --correspondence DIR: a qs-dissect folder measured against ground truth (map files, or identical
-// face lists): qs::correspondence, README "Correspondence". Exit 2 also for meshes without a
+// face lists): qs::correspondence, docs/correspondence.md. Exit 2 also for meshes without a
 // common domain or a map of another mesh.
 
 #include <cstdio>
@@ -181,8 +181,8 @@ struct ErrorMapOptions {
 };
 
 int run_correspondence(const std::string& folder_name, const std::vector<std::string>& maps, long samples,
-                       std::uint64_t seed, int level, bool as_json, const std::optional<std::string>& output,
-                       const ErrorMapOptions& error_map) {
+                       std::uint64_t seed, int level, int threads, bool as_json,
+                       const std::optional<std::string>& output, const ErrorMapOptions& error_map) {
   namespace fs = std::filesystem;
   const fs::path folder(folder_name);
   const qs::dissect::LoadedDissection loaded = qs::dissect::read_dissection(folder);
@@ -215,6 +215,7 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   if (samples > 0) mo.samples = samples;
   mo.seed = seed;
   mo.level = level;
+  mo.threads = threads;
   mo.vertex_errors = error_map.folder.has_value() || error_map.worst > 0;
   // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal),
   // staged and moved into the folder only when every pair has been measured and written.
@@ -356,14 +357,14 @@ int main(int argc, char** argv) {
   std::optional<std::string> output;
   std::optional<std::string> correspondence;
   std::vector<std::string> maps;
-  int level = 0;
+  int level = 0, threads = 0;
   ErrorMapOptions error_map;
   app.add_option("A", file_a, "First mesh (.obj .off .ply .stl); its bounding-box diagonal is the "
                               "reference for the percentages");
   app.add_option("B", file_b, "Second mesh");
   app.add_option("--correspondence", correspondence,
                  "Measure the correspondence of a qs-dissect folder against ground truth instead (no A, B): "
-                 "the first mesh against every other (README \"Correspondence\")");
+                 "the first mesh against every other (docs/correspondence.md)");
   app.add_option("--level", level, "With --correspondence: map through B's uniform level-N common remesh "
                                   "(1..12) instead of the charts' continuous map (0, the default)")
       ->check(CLI::Range(0, 12));
@@ -388,6 +389,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-vertices", no_vertices, "Do not measure at the vertices (surface samples only)");
   app.add_flag("--json", as_json, "Print a JSON object instead of text");
   app.add_option("-o,--output", output, "Write the report to this file instead of stdout");
+  app.add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
   long max_samples = 100000000;
   app.add_option("--max-samples", max_samples,
                  "Refuse a --samples count above this up front (the run time grows linearly with it)")
@@ -403,7 +407,7 @@ int main(int argc, char** argv) {
       if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
       if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
       if (error_map.scale > 0 && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
-      return run_correspondence(*correspondence, maps, samples, seed, level, as_json, output, error_map);
+      return run_correspondence(*correspondence, maps, samples, seed, level, threads, as_json, output, error_map);
     }
     if (error_map.folder || error_map.scale > 0 || error_map.worst > 0)
       throw qs::UsageError("--error-map, --error-scale and --worst need --correspondence");
@@ -417,6 +421,7 @@ int main(int argc, char** argv) {
     opt.face_samples = samples;
     opt.seed = seed;
     opt.sample_vertices = !no_vertices;
+    opt.threads = threads;
     qs::metro::MetroResult r;
     try {
       r = qs::metro::metro(a.mesh, b.mesh, opt);

@@ -108,10 +108,9 @@ int main(int argc, char** argv) {
                "With --bake: frames (and the blend) as OBJ with the bake's atlas UVs, an MTL and their own normal map "
                "(<name>_normal.png: the shapes' maps blended texel by texel with the frame's weights)");
   app.add_option("-o,--output", outdir, "Output folder for frames, blend and morph.json (default: <remesh>/morph)");
-  app.add_option("--threads", threads, "Threads writing frames (0: one per hardware thread); the files are the same "
-                                      "for any count")
+  app.add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 1024));
+      ->check(CLI::Range(0, 4096));
   app.add_option("--align", align,
                  "Place every shape on the path's first by the least-squares rotation (rigid) or rotation and "
                  "uniform scale (similarity) over corresponding vertices, before blending")
@@ -125,6 +124,7 @@ int main(int argc, char** argv) {
     if (frame_maps && bake.empty()) throw qs::UsageError("--frame-maps needs --bake DIR (the normal maps to blend)");
     if (frame_maps && format != "obj") throw qs::UsageError("--frame-maps writes OBJ + MTL frames; drop --format " + format);
     qs::Context context;
+    context.threads = threads;
     if (!quiet && ::isatty(2))  // progress on a terminal only
       context.progress = [](const std::string& stage, double done) {
         std::cerr << "\r  " << stage << " " << static_cast<int>(100 * done) << "%" << (done >= 1 ? "\n" : "") << std::flush;

@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> inputs;
   std::string output, size = "800";
   std::vector<double> view_v, up_v;
-  bool uv = false, patch_edges = false, verbose = false;
+  bool uv = false, patch_edges = false, quiet = false;
   qs::render::RenderOptions opt;
   app.add_option("inputs", inputs,
                  "Meshes (.obj .off .ply .stl) and charts (*.chart.ply); several are drawn side by side")
@@ -103,9 +103,9 @@ int main(int argc, char** argv) {
   app.add_flag("--smooth", opt.smooth, "Smooth shading (interpolated vertex normals)");
   app.add_flag("--patch-edges", patch_edges, "Charts: draw patch boundaries as thick dark lines");
   app.add_flag("--uv", uv, "Charts: draw the uv layout (one tile per patch; red = flipped or overlapping)");
-  app.add_flag("-v,--verbose", verbose, "Print read and render times");
   double max_memory = qs::tools::kDefaultMaxMemoryGiB;
   qs::tools::add_max_memory_option(app, max_memory);
+  app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
     std::smatch m;
@@ -189,13 +189,16 @@ int main(int argc, char** argv) {
         t1 = clock::now();
         img = qs::render::render_mesh(read.mesh, nullptr, opt);
       }
-      if (verbose)
-        std::cout << file << ": read " << ms(t0, t1) << " ms, render " << ms(t1, clock::now()) << " ms\n";
+      if (!quiet)
+        std::cout << "  " << file << ": read " << ms(t0, t1) << " ms, render " << ms(t1, clock::now()) << " ms\n";
       views.push_back(std::move(img));
     }
     const auto t2 = clock::now();
-    qs::render::write_png(output, views.size() == 1 ? views.front() : qs::render::side_by_side(views));
-    if (verbose) std::cout << output << ": written in " << ms(t2, clock::now()) << " ms\n";
+    const qs::render::Image picture = views.size() == 1 ? views.front() : qs::render::side_by_side(views);
+    qs::render::write_png(output, picture);
+    if (!quiet)
+      std::cout << "  wrote " << output << " (" << picture.width << " x " << picture.height << ") in "
+                << ms(t2, clock::now()) << " ms\n";
     return 0;
   });
 }

@@ -122,6 +122,17 @@ TEST_F(MetroTool, WritesTheReportToAFile) {
     EXPECT_THAT(e.path().filename().string(), ::testing::Not(HasSubstr(".tmp"))) << "temporary left behind";
 }
 
+TEST_F(MetroTool, TheReportDoesNotDependOnTheThreadCount) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(3));
+  const std::string b = write("b.obj", qs::shapes::torus(32, 12));
+  const RunResult one = run(a + " " + b + " --json --samples 20000 --threads 1");
+  const RunResult three = run(a + " " + b + " --json --samples 20000 --threads 3");
+  ASSERT_EQ(one.exit, 0) << one.out;
+  ASSERT_EQ(three.exit, 0) << three.out;
+  EXPECT_EQ(one.out, three.out);
+  EXPECT_EQ(run(a + " " + b + " --threads -1").exit, 1);
+}
+
 TEST_F(MetroTool, OpenMeshesAreMeasuredWithANote) {
   const std::string a = write("disk.obj", qs::shapes::open_disk(4));
   const RunResult r = run(a + " " + a + " --samples 1000");

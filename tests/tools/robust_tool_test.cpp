@@ -12,6 +12,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
@@ -419,4 +421,54 @@ TEST_F(RobustTool, SolverAdviceFollowsTheStopReason) {
   EXPECT_TRUE(!says_split || split_failed) << advice;
   EXPECT_TRUE(!says_depth || limits) << advice;
   EXPECT_TRUE(says_split || says_depth) << advice;
+}
+
+TEST_F(RobustTool, ToolsShareTheirCommonOptions) {
+  struct Expect {
+    std::string command;  // the tool, with its subcommand where it has them
+    bool output, quiet, threads, json;
+  };
+  const std::vector<Expect> tools = {
+      {"qs-dissect", true, true, true, true},   {"qs-remesh", true, true, true, false},
+      {"qs-bake", true, true, true, false},     {"qs-morph", true, true, true, false},
+      {"qs-merge", true, true, true, false},    {"qs-metro", true, false, true, true},
+      {"qs-dfi", true, true, true, false},      {"qs-render", true, true, false, false},
+      {"qs-family generate", true, true, true, false},
+      {"qs-family retessellate", true, true, false, false},
+      {"qs-family pose", true, true, false, false},
+      {"qs-inspect", false, false, false, true},
+  };
+  for (const Expect& t : tools) {
+    const RunResult r = run_tool(t.command, "--help");
+    ASSERT_EQ(r.exit, 0) << t.command << ": " << r.out;
+    EXPECT_EQ(r.out.find("-o,--output") != std::string::npos, t.output) << t.command << "\n" << r.out;
+    EXPECT_EQ(r.out.find("-q,--quiet") != std::string::npos, t.quiet) << t.command << "\n" << r.out;
+    EXPECT_EQ(r.out.find("--threads") != std::string::npos, t.threads) << t.command << "\n" << r.out;
+    EXPECT_EQ(r.out.find("--json") != std::string::npos, t.json) << t.command << "\n" << r.out;
+    EXPECT_THAT(r.out, Not(HasSubstr("--outdir"))) << t.command;
+    EXPECT_THAT(r.out, Not(HasSubstr("--verbose"))) << t.command;
+    EXPECT_THAT(r.out, Not(::testing::ContainsRegex("[Ii]ssue [0-9]"))) << t.command;
+  }
+  const std::string a = write("a.obj", qs::shapes::icosphere(2));
+  const RunResult outdir = run_tool("qs-dfi", a + " " + a + " --outdir " + (dir_ / "d").string());
+  EXPECT_EQ(outdir.exit, 1) << outdir.out;
+  EXPECT_FALSE(fs::exists(dir_ / "d"));
+  const RunResult verbose = run_tool("qs-render", a + " -v -o " + (dir_ / "v.png").string());
+  EXPECT_EQ(verbose.exit, 1) << verbose.out;
+  EXPECT_FALSE(fs::exists(dir_ / "v.png"));
+}
+
+TEST_F(RobustTool, RenderReportsWhatItWroteUnlessQuiet) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(2));
+  const fs::path png = dir_ / "a.png";
+  RunResult r = run_tool("qs-render", a + " --size 64 -o " + png.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("wrote " + png.string() + " (64 x 64)"));
+  EXPECT_THAT(r.out, HasSubstr(a + ": read "));
+  const std::string loud = read_bytes(png);
+  fs::remove(png);
+  r = run_tool("qs-render", a + " --size 64 --quiet --output " + png.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(read_bytes(png), loud);
 }
