@@ -17,6 +17,7 @@
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/dissect/dissection_json.h"
+#include "qs/dissect/chart_io.h"
 #include "qs/io/write_mesh.h"
 #include "qs/merge/merge.h"
 #include "tool_main.h"
@@ -25,13 +26,6 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-std::string stem_of_chart(const std::string& chart) {
-  const std::string suffix = ".chart.ply";
-  return chart.size() > suffix.size() && chart.compare(chart.size() - suffix.size(), suffix.size(), suffix) == 0
-             ? chart.substr(0, chart.size() - suffix.size())
-             : fs::path(chart).stem().string();
-}
 
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
@@ -68,7 +62,7 @@ int main(int argc, char** argv) {
     if (!fs::is_directory(folder)) throw qs::IoError(folder + ": no such folder (expected a qs-dissect output folder)");
     const qs::dissect::LoadedDissection in = qs::dissect::read_dissection(folder);
     std::vector<std::string> stems;
-    for (const auto& dm : in.meshes) stems.push_back(stem_of_chart(dm.chart_file));
+    for (const auto& dm : in.meshes) stems.push_back(qs::dissect::chart_stem(dm.chart_file));
     auto known = [&] {
       std::string k;
       for (const auto& s : stems) k += (k.empty() ? "" : ", ") + s;

@@ -178,4 +178,12 @@ Chart parse_chart_ply(std::string_view data, const std::string& name) {
   return chart;
 }
 
+std::string chart_stem(const std::string& chart_file) {
+  const std::string suffix = ".chart.ply";
+  return chart_file.size() > suffix.size() &&
+                 chart_file.compare(chart_file.size() - suffix.size(), suffix.size(), suffix) == 0
+             ? chart_file.substr(0, chart_file.size() - suffix.size())
+             : std::filesystem::path(chart_file).stem().string();
+}
+
 }  // namespace qs::dissect

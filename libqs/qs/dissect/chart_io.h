@@ -29,6 +29,9 @@ Chart read_chart_ply(const std::filesystem::path& path);
 /// texcoords outside the unit square (1e-4 tolerance) or NaN, and patch ids outside [0, #F).
 Chart parse_chart_ply(std::string_view data, const std::string& name);
 
+/// The stem a chart file names its mesh by: "<stem>.chart.ply" -> "<stem>"; another name: its stem.
+std::string chart_stem(const std::string& chart_file);
+
 /// A distinct, stable colour per patch index (golden-ratio hue walk).
 std::array<unsigned char, 3> patch_colour(int patch);
 

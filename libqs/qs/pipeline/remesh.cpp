@@ -10,6 +10,7 @@
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/core/json_strict.h"
+#include "qs/dissect/chart_io.h"
 #include "qs/io/write_mesh.h"
 #include "qs/metro/metro.h"
 #include "qs/pipeline/pipeline.h"
@@ -25,13 +26,6 @@ using Clock = std::chrono::steady_clock;
 using nlohmann::ordered_json;
 
 namespace {
-
-std::string stem_of_chart(const std::string& chart) {
-  const std::string suffix = ".chart.ply";
-  return chart.size() > suffix.size() && chart.compare(chart.size() - suffix.size(), suffix.size(), suffix) == 0
-             ? chart.substr(0, chart.size() - suffix.size())
-             : fs::path(chart).stem().string();
-}
 
 // OBJ with quad faces (the grid cells), written atomically.
 void write_quad_obj(const fs::path& path, const std::vector<Vec3>& positions, const std::vector<std::array<int, 4>>& quads) {
@@ -95,9 +89,10 @@ RemeshResult remesh(const dissect::LoadedDissection& in, const fs::path& dissect
   const std::string diagonals = config.pattern_diagonals ? "pattern" : "angle";
   remesh::SemiRegularSet& set = result.set;
   ordered_json stats;
-  if (even(config) && !config.square_cells) {
-    double share_sum = 0;
+  double share_sum = 0;
+  if (even(config))
     for (double a : remesh::patch_area_shares(charts)) share_sum += a;
+  if (even(config) && !config.square_cells) {
     const remesh::AnisotropicOptions ao = remesh::anisotropic_options(level, patches, std::max(share_sum, 1.0));
     const remesh::AnisotropicRemesh ar = remesh::remesh_anisotropic(charts, ao, ctx);
     set = ar.remesh;
@@ -121,8 +116,6 @@ RemeshResult remesh(const dissect::LoadedDissection& in, const fs::path& dissect
              {"flip_rounds", ao.flip_rounds},
              {"flips", ar.stats.flips}};
   } else if (even(config)) {
-    double share_sum = 0;
-    for (double a : remesh::patch_area_shares(charts)) share_sum += a;
     const remesh::AdaptiveOptions eo = remesh::even_options(level, patches, std::max(share_sum, 1.0));
     const remesh::AdaptiveRemesh ar = remesh::remesh_adaptive(charts, eo, ctx);
     set = ar.remesh;
@@ -170,7 +163,7 @@ RemeshResult remesh(const dissect::LoadedDissection& in, const fs::path& dissect
        << " patches, the same for all " << in.meshes.size() << " meshes\n";
   for (size_t i = 0; i < in.meshes.size(); ++i) {
     const auto& dm = in.meshes[i];
-    const std::string out_name = stem_of_chart(dm.chart_file) + "." + config.format;
+    const std::string out_name = dissect::chart_stem(dm.chart_file) + "." + config.format;
     result.outputs.push_back(out_name);
     const TriMesh mesh = set.mesh(static_cast<int>(i));
     ordered_json j = {{"file", dm.file}, {"chart", dm.chart_file}, {"output", out_name}};
