@@ -376,7 +376,7 @@ constexpr double kPoseLoopSigma = 0.005;
 constexpr double kIntrinsicLoopSigma = 0.2;
 /// ... used only for a mesh whose landmarks' geodesic distances to each other differ from the
 /// first mesh's by at most this fraction of their sum (one shape in another pose).
-constexpr double kIntrinsicLoopIsometry = 0.1;
+constexpr double kIntrinsicLoopIsometry = 0.05;
 /// same_pose: posed inner corners stay this far inside the square.
 constexpr double kSamePoseMargin = 0.03;
 

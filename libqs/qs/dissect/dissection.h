@@ -288,7 +288,7 @@ struct DissectionSet {
   int intrinsic_loops = 0;  ///< meshes but the first whose loop follows the first's (intrinsic_loops)
   /// Per mesh, how far its landmarks' geodesic distances to each other are from the first
   /// mesh's (a fraction of their sum; empty when not measured): intrinsic_loops routes only
-  /// meshes within 10%, one shape in another pose.
+  /// meshes within 5%, one shape in another pose.
   std::vector<double> landmark_discrepancy;
 };
 

@@ -250,7 +250,7 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
             "distances differ from the first mesh's by "
          << std::setprecision(3) << 100 * *std::min_element(d.begin() + 1, d.end()) << "-"
          << 100 * *std::max_element(d.begin() + 1, d.end())
-         << "%; a mesh over 10%, not the first's shape in another pose, or whose loop would move a feature to the "
+         << "%; a mesh over 5%, not the first's shape in another pose, or whose loop would move a feature to the "
             "other side keeps its own shortest loop)\n";
   }
   if (inputs.size() > 1)
