@@ -2,52 +2,23 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
-#include <queue>
 
 #include "qs/core/error.h"
+#include "qs/dissect/seed_routing_detail.h"
 
 namespace qs::dissect {
 
 GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks) {
+  const routing::Graph g = routing::build_graph(mesh);
+  routing::Dijkstra dijkstra(g);
   const int nv = mesh.num_vertices();
-  std::vector<int> start(nv + 1, 0), adj;
-  for (const Tri& t : mesh.faces)
-    for (int k = 0; k < 3; ++k) start[t[k] + 1] += 2;
-  for (int v = 0; v < nv; ++v) start[v + 1] += start[v];
-  adj.resize(start[nv]);
-  std::vector<int> fill(start.begin(), start.end() - 1);
-  for (const Tri& t : mesh.faces)
-    for (int k = 0; k < 3; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3];
-      adj[fill[a]++] = b;
-      adj[fill[b]++] = a;
-    }
   const double scale = 1.0 / std::sqrt(std::max(surface_area(mesh), 1e-300));
   GeodesicCoordinates out;
   out.dims = static_cast<int>(landmarks.size());
-  out.values.assign(static_cast<size_t>(nv) * out.dims, std::numeric_limits<double>::infinity());
-  std::vector<double> dist(nv);
-  using Item = std::pair<double, int>;
+  out.values.resize(static_cast<size_t>(nv) * out.dims);
   for (int l = 0; l < out.dims; ++l) {
-    std::fill(dist.begin(), dist.end(), std::numeric_limits<double>::infinity());
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
-    dist[landmarks[l]] = 0;
-    heap.emplace(0.0, landmarks[l]);
-    while (!heap.empty()) {
-      const auto [du, u] = heap.top();
-      heap.pop();
-      if (du > dist[u]) continue;
-      for (int k = start[u]; k < start[u + 1]; ++k) {
-        const int w = adj[k];
-        const double nd = du + (mesh.positions[u] - mesh.positions[w]).norm();
-        if (nd < dist[w]) {
-          dist[w] = nd;
-          heap.emplace(nd, w);
-        }
-      }
-    }
+    const std::vector<double> dist = dijkstra.all_distances(landmarks[l]);
     for (int v = 0; v < nv; ++v) out.values[static_cast<size_t>(v) * out.dims + l] = dist[v] * scale;
   }
   return out;
