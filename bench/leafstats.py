@@ -15,18 +15,8 @@ import sys
 
 import numpy as np
 
-
-def read_chart(path):
-    data = open(path, 'rb').read()
-    h = data.index(b'end_header\n') + len(b'end_header\n')
-    hdr = data[:h].decode('ascii', 'replace')
-    nv = int(hdr.split('element vertex ')[1].split()[0])
-    nf = int(hdr.split('element face ')[1].split()[0])
-    tex = '<f8' if 'list uchar double texcoord' in hdr else '<f4'
-    P = np.frombuffer(data, dtype='<f8', count=3 * nv, offset=h).reshape(-1, 3)
-    rec = np.dtype([('n', 'u1'), ('v', '<i4', 3), ('m', 'u1'), ('t', tex, 6), ('p', '<i4'), ('c', 'u1', 3)])
-    F = np.frombuffer(data, dtype=rec, count=nf, offset=h + 24 * nv)
-    return P, F
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from qs_chart import read_chart  # noqa: E402
 
 
 def main():
@@ -40,10 +30,12 @@ def main():
         sys.exit(f'leafstats: {a.dir}: no readable dissection.json ({e})')
     tau = d['options']['tau']
     for m in d['meshes']:
-        P, F = read_chart(os.path.join(a.dir, m['chart']))
-        V = F['v']
+        positions, faces = read_chart(os.path.join(a.dir, m['chart']))
+        P = np.array(positions)
+        V = np.array([f for f, _ in faces], dtype=np.int64).reshape(-1, 3)
+        patch = np.array([p for _, p in faces], dtype=np.int64)
         A = 0.5 * np.linalg.norm(np.cross(P[V[:, 1]] - P[V[:, 0]], P[V[:, 2]] - P[V[:, 0]]), axis=1)
-        area = np.bincount(F['p'], weights=A, minlength=len(m['patches'])) / A.sum()
+        area = np.bincount(patch, weights=A, minlength=len(m['patches'])) / A.sum()
         over = [i for i, p in enumerate(m['patches']) if p['stretch'] is None or p['stretch'] > tau]
         over.sort(key=lambda i: -area[i])
         big = area[over[0]] if over else 0.0

@@ -75,21 +75,11 @@ for mesh in $LIST; do
       "$d/posed_r.landmarks.json" "$d/posed_r.map.json" "$d/posed.obj"
 done
 
-python3 - "$RESULTS" <<'PY'
-import json, math, os, struct, sys
+QS_BENCH_DIR="$(dirname "$0")" python3 - "$RESULTS" <<'PY'
+import json, math, os, sys
 
-def read_chart(path):
-    """A qs chart: vertex positions and per face (vertices, patch index)."""
-    data = open(path, 'rb').read()
-    h = data.index(b'end_header\n') + len(b'end_header\n')
-    hdr = data[:h].decode('ascii', 'replace')
-    nv = int(hdr.split('element vertex ')[1].split()[0])
-    nf = int(hdr.split('element face ')[1].split()[0])
-    fmt = '<B3iB6diBBB' if 'list uchar double texcoord' in hdr else '<B3iB6fiBBB'
-    P = list(struct.iter_unpack('<3d', data[h:h + 24 * nv]))
-    size = struct.calcsize(fmt)
-    F = [(r[1:4], r[11]) for r in struct.iter_unpack(fmt, data[h + 24 * nv:h + 24 * nv + size * nf])]
-    return P, F
+sys.path.insert(0, os.environ['QS_BENCH_DIR'])
+from qs_chart import read_chart
 
 def obj_faces(path):
     return [[int(t.split('/')[0]) - 1 for t in l.split()[1:4]] for l in open(path) if l.startswith('f ')]
