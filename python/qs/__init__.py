@@ -16,7 +16,7 @@ Errors are exceptions of one hierarchy, with the tools' messages: qs.Error, and 
 qs.UsageError (exit code 1), qs.InvalidInput (a ValueError; 2), qs.IoError (an OSError; 3),
 qs.SolverError (a RuntimeError; 4), qs.InternalError (a RuntimeError; 70).
 
-Long calls (dissect, remesh, metro) release the GIL, stop on Ctrl-C (KeyboardInterrupt) and take
+Long calls (dissect, remesh, bake, metro) release the GIL, stop on Ctrl-C (KeyboardInterrupt) and take
 an optional progress callback progress(stage: str, fraction: float). Reference: docs/python.md.
 """
 
@@ -29,7 +29,7 @@ from ._qs import Error, UsageError, InvalidInput, IoError, SolverError, Internal
 __all__ = [
     "Error", "UsageError", "InvalidInput", "IoError", "SolverError", "InternalError",
     "Mesh", "read_mesh", "inspect", "Landmarks", "read_landmarks",
-    "dissect", "Dissection", "remesh", "Remesh", "metro", "DISSECT_DEFAULTS",
+    "dissect", "Dissection", "remesh", "Remesh", "bake", "metro", "DISSECT_DEFAULTS",
 ]
 
 Mesh.__doc__ = """A triangle mesh: Mesh(vertices, faces, name="mesh").
@@ -209,7 +209,8 @@ def dissect(meshes, landmarks=None, *, threads=0, progress=None, allow_folded=Fa
       order. Seeds correspond by order, features by name; either every mesh has seeds or none.
       Landmark files beside the meshes are not looked up: read them with qs.read_landmarks.
     threads: 0 for all hardware threads; the result does not depend on it.
-    progress: None or a callable progress(stage, fraction); stages "dissect", "refine maps".
+    progress: None or a callable progress(stage, fraction); stages "seed loops", "quinary
+      subdivision", "leaf repairs", "refine maps".
     allow_folded: return a result whose uv faces stay folded instead of raising qs.SolverError
       (qs-dissect writes such a result, then exits with 4).
     **options: the dissection's options by their --config names, defaults as in qs-dissect
@@ -316,6 +317,28 @@ def remesh(dissection, level=4, *, uniform=False, cells="aniso", adaptive=None, 
     return Remesh(_qs._remesh(dissection._impl, mode, int(level), cells, eps, int(max_level), bool(quads),
                               diagonals, float(grid_relax), format, bool(error), int(metro_samples), int(threads),
                               progress))
+
+
+def bake(remesh, dissection, *, size=256, tiles="area", space="tangent", green="opengl", gutter=4, threads=0,
+         progress=None):
+    """Normal-map atlases of the originals on their remeshes (qs-bake's maps, in memory).
+
+    remesh: a qs.Remesh; dissection: the qs.Dissection it was made from.
+    size: S, texels per patch side (tiles="area": of a patch of average area; default 256).
+    tiles: "area" (tile sides grow with the square root of each patch's area, largest over the
+      set; shelf-packed) or "uniform" (every tile S x S in a grid).
+    space: "tangent" or "object"; green: "opengl" (+Y up) or "directx" (tangent space only).
+    gutter: texels around each tile (default 4).
+
+    Returns {"images": per mesh {"normals": (H, W, 3) float32 unit vectors, "rgb8": (H, W, 3)
+    uint8, the content of qs-bake's <stem>_normal.png}, "tiles": per patch (x, y, side),
+    "width", "height", "grid"}; one layout for the whole set. The GLBs and bake.json are
+    written by qs-bake on the saved remesh folder.
+    """
+    if not isinstance(remesh, Remesh) or not isinstance(dissection, Dissection):
+        raise UsageError("bake: expected a qs.Remesh and the qs.Dissection it was made from")
+    return _qs._bake(remesh._impl, dissection._impl, int(size), tiles, space, green, int(gutter), int(threads),
+                     progress)
 
 
 def metro(a, b, *, samples=0, vertices=True, seed=1, threads=0, progress=None):

@@ -25,7 +25,10 @@
 #include "qs/core/error.h"
 #include "qs/core/json_strict.h"
 #include "qs/dissect/chart_io.h"
+#include "qs/bake/bake.h"
 #include "qs/metro/metro.h"
+#include "qs/remesh/chart_sampler.h"
+#include "qs/remesh/quality.h"
 #include "qs/pipeline/pipeline.h"
 
 namespace py = pybind11;
@@ -92,12 +95,14 @@ auto run_long(const py::object& progress, int threads, F&& work) -> decltype(wor
   ctx.cancel = &call->cancel;
   if (!progress.is_none()) {
     if (!PyCallable_Check(progress.ptr())) throw qs::UsageError("progress must be callable as progress(stage, fraction)");
-    py::object cb = progress;
+    // Shared, so that the library's copies of the context never touch the callable's reference
+    // count without the GIL; the last reference goes in this thread, with the GIL.
+    auto cb = std::make_shared<py::object>(progress);
     ctx.progress = [call, cb](const std::string& stage, double fraction) {
       if (call->cancel) return;
       py::gil_scoped_acquire gil;
       try {
-        cb(stage, fraction);
+        (*cb)(stage, fraction);
       } catch (py::error_already_set&) {
         call->fail_with_python_error();
       }
@@ -138,7 +143,6 @@ auto run_long(const py::object& progress, int threads, F&& work) -> decltype(wor
     lock.unlock();
     worker.join();
   }
-  // The progress callback holds Python objects: drop it with the GIL held.
   ctx.progress = nullptr;
   if (call->python_error) std::rethrow_exception(call->python_error);
   if (library_error) std::rethrow_exception(library_error);
@@ -182,7 +186,7 @@ std::vector<qs::Vec3> vertices_from(const py::handle& h, const char* what) {
   const py::dtype dt = a.dtype();
   if (dt.kind() != 'f' || (dt.itemsize() != 8 && dt.itemsize() != 4))
     throw qs::InvalidInput(std::string(what) + ": expected float64 (or float32) values, got dtype " +
-                           std::string(py::str(dt)));
+                           std::string(py::str(py::handle(dt))));
   const auto n = static_cast<size_t>(a.shape(0));
   std::vector<qs::Vec3> out(n);
   for (size_t i = 0; i < n; ++i)
@@ -203,7 +207,7 @@ std::vector<qs::Tri> faces_from(const py::handle& h, size_t num_vertices, const 
   const py::dtype dt = a.dtype();
   if ((dt.kind() != 'i' && dt.kind() != 'u') || (dt.itemsize() != 4 && dt.itemsize() != 8))
     throw qs::InvalidInput(std::string(what) + ": expected int32 (or int64) vertex indices, got dtype " +
-                           std::string(py::str(dt)));
+                           std::string(py::str(py::handle(dt))));
   const auto m = static_cast<size_t>(a.shape(0));
   std::vector<qs::Tri> out(m);
   for (size_t f = 0; f < m; ++f)
@@ -572,6 +576,78 @@ PYBIND11_MODULE(_qs, m) {
       return qs::pipeline::remesh(d->loaded, folder, config, ctx);
     });
     return r;
+  });
+
+  // Bake ------------------------------------------------------------------------------------
+  // qs-bake's atlas for each mesh of a remeshed set: the layout (tiles by area or a grid) and
+  // per mesh the baked unit normals and their 8-bit encoding (the PNG's content).
+  m.def("_bake", [](const std::shared_ptr<Remesh>& r, const std::shared_ptr<Dissection>& d, int size,
+                    const std::string& tiles, const std::string& space, const std::string& green, int gutter,
+                    int threads, const py::object& progress) {
+    if (!r || !d) throw qs::UsageError("bake needs a qs.Remesh and the qs.Dissection it was made from");
+    if (size < 2 || size > 16384) throw qs::UsageError("size " + std::to_string(size) + ": expected 2 to 16384");
+    if (gutter < 0 || gutter > 1024) throw qs::UsageError("gutter " + std::to_string(gutter) + ": expected 0 to 1024");
+    if (tiles != "area" && tiles != "uniform") throw qs::UsageError("tiles '" + tiles + "': expected area or uniform");
+    if (space != "tangent" && space != "object") throw qs::UsageError("space '" + space + "': expected tangent or object");
+    if (green != "opengl" && green != "directx") throw qs::UsageError("green '" + green + "': expected opengl or directx");
+    if (space == "object" && green == "directx")
+      throw qs::UsageError("--green applies to tangent-space maps only; drop it with --space object");
+    const auto& c = r->result.set.connectivity;
+    const auto& meshes = d->loaded.meshes;
+    if (meshes.size() != r->result.set.positions.size())
+      throw qs::InvalidInput("the dissection has " + std::to_string(meshes.size()) + " meshes, the remesh " +
+                             std::to_string(r->result.set.positions.size()) + ": not the dissection it was made from");
+    for (const auto& dm : meshes)
+      if (static_cast<int>(dm.dissection.chart.patches.size()) != c.num_patches)
+        throw qs::InvalidInput("the dissection has " + std::to_string(dm.dissection.chart.patches.size()) +
+                               " patches, the remesh " + std::to_string(c.num_patches) +
+                               ": not the dissection it was made from");
+    qs::bake::BakeOptions opt;
+    opt.tile_size = size;
+    opt.gutter = gutter;
+    opt.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
+    opt.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
+    std::vector<const qs::dissect::Chart*> charts;
+    for (const auto& dm : meshes) charts.push_back(&dm.dissection.chart);
+    qs::bake::AtlasLayout layout;
+    if (tiles == "area") {
+      opt.tile_sizes = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), size);
+      layout = qs::bake::make_atlas_layout(opt.tile_sizes, size, gutter);
+    } else {
+      layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
+    }
+    std::vector<qs::bake::NormalAtlas> atlases = run_long(progress, threads, [&](const qs::Context& ctx) {
+      std::vector<qs::bake::NormalAtlas> out;
+      for (size_t i = 0; i < meshes.size(); ++i) {
+        const qs::remesh::ChartSampler sampler(meshes[i].dissection.chart, ctx);
+        qs::bake::BakeOptions mesh_opt = opt;
+        mesh_opt.original_vertices = meshes[i].input_vertices;
+        out.push_back(qs::bake::bake_normal_map(sampler, c, r->result.set.positions[i], mesh_opt, ctx).atlas);
+      }
+      return out;
+    });
+    py::list images;
+    for (const auto& a : atlases) {
+      py::array_t<float> normals({static_cast<size_t>(a.height), static_cast<size_t>(a.width), size_t{3}});
+      std::copy(a.texels.begin(), a.texels.end(), normals.mutable_data());
+      const qs::bake::Rgb8Image img = qs::bake::quantize8(a);
+      py::array_t<uint8_t> rgb({static_cast<size_t>(img.height), static_cast<size_t>(img.width), size_t{3}});
+      std::copy(img.rgb.begin(), img.rgb.end(), rgb.mutable_data());
+      py::dict one;
+      one["normals"] = normals;
+      one["rgb8"] = rgb;
+      images.append(one);
+    }
+    py::list tiles_out;
+    for (int p = 0; p < layout.num_patches; ++p)
+      tiles_out.append(py::make_tuple(layout.tile_x(p), layout.tile_y(p), layout.tile_side(p)));
+    py::dict out;
+    out["images"] = images;
+    out["tiles"] = tiles_out;
+    out["width"] = layout.width();
+    out["height"] = layout.height();
+    out["grid"] = layout.grid;
+    return out;
   });
 
   // Metro -----------------------------------------------------------------------------------

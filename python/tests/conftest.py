@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-SOURCE = Path(os.environ.get("QS_SOURCE_DIR", Path(__file__).resolve().parents[2]))
-TOOLS = Path(os.environ.get("QS_TOOLS", SOURCE / "build" / "tools"))
+SOURCE = Path(os.environ.get("QS_SOURCE_DIR", Path(__file__).resolve().parents[2])).resolve()
+TOOLS = Path(os.environ.get("QS_TOOLS", SOURCE / "build" / "tools")).resolve()
 EXAMPLES = SOURCE / "examples"
 
 
@@ -23,7 +23,9 @@ def tool_error(stderr, tool):
     prefix = tool + ": "
     assert stderr.startswith(prefix), stderr
     rest = stderr[len(prefix):]
-    return rest.split(" error: ", 1)[1].rstrip("\n")
+    message = rest.split(" error: ", 1)[1]
+    assert message.endswith("\n")
+    return message[:-1]  # the tool ends the message with a newline
 
 
 def icosphere(subdivisions, axes=(1.0, 0.8, 0.6)):

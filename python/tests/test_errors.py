@@ -30,7 +30,7 @@ V, F = icosphere(1)
     (V, F.astype(np.float64), "faces: expected int32"),
     (V, F.astype(bool), "faces: expected int32"),
     (np.where(np.arange(42)[:, None] == 5, np.nan, V), F, r"vertices\[5, 0\] is nan"),
-    (V * np.inf, F, "is infinite"),
+    (np.where(np.arange(42)[:, None] == 3, np.inf, V), F, r"vertices\[3, 0\] is infinite"),
     (V, np.where(F == 7, 42, F).astype(np.int32), "= 42 is not a vertex index: expected 0 to 41"),
     (V, np.where(F == 7, -1, F).astype(np.int64), "= -1 is not a vertex index"),
     (np.hstack([V, V])[:, ::2], F, "not C-contiguous"),

@@ -46,6 +46,7 @@ def test_dissection_saved_is_what_qs_dissect_writes(runs):
     d = runs["d"]
     assert d.files == MESHES and d.chart_files == ["spot_2k.chart.ply", "koala_7k.chart.ply"]
     doc = json.load(open(runs["tool"] / "dissection" / "dissection.json"))
+    assert len(doc["meshes"]) == 2
     assert d.num_patches == len(d.patch_names) > 4
     assert "patches" in d.report and d.folded_faces == 0
 
@@ -146,3 +147,65 @@ def test_remesh_option_errors(tmp_path):
         r.save(tmp_path / "r")
     with pytest.raises(qs.UsageError):
         qs.remesh("not a dissection")
+
+
+def read_png_rgb8(path):
+    """An 8-bit RGB, non-interlaced PNG's pixels as (H, W, 3) uint8 (the filters undone)."""
+    import struct
+    import zlib
+    data = open(path, "rb").read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, width = 8, b"", 0
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        if kind == b"IHDR":
+            width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            assert (depth, colour, interlace) == (8, 2, 0)
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + n
+    raw = zlib.decompress(idat)
+    stride = 3 * width
+    out = np.zeros((height, stride), dtype=np.int32)
+    prev = np.zeros(stride, dtype=np.int32)
+    for y in range(height):
+        f = raw[y * (stride + 1)]
+        line = np.frombuffer(raw, np.uint8, stride, y * (stride + 1) + 1).astype(np.int32)
+        cur = np.zeros(stride, dtype=np.int32)
+        for x in range(stride):
+            a = cur[x - 3] if x >= 3 else 0
+            b = prev[x]
+            c = prev[x - 3] if x >= 3 else 0
+            if f == 0:
+                p = 0
+            elif f == 1:
+                p = a
+            elif f == 2:
+                p = b
+            elif f == 3:
+                p = (a + b) // 2
+            else:
+                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+                p = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+            cur[x] = (line[x] + p) & 255
+        out[y] = cur
+        prev = cur
+    return out.reshape(height, width, 3).astype(np.uint8)
+
+
+def test_bake_matches_qs_bake_pngs(runs, tmp_path):
+    code, _, err = run_tool("qs-bake", runs["tool"] / "remesh-L4", "--size", "16", "--samples", "0",
+                            "-o", tmp_path / "bake", "-q")
+    assert code == 0, err
+    b = qs.bake(runs["r"], runs["d"], size=16)
+    bake_json = json.load(open(tmp_path / "bake" / "bake.json"))
+    assert (b["width"], b["height"]) == (bake_json["atlas"]["width"], bake_json["atlas"]["height"])
+    assert [list(t) for t in b["tiles"]] == [[p["x"], p["y"], p["width"]] for p in bake_json["atlas"]["patches"]]
+    for i, stem in enumerate(["spot_2k", "koala_7k"]):
+        png = read_png_rgb8(tmp_path / "bake" / (stem + "_normal.png"))
+        assert np.array_equal(b["images"][i]["rgb8"], png), stem
+        n = b["images"][i]["normals"]
+        assert n.shape == png.shape and n.dtype == np.float32
+    with pytest.raises(qs.UsageError, match="size"):
+        qs.bake(runs["r"], runs["d"], size=1)
