@@ -80,7 +80,7 @@ def main():
     if any(l is None for l in landmarks):
         landmarks = None  # every mesh or none
     d = qs.dissect(meshes, landmarks=landmarks,
-                   progress=lambda stage, f: print("\r  %s %3d%%" % (stage, 100 * f), end="", flush=True))
+                   progress=lambda stage, f: print("\r  %-20s %3d%%" % (stage, 100 * f), end="", flush=True))
     print()
     t1 = time.perf_counter()
     d.save(os.path.join(args.output, "dissection"))

@@ -244,7 +244,7 @@ def dissect(meshes, landmarks=None, *, threads=0, progress=None, allow_folded=Fa
     return d
 
 
-dissect.__doc__ += _qs._describe_config()
+dissect.__doc__ = dissect.__doc__.rstrip(" ") + "".join("    " + line + "\n" for line in _qs._describe_config().splitlines() if line.strip())
 
 
 class Remesh:
