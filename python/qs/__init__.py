@@ -16,7 +16,7 @@ Errors are exceptions of one hierarchy, with the tools' messages: qs.Error, and 
 qs.UsageError (exit code 1), qs.InvalidInput (a ValueError; 2), qs.IoError (an OSError; 3),
 qs.SolverError (a RuntimeError; 4), qs.InternalError (a RuntimeError; 70).
 
-Long calls (dissect, remesh, bake, metro) release the GIL, stop on Ctrl-C (KeyboardInterrupt) and take
+Long calls (dissect, remesh, bake, merge, metro) release the GIL, stop on Ctrl-C (KeyboardInterrupt) and take
 an optional progress callback progress(stage: str, fraction: float). Reference: docs/python.md.
 """
 
@@ -29,7 +29,7 @@ from ._qs import Error, UsageError, InvalidInput, IoError, SolverError, Internal
 __all__ = [
     "Error", "UsageError", "InvalidInput", "IoError", "SolverError", "InternalError",
     "Mesh", "read_mesh", "inspect", "Landmarks", "read_landmarks",
-    "dissect", "Dissection", "remesh", "Remesh", "bake", "metro", "DISSECT_DEFAULTS",
+    "dissect", "Dissection", "remesh", "Remesh", "bake", "morph", "merge", "metro", "DISSECT_DEFAULTS",
 ]
 
 Mesh.__doc__ = """A triangle mesh: Mesh(vertices, faces, name="mesh").
@@ -339,6 +339,53 @@ def bake(remesh, dissection, *, size=256, tiles="area", space="tangent", green="
         raise UsageError("bake: expected a qs.Remesh and the qs.Dissection it was made from")
     return _qs._bake(remesh._impl, dissection._impl, int(size), tiles, space, green, int(gutter), int(threads),
                      progress)
+
+
+def morph(shapes, *, frames=None, path=None, weights=None, align="none"):
+    """Frames of a morph between shapes with one connectivity (qs-morph's frames and blend).
+
+    shapes: a qs.Remesh (its positions), a merge result (qs.merge) or a list of (n, 3) arrays.
+    path: shape indices to pass through (default: every shape in order); frames: K frames
+      uniform in the path parameter (default 10 per leg + 1, so every stop is a frame).
+    weights: instead of frames, one blend with these barycentric weights (one per shape,
+      >= 0, summing to 1).
+    align: "none", "rigid" or "similarity": every shape placed on the path's first (the first
+      shape with weights) by the least-squares fit over corresponding vertices, before blending.
+
+    Returns a list of (n, 3) float64 arrays (one with weights); the faces are the remesh's.
+    """
+    if isinstance(shapes, Remesh):
+        positions = shapes.positions
+    elif isinstance(shapes, dict) and "positions" in shapes:
+        positions = shapes["positions"]
+    else:
+        positions = list(shapes)
+    n = len(positions)
+    if weights is not None:
+        if frames is not None or path is not None:
+            raise UsageError("give weights or frames/path, not both")
+        return _qs._morph(positions, [], 0, [float(w) for w in weights], align)
+    stops = list(range(n)) if path is None else [int(p) for p in path]
+    if frames is None:
+        frames = 10 * (len(stops) - 1) + 1
+    return _qs._morph(positions, stops, int(frames), None, align)
+
+
+def merge(dissection, pair=(0, 1), *, sliver_degrees=1.0, fan=False, threads=0, progress=None):
+    """The exact morph of two dissected meshes (qs-merge): the overlay of their charts, one
+    connectivity whose positions lie on the first mesh's surface (t = 0) and on the second's (t = 1).
+
+    pair: the two meshes, by index in the dissection (default (0, 1)).
+    sliver_degrees: merged faces with a smaller corner angle count as slivers (default 1).
+    fan: cut the overlay polygons by fans instead of the cut that maximizes the smallest angle.
+
+    Returns {"faces": (m, 3) int32, "positions": [(n, 3) at t = 0, (n, 3) at t = 1],
+    "vertex_patch", "vertex_uv", "stats"}; qs.morph(result, frames=11) gives the frames.
+    """
+    if not isinstance(dissection, Dissection):
+        raise UsageError("merge: expected a qs.Dissection, got %s" % type(dissection).__name__)
+    a, b = pair
+    return _qs._merge(dissection._impl, int(a), int(b), float(sliver_degrees), bool(fan), int(threads), progress)
 
 
 def metro(a, b, *, samples=0, vertices=True, seed=1, threads=0, progress=None):

@@ -26,7 +26,9 @@
 #include "qs/core/json_strict.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/bake/bake.h"
+#include "qs/merge/merge.h"
 #include "qs/metro/metro.h"
+#include "qs/morph/blend.h"
 #include "qs/remesh/chart_sampler.h"
 #include "qs/remesh/quality.h"
 #include "qs/pipeline/pipeline.h"
@@ -647,6 +649,94 @@ PYBIND11_MODULE(_qs, m) {
     out["width"] = layout.width();
     out["height"] = layout.height();
     out["grid"] = layout.grid;
+    return out;
+  });
+
+  // Morph -----------------------------------------------------------------------------------
+  // qs-morph's frames (or one blend) of shapes with one connectivity, aligned onto the path's first.
+  m.def("_morph", [](const std::vector<py::object>& shapes, const std::vector<int>& stops, int frames,
+                     const std::optional<std::vector<double>>& weights, const std::string& align) {
+    std::vector<std::vector<qs::Vec3>> positions;
+    for (size_t i = 0; i < shapes.size(); ++i) {
+      const std::string what = "positions[" + std::to_string(i) + "]";
+      positions.push_back(vertices_from(shapes[i], what.c_str()));
+      if (positions.back().size() != positions.front().size())
+        invalid(what + ": " + std::to_string(positions.back().size()) + " vertices, positions[0] " +
+                std::to_string(positions.front().size()) + ": the shapes must share one connectivity");
+    }
+    if (positions.size() < 2) throw qs::UsageError("a morph needs at least 2 shapes");
+    const qs::morph::Align how = qs::morph::align_from_name(align);
+    const int base = weights ? 0 : stops.at(0);
+    if (base < 0 || base >= static_cast<int>(positions.size()))
+      throw qs::InvalidInput("path: shape " + std::to_string(base) + " is not in [0, " + std::to_string(positions.size()) + ")");
+    for (size_t i = 0; i < positions.size(); ++i)
+      if (static_cast<int>(i) != base) positions[i] = qs::morph::align_to(positions[i], positions[base], how);
+    py::list out;
+    auto array = [](const std::vector<qs::Vec3>& p) {
+      py::array_t<double> a({p.size(), size_t{3}});
+      std::copy(p.empty() ? nullptr : p[0].data(), p.empty() ? nullptr : p[0].data() + 3 * p.size(), a.mutable_data());
+      return a;
+    };
+    if (weights) {
+      out.append(array(qs::morph::blend(positions, *weights)));
+      return out;
+    }
+    for (const auto& f : qs::morph::path_frames(static_cast<int>(positions.size()), stops, frames))
+      out.append(array(qs::morph::blend(positions, f.weights)));
+    return out;
+  });
+
+  // Merge -----------------------------------------------------------------------------------
+  m.def("_merge", [](const std::shared_ptr<Dissection>& d, int a, int b, double sliver_degrees, bool fan, int threads,
+                     const py::object& progress) {
+    if (!d) throw qs::UsageError("merge needs a qs.Dissection");
+    const int n = static_cast<int>(d->loaded.meshes.size());
+    if (a < 0 || a >= n || b < 0 || b >= n)
+      throw qs::InvalidInput("pair (" + std::to_string(a) + ", " + std::to_string(b) + "): the dissection has " +
+                             std::to_string(n) + " meshes");
+    if (a == b) throw qs::InvalidInput("pair names mesh " + std::to_string(a) + " twice; merge two different meshes");
+    if (!(sliver_degrees >= 0 && sliver_degrees <= 60)) throw qs::UsageError("sliver_degrees: expected 0 to 60");
+    qs::merge::MergeOptions options;
+    options.sliver_degrees = sliver_degrees;
+    options.improve_slivers = !fan;
+    const auto& A = d->loaded.meshes[static_cast<size_t>(a)];
+    const auto& B = d->loaded.meshes[static_cast<size_t>(b)];
+    auto merged = std::make_shared<qs::merge::Merged>(run_long(progress, threads, [&](const qs::Context& ctx) {
+      try {
+        return qs::merge::merge_charts(A.dissection.chart, B.dissection.chart, options, ctx);
+      } catch (const qs::InvalidInput& e) {
+        std::string what = e.what();
+        for (auto [tag, dm] : {std::pair{"mesh A", &A}, std::pair{"mesh B", &B}})
+          if (what.rfind(tag, 0) == 0) what = dm->chart_file + what.substr(6);
+        throw qs::InvalidInput(what);
+      }
+    }));
+    py::capsule owner(new std::shared_ptr<qs::merge::Merged>(merged),
+                      [](void* p) { delete static_cast<std::shared_ptr<qs::merge::Merged>*>(p); });
+    const auto& mg = *merged;
+    py::dict out;
+    out["faces"] = view<int>(mg.faces.empty() ? nullptr : mg.faces[0].data(), mg.faces.size(), 3, owner);
+    py::list pos;
+    pos.append(view<double>(mg.positions_a.empty() ? nullptr : mg.positions_a[0].data(), mg.positions_a.size(), 3, owner));
+    pos.append(view<double>(mg.positions_b.empty() ? nullptr : mg.positions_b[0].data(), mg.positions_b.size(), 3, owner));
+    out["positions"] = pos;
+    py::array_t<int> vp(mg.vertex_patch.size());
+    std::copy(mg.vertex_patch.begin(), mg.vertex_patch.end(), vp.mutable_data());
+    out["vertex_patch"] = vp;
+    py::array_t<double> uv({mg.vertex_uv.size(), size_t{2}});
+    for (size_t v = 0; v < mg.vertex_uv.size(); ++v) uv.mutable_at(v, 0) = mg.vertex_uv[v].x(), uv.mutable_at(v, 1) = mg.vertex_uv[v].y();
+    out["vertex_uv"] = uv;
+    const auto& st = mg.stats;
+    py::dict stats;
+    stats["patches"] = st.patches;
+    stats["input_faces"] = py::make_tuple(st.input_faces_a, st.input_faces_b);
+    stats["crossings"] = st.crossings;
+    stats["coincident_vertices"] = st.coincident_vertices;
+    stats["slivers_uv"] = st.slivers_uv;
+    stats["slivers"] = py::make_tuple(st.slivers_a, st.slivers_b);
+    stats["min_angle_uv"] = st.min_angle_uv;
+    stats["min_angle"] = py::make_tuple(st.min_angle_a, st.min_angle_b);
+    out["stats"] = stats;
     return out;
   });
 

@@ -209,3 +209,36 @@ def test_bake_matches_qs_bake_pngs(runs, tmp_path):
         assert n.shape == png.shape and n.dtype == np.float32
     with pytest.raises(qs.UsageError, match="size"):
         qs.bake(runs["r"], runs["d"], size=1)
+
+
+def test_morph_frames_match_qs_morph(runs, tmp_path):
+    code, _, err = run_tool("qs-morph", runs["tool"] / "remesh-L4", "--frames", "5", "--align", "similarity",
+                            "-o", tmp_path / "morph", "-q")
+    assert code == 0, err
+    frames = qs.morph(runs["r"], frames=5, align="similarity")
+    files = sorted(p for p in (tmp_path / "morph").iterdir() if p.suffix == ".obj")
+    assert len(files) == len(frames) == 5
+    for f, mine in zip(files, frames):
+        v, faces = read_obj(f)
+        assert np.array_equal(faces, runs["r"].faces)
+        assert np.allclose(mine, v, rtol=0, atol=1e-12 * np.abs(v).max()), f.name
+    mid = qs.morph(runs["r"], weights=[0.5, 0.5])[0]
+    assert np.allclose(mid, (runs["r"].positions[0] + runs["r"].positions[1]) / 2)
+    with pytest.raises(qs.InvalidInput):
+        qs.morph(runs["r"], weights=[0.7, 0.7])
+    with pytest.raises(qs.InvalidInput):
+        qs.morph([runs["r"].positions[0], runs["r"].positions[1][:-1]])
+
+
+def test_merge_matches_qs_merge(runs, tmp_path):
+    code, _, err = run_tool("qs-merge", runs["tool"] / "dissection", "-o", tmp_path / "merge", "-q")
+    assert code == 0, err
+    m = qs.merge(runs["d"])
+    for i, stem in enumerate(["spot_2k", "koala_7k"]):
+        v, f = read_obj(tmp_path / "merge" / (stem + ".obj"))
+        assert np.array_equal(m["faces"], f)
+        assert np.array_equal(m["positions"][i], v)
+    ends = qs.morph(m, frames=2)
+    assert np.array_equal(ends[0], m["positions"][0]) and np.array_equal(ends[1], m["positions"][1])
+    with pytest.raises(qs.InvalidInput, match="twice"):
+        qs.merge(runs["d"], pair=(1, 1))
