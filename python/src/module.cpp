@@ -221,7 +221,10 @@ std::vector<qs::Tri> faces_from(const py::handle& h, size_t num_vertices, const 
       else if (dt.kind() == 'i') v = static_cast<const int64_t*>(a.data())[3 * f + k];
       else {
         const uint64_t u = static_cast<const uint64_t*>(a.data())[3 * f + k];
-        v = u > static_cast<uint64_t>(num_vertices) ? -1 : static_cast<long long>(u);
+        if (u >= static_cast<uint64_t>(num_vertices))
+          invalid(std::string(what) + "[" + std::to_string(f) + ", " + std::to_string(k) + "] = " + std::to_string(u) +
+                  " is not a vertex index: expected 0 to " + std::to_string(static_cast<long long>(num_vertices) - 1));
+        v = static_cast<long long>(u);
       }
       if (v < 0 || v >= static_cast<long long>(num_vertices))
         invalid(std::string(what) + "[" + std::to_string(f) + ", " + std::to_string(k) + "] = " + std::to_string(v) +

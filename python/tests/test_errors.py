@@ -33,6 +33,7 @@ V, F = icosphere(1)
     (np.where(np.arange(42)[:, None] == 3, np.inf, V), F, r"vertices\[3, 0\] is infinite"),
     (V, np.where(F == 7, 42, F).astype(np.int32), "= 42 is not a vertex index: expected 0 to 41"),
     (V, np.where(F == 7, -1, F).astype(np.int64), "= -1 is not a vertex index"),
+    (V, np.where(F == 7, 2 ** 40, F).astype(np.uint64), "= 1099511627776 is not a vertex index"),
     (np.hstack([V, V])[:, ::2], F, "not C-contiguous"),
     (V, np.asfortranarray(F), "not C-contiguous"),
     (V.tolist(), F, "expected a numpy array, got list"),
