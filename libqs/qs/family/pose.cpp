@@ -13,6 +13,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <numbers>
 #include <queue>
 #include <random>
 #include <set>
@@ -25,7 +26,6 @@ namespace qs::family {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 using Adjacency = std::vector<std::vector<int>>;
@@ -135,12 +135,12 @@ bool limb_region(const TriMesh& mesh, const std::vector<double>& d, double radiu
   }
   if (length <= 0) return false;
   border_radius /= length;
-  if (length >= border_bound * 2 * kPi * border_radius) return false;
+  if (length >= border_bound * 2 * std::numbers::pi * border_radius) return false;
   *pivot = centre / length;
   return true;
 }
 
-struct Limb {
+struct ExtremityRegion {
   int tip = -1;
   double radius = 0;
   Vec3 pivot = Vec3::Zero();
@@ -150,7 +150,7 @@ struct Limb {
 struct Analysis {
   Adjacency adj;
   std::vector<Extremity> extremities;
-  std::vector<Limb> limbs;  // disjoint regions, most prominent first
+  std::vector<ExtremityRegion> limbs;  // disjoint regions, most prominent first
   std::vector<int> candidates;  // the farthest points, in the order found
 };
 
@@ -243,7 +243,7 @@ double loop_length(const std::vector<std::vector<double>>& d, const std::vector<
 double uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 Eigen::Matrix3d rotation(const Vec3& axis, double angle_deg) {
-  return Eigen::AngleAxisd(angle_deg * kPi / 180, axis).toRotationMatrix();
+  return Eigen::AngleAxisd(angle_deg * std::numbers::pi / 180, axis).toRotationMatrix();
 }
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -368,7 +368,7 @@ Pose pose_mesh(const TriMesh& mesh, const PoseOptions& options, const Context& c
   std::sort(order.begin(), order.end());
   std::vector<PosedLimb> limbs;
   for (int k : order) {
-    const Limb& l = an.limbs[k];
+    const ExtremityRegion& l = an.limbs[k];
     PosedLimb p;
     p.tip = l.tip;
     p.radius = l.radius;

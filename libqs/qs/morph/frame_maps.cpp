@@ -1,4 +1,5 @@
 #include "qs/morph/frame_maps.h"
+#include "qs/morph/number_text_detail.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -20,18 +21,14 @@ namespace fs = std::filesystem;
 namespace qs::morph {
 namespace {
 
+using detail::append_number;
+
 // OpenImageIO's error text can span lines (libpng's own message appended): one line for qs's.
 std::string one_line(std::string s) {
   while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
   for (char& c : s)
     if (c == '\n') c = ';';
   return s;
-}
-
-template <class T>
-void append_number(std::string& out, T v) {
-  char buf[32];
-  out.append(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
 }
 
 }  // namespace

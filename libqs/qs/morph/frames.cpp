@@ -1,4 +1,5 @@
 #include "qs/morph/frames.h"
+#include "qs/morph/number_text_detail.h"
 
 #include <algorithm>
 #include <charconv>
@@ -12,12 +13,7 @@
 namespace qs::morph {
 namespace {
 
-template <class T>
-void append_number(std::string& out, T v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest text that reads back exactly
-  out.append(buf, r.ptr);
-}
+using detail::append_number;
 
 bool little_endian() {
   const uint16_t one = 1;
