@@ -1,26 +1,29 @@
 #!/usr/bin/env bash
 # Installs what qs needs from Debian 12's packages. Idempotent and non-interactive; run as root
 # (or with sudo available).
-#   usage: scripts/setup.sh [--studio] [--dev]
-#   (none)    build and run: compiler, CMake, Ninja, the libraries qs links, pybind11, Python's
-#             headers and numpy (the Python module qs), and node with the Khronos glTF validator
-#             (scripts/validate-gltf.sh) that scripts/run-example.sh runs
+#   usage: scripts/setup.sh [--python] [--studio] [--dev]
+#   (none)    build and run: compiler, CMake, Ninja, the libraries qs links, and node with the
+#             Khronos glTF validator (scripts/validate-gltf.sh) that scripts/run-example.sh runs
+#   --python  adds pybind11, Python's headers and numpy: scripts/build.sh then builds the Python
+#             module qs
 #   --studio  adds web/studio's npm packages (three.js, which qs-studio's page loads)
-#   --dev     adds what scripts/test.sh needs: GoogleTest/GoogleMock, pytest (the Python module's
-#             tests), clang-16 with its runtime (libFuzzer, ASan, UBSan for scripts/fuzz.sh),
+#   --dev     adds what scripts/test.sh needs: the --python and --studio parts, GoogleTest/GoogleMock,
+#             pytest (the Python module's tests), clang-16 with its runtime (libFuzzer, ASan, UBSan for scripts/fuzz.sh),
 #             Chromium and web/studio's npm packages (puppeteer-core drives the studio's browser tests)
 # What each package is for, and their licences: docs/packaging.md.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 
+python=0
 studio=0
 dev=0
 for a in "$@"; do
   case "$a" in
+    --python) python=1 ;;
     --studio) studio=1 ;;
-    --dev) dev=1; studio=1 ;;
+    --dev) dev=1; studio=1; python=1 ;;
     -h|--help) sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "setup: unknown argument '$a' (usage: scripts/setup.sh [--studio] [--dev])" >&2; exit 2 ;;
+    *) echo "setup: unknown argument '$a' (usage: scripts/setup.sh [--python] [--studio] [--dev])" >&2; exit 2 ;;
   esac
 done
 
@@ -28,9 +31,11 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libcgal-dev libopenimageio-dev libtinygltf-dev nlohmann-json3-dev
   libcli11-dev liblemon-dev libcpp-httplib-dev
-  pybind11-dev python3-dev python3-numpy  # the Python module qs
   ca-certificates  # npm's downloads
 )
+if [ "$python" = 1 ]; then
+  packages+=(pybind11-dev python3-dev python3-numpy)  # the Python module qs
+fi
 if [ "$dev" = 1 ]; then
   packages+=(
     libgtest-dev libgmock-dev
