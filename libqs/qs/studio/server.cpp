@@ -112,6 +112,7 @@ void reply(const Response& res, httplib::Response& out) {
     out.set_content("", res.content_type);
     return;
   }
+  if (res.status == 200) out.status = -1;  // httplib answers 206 to a Range request, 200 otherwise
   out.set_content_provider(size, res.content_type, [file](size_t offset, size_t length, httplib::DataSink& sink) {
     char buf[1 << 16];
     const ssize_t n = pread(*file, buf, std::min(length, sizeof buf), static_cast<off_t>(offset));
