@@ -319,6 +319,10 @@ TEST(StudioServer, BodyOverTheRouteLimitIsRefusedFromItsHeaders) {
       s.port, "POST /api/run HTTP/1.1\r\nHost: x\r\nContent-Length: 267386880\r\nExpect: 100-continue\r\n\r\n", "}");
   EXPECT_EQ(got.substr(0, 12), "HTTP/1.1 413") << got;
   EXPECT_EQ(got.find("100 Continue"), std::string::npos) << got;
+  // an upload under a name it cannot take is refused before its body is read
+  const std::string named = raw_exchange(
+      s.port, "POST /api/upload?name=%FF.obj HTTP/1.1\r\nHost: x\r\nContent-Length: 104857600\r\n\r\nv 0 0 0\n");
+  EXPECT_EQ(named.substr(0, 12), "HTTP/1.1 403") << named;
   // a Content-Length that is not a number
   const std::string junk = raw_exchange(s.port, "POST /api/run HTTP/1.1\r\nHost: x\r\nContent-Length: 12x\r\n\r\n");
   EXPECT_EQ(junk.substr(0, 12), "HTTP/1.1 400") << junk;

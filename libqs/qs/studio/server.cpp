@@ -35,18 +35,22 @@ std::string error_body(const std::string& message) {
   return "{\"error\": \"" + out + "\"}";
 }
 
-/// Answers `status` and closes the connection after the answer: the request's body (too large,
+/// Answers `status` with `json_body` and closes the connection after the answer: the request's body (too large,
 /// or cut off) is not read, so the connection cannot carry another request. httplib closes a
 /// connection whose response content provider reports failure; this one writes the whole answer
 /// first.
-void refuse_and_close(httplib::Response& out, int status, const std::string& message) {
+void close_with(httplib::Response& out, int status, const std::string& json_body) {
   out.status = status;
   out.set_header("Connection", "close");
-  auto body = std::make_shared<std::string>(error_body(message));
+  auto body = std::make_shared<std::string>(json_body);
   out.set_content_provider(body->size(), "application/json", [body](size_t offset, size_t length, httplib::DataSink& sink) {
     sink.write(body->data() + offset, length);
     return false;
   });
+}
+
+void refuse_and_close(httplib::Response& out, int status, const std::string& message) {
+  close_with(out, status, error_body(message));
 }
 
 /// The declared body length: nullopt when there is none, SIZE_MAX when it is not a number or too
@@ -180,6 +184,17 @@ Server::Server(Studio& studio, ServerOptions options) : impl_(std::make_unique<I
     int parts = 0;
     bool ok = true;
     try {
+      if (limit.upload && r.query.count("name")) {
+        // The name and route are checked before a byte is stored (the body itself comes next).
+        Request named = r;
+        named.body_file = "(streaming)";
+        try {
+          (void)check_request(named, studio.options());
+        } catch (const Error&) {
+          const Response refused = studio.handle(named);  // the same refusal, as JSON
+          return close_with(out, refused.status, refused.body);
+        }
+      }
       if (limit.upload) {
         std::string ext;
         if (auto it = r.query.find("name"); it != r.query.end()) ext = std::filesystem::path(it->second).extension().string();

@@ -166,6 +166,7 @@ class Studio {
   void stop_run();
 
   const std::filesystem::path& folder() const { return root_; }
+  const StudioOptions& options() const { return opt_; }
   /// Blocks until the current run (if any) has finished. For tests and shutdown.
   void wait_for_run();
   RunState run_state() const;
