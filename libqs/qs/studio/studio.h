@@ -55,7 +55,7 @@ struct Request {
   std::map<std::string, std::string> query;
   std::string body;
   /// An upload streamed to disk by the server (a file from Studio::new_upload_file()) instead of
-  /// `body`; the studio moves it into place or removes it.
+  /// `body`; handle() moves it into place when it is accepted, its UploadFile removes it otherwise.
   std::filesystem::path body_file;
   std::string body_file_name;  ///< the file name a multipart form gave for it (used when ?name= is absent)
 };
