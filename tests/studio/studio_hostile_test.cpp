@@ -323,6 +323,9 @@ TEST(StudioServer, BodyOverTheRouteLimitIsRefusedFromItsHeaders) {
   const std::string named = raw_exchange(
       s.port, "POST /api/upload?name=%FF.obj HTTP/1.1\r\nHost: x\r\nContent-Length: 104857600\r\n\r\nv 0 0 0\n");
   EXPECT_EQ(named.substr(0, 12), "HTTP/1.1 403") << named;
+  const std::string taken = raw_exchange(
+      s.port, "POST /api/upload?name=sphere.obj HTTP/1.1\r\nHost: x\r\nContent-Length: 104857600\r\n\r\nv 0 0 0\n");
+  EXPECT_EQ(taken.substr(0, 12), "HTTP/1.1 409") << taken;
   // a Content-Length that is not a number
   const std::string junk = raw_exchange(s.port, "POST /api/run HTTP/1.1\r\nHost: x\r\nContent-Length: 12x\r\n\r\n");
   EXPECT_EQ(junk.substr(0, 12), "HTTP/1.1 400") << junk;

@@ -11,6 +11,7 @@
 
 #include "qs/core/error.h"
 #include "qs/core/json_strict.h"
+#include "qs/studio/paths.h"
 
 namespace qs::studio {
 
@@ -190,9 +191,13 @@ Server::Server(Studio& studio, ServerOptions options) : impl_(std::make_unique<I
         named.body_file = "(streaming)";
         try {
           (void)check_request(named, studio.options());
-        } catch (const Error&) {
-          const Response refused = studio.handle(named);  // the same refusal, as JSON
-          return close_with(out, refused.status, refused.body);
+          studio.check_upload_target(named.query.at("name"));
+        } catch (const HttpError& e) {
+          return refuse_and_close(out, e.status(), e.what());
+        } catch (const PathRefused& e) {
+          return refuse_and_close(out, 403, e.what());
+        } catch (const Error& e) {
+          return refuse_and_close(out, e.code() == ErrorCode::InvalidInput ? 400 : 500, e.what());
         }
       }
       if (limit.upload) {

@@ -724,6 +724,13 @@ Studio::UploadFile Studio::new_upload_file(const std::string& extension) {
   throw IoError("cannot create a file for the upload in the studio's folder");
 }
 
+void Studio::check_upload_target(const std::string& name) const {
+  check_mesh_name(name);
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(resolve_for_writing(root_, name), ec)))
+    throw HttpError(409, quote(name) + " exists already; the studio never replaces a mesh (rename the upload)");
+}
+
 BodyLimit Studio::body_limit(const std::string& method, const std::string& path) const {
   if (method != "POST" && method != "PUT" && method != "PATCH" && method != "DELETE") return {0, false};
   if (path == "/api/upload") return {opt_.max_upload_bytes, true};
@@ -1008,9 +1015,8 @@ Response Studio::upload(const std::string& name, const Request& r) {
   if (bytes > opt_.max_upload_bytes)
     throw HttpError(413, "upload of " + std::to_string(bytes) + " bytes; at most " + std::to_string(opt_.max_upload_bytes) +
                              " are accepted");
+  check_upload_target(name);
   const fs::path out = resolve_for_writing(root_, name);
-  if (fs::exists(fs::symlink_status(out, ec)))
-    throw HttpError(409, quote(name) + " exists already; the studio never replaces a mesh (rename the upload)");
   try {
     std::string bytes_read(static_cast<size_t>(bytes), '\0');
     {

@@ -158,6 +158,10 @@ class Studio {
   };
   UploadFile new_upload_file(const std::string& extension);
 
+  /// Refuses (HttpError 409, PathRefused) an upload name that is taken or cannot be written, so
+  /// that the server can say so before it reads the body. The upload checks again when it ends.
+  void check_upload_target(const std::string& name) const;
+
   /// The body limit of a route (for the server, before it reads a body).
   BodyLimit body_limit(const std::string& method, const std::string& path) const;
 
