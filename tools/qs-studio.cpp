@@ -2,7 +2,8 @@
 // Serves FOLDER's meshes and the page (web/studio) on 127.0.0.1; runs qs-dissect, qs-remesh,
 // qs-bake and qs-morph (found beside this program) as subprocesses; writes only inside FOLDER.
 //
-// Exit codes: 0 stopped (Ctrl-C), 1 usage, 2 FOLDER is not a folder, 3 i/o (FOLDER missing, the
+// Exit codes: 0 stopped (Ctrl-C or SIGTERM: a run in progress is stopped, its tool ended and its
+// staging removed), 1 usage, 2 FOLDER is not a folder, 3 i/o (FOLDER missing, the
 // port cannot be bound), 70 internal error.
 
 #include <signal.h>
@@ -104,7 +105,9 @@ int main(int argc, char** argv) {
     server.listen();
     if (!stopping) pthread_kill(waiter.native_handle(), SIGTERM);  // listen() ended on its own
     waiter.join();
-    studio.wait_for_run();
+    // A run in progress is stopped: its tool gets SIGTERM (cleaning up its own output), the run's
+    // staging folder is removed. (Tools also get SIGTERM if this process is killed outright.)
+    studio.stop_run();
     return 0;
   });
 }

@@ -466,10 +466,11 @@ TEST(StudioServer, HttpLimitsAndTraversal) {
   Fixture fx;
   fs::create_directories(fx.web / "node_modules/three/build");
   write_text(fx.web / "node_modules/three/build/three.module.js", std::string(200000, 'x'));
-  Studio studio(fx.options());
+  StudioOptions sto = fx.options();
+  sto.max_upload_bytes = 1u << 20;
+  Studio studio(sto);
   ServerOptions so;
   so.port = 0;
-  so.max_request_bytes = 1u << 20;
   Server server(studio, so);
   const int port = server.bind();
   std::thread t([&] { server.listen(); });

@@ -2,18 +2,15 @@
 
 #include <system_error>
 
+#include "qs/core/json_strict.h"
+
 namespace fs = std::filesystem;
 
 namespace qs::studio {
 
 namespace {
 
-std::string quoted(std::string_view s) {
-  std::string out = "'";
-  for (char c : s.substr(0, 200)) out += (static_cast<unsigned char>(c) < 0x20 ? '?' : c);
-  if (s.size() > 200) out += "...";
-  return out + "'";
-}
+std::string quoted(std::string_view s) { return "'" + json_strict::printable(s, 200) + "'"; }
 
 }  // namespace
 
@@ -25,6 +22,8 @@ void check_relative_path(std::string_view rel) {
     if (c == '\0' || c == '\\' || static_cast<unsigned char>(c) < 0x20)
       throw PathRefused("path " + quoted(rel) + " holds a NUL, a backslash or a control character");
   }
+  if (!json_strict::is_clean_text(rel))
+    throw PathRefused("path " + quoted(rel) + " is not valid UTF-8; the studio names files in UTF-8 only");
   if (rel.front() == '/')
     throw PathRefused("absolute path " + quoted(rel) + " refused; paths are relative to the studio's folder");
   size_t start = 0;
@@ -38,6 +37,9 @@ void check_relative_path(std::string_view rel) {
       throw PathRefused("path " + quoted(rel) + " has a '..' component; the studio serves only inside its folder");
     if (part.front() == '.')
       throw PathRefused("path " + quoted(rel) + " names a hidden file or folder (a component starting with '.')");
+    if (part.size() > 255)
+      throw PathRefused("path " + quoted(rel) + " has a component of " + std::to_string(part.size()) +
+                        " bytes; file names have at most 255");
     start = end + 1;
   }
 }

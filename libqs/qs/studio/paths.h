@@ -2,9 +2,10 @@
 // qs-studio's path rules: every file the studio serves or writes lies inside one folder.
 //
 // A request names a file by a relative path with '/' separators. It is refused when it is empty,
-// longer than 1024 bytes, holds a NUL, a backslash or a control character, is absolute, has an
-// empty, "." or ".." component, or a component starting with '.' (hidden files and the studio's
-// own staging folders are never served). The resolved file must then stay inside the folder
+// longer than 1024 bytes, holds a NUL, a backslash or a control character, is not valid UTF-8 (it
+// could not be named in JSON or on the page), is absolute, has an empty, "." or ".." component, a
+// component longer than 255 bytes, or a component starting with '.' (hidden files and the
+// studio's own staging files are never served). The resolved file must then stay inside the folder
 // after every symbolic link is followed: a link that points out of the folder is refused like
 // "..", and a link is never written through.
 
@@ -23,7 +24,7 @@ class PathRefused : public InvalidInput {
 };
 
 /// Checks the syntax of a relative path (the rules above that need no file system).
-/// \throws PathRefused naming the rule that is broken.
+/// \throws PathRefused naming the rule that is broken (the path quoted printable, at most 200 bytes).
 void check_relative_path(std::string_view relative);
 
 /// An existing regular file (or, with allow_directory, a folder) inside `root`.

@@ -11,7 +11,9 @@ namespace qs::studio {
 struct ServerOptions {
   std::string host = "127.0.0.1";  ///< listen address; anything else is reachable from the network
   int port = 8420;                 ///< 0: any free port
-  size_t max_request_bytes = 256u << 20;  ///< larger bodies get 413 before they are read whole
+  /// A cap on any body httplib would read by itself; each route's own limit (Studio::body_limit)
+  /// is checked from the headers first and enforced while the body streams in.
+  size_t max_request_bytes = 256u << 20;
   /// Worker threads. A browser keeps up to 6 connections open (keep-alive) and each holds a
   /// thread while open, so fewer threads than that stall page loads.
   int threads = 16;

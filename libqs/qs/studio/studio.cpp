@@ -1,22 +1,31 @@
 #include "qs/studio/studio.h"
 
 #include <fcntl.h>
-#include <spawn.h>
+#include <signal.h>
+#include <stdio.h>
 #include <sys/file.h>
+#include <sys/prctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
-#include <nlohmann/json.hpp>
+#include <cfloat>
+#include <charconv>
+#include <chrono>
+#include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/io/read_mesh.h"
@@ -33,16 +42,15 @@ namespace qs::studio {
 
 namespace {
 
-/// An error with its HTTP status, thrown inside the handlers.
-struct HttpError : std::runtime_error {
-  int status;
-  HttpError(int s, const std::string& m) : std::runtime_error(m), status(s) {}
-};
+using json_strict::printable;
+
+/// A name or text from a request, quoted for a message: printable, at most 200 bytes.
+std::string quote(std::string_view s) { return "'" + printable(s, 200) + "'"; }
 
 Response json_response(const json& j, int status = 200) {
   Response r;
   r.status = status;
-  r.body = j.dump();
+  r.body = json_strict::dump(j, -1);  // never throws: bytes that are not UTF-8 become U+FFFD
   return r;
 }
 
@@ -70,9 +78,9 @@ std::string param(const Request& r, const std::string& key) {
 void check_mesh_name(const std::string& name) {
   check_relative_path(name);
   if (name.find('/') != std::string::npos)
-    throw HttpError(400, "mesh name '" + name + "' has a '/'; meshes are files of the studio's folder itself");
+    throw HttpError(400, "mesh name " + quote(name) + " has a '/'; meshes are files of the studio's folder itself");
   if (!is_mesh_name(name))
-    throw HttpError(400, "'" + name + "' is not a mesh file name; expected .obj, .off, .ply or .stl");
+    throw HttpError(400, quote(name) + " is not a mesh file name; expected .obj, .off, .ply or .stl");
 }
 
 fs::path existing(const fs::path& root, const std::string& rel, bool allow_directory = false) {
@@ -85,15 +93,33 @@ fs::path existing(const fs::path& root, const std::string& rel, bool allow_direc
   }
 }
 
+void check_body_size(size_t bytes, size_t limit) {
+  if (bytes > limit)
+    throw HttpError(413, "request body of " + std::to_string(bytes) + " bytes; at most " + std::to_string(limit) +
+                             " are accepted here");
+}
+
+/// The body as strict JSON (nesting depth, duplicate keys, numbers that fit a double).
 json parse_json_body(const Request& r, size_t limit) {
-  if (r.body.size() > limit)
-    throw HttpError(413, "request body of " + std::to_string(r.body.size()) + " bytes; at most " +
-                             std::to_string(limit) + " are accepted here");
+  check_body_size(r.body.size(), limit);
   try {
-    return json::parse(r.body);
-  } catch (const json::parse_error& e) {
-    throw HttpError(400, std::string("the request body is not valid JSON: ") + e.what());
+    return json_strict::parse(r.body, "the request body");
+  } catch (const InvalidInput& e) {
+    throw HttpError(400, e.what());
   }
+}
+
+/// The shape of a landmark body ({"seeds": [...], "features": ...}, nothing else); the references
+/// themselves are checked against the mesh by qs-dissect's reader.
+void check_landmark_body(const json& j, bool need_seeds) {
+  if (!j.is_object())
+    throw HttpError(400, "landmarks must be a JSON object {\"seeds\": [...], \"features\": {...}}, found " +
+                             json_strict::describe(j));
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it.key() != "seeds" && it.key() != "features")
+      throw HttpError(400, "unknown key \"" + printable(it.key(), 60) + "\" in the landmarks; expected seeds and features");
+  if (need_seeds && !j.contains("seeds"))
+    throw HttpError(400, "expected {\"seeds\": [4 references], \"features\": {...}}");
 }
 
 // cpp-httplib (Debian's build) compresses text/*, application/javascript and application/json
@@ -259,35 +285,68 @@ json landmarks_json(const landmarks::Landmarks& lm, const mesh::ValidationResult
 
 // Run helpers ----------------------------------------------------------------------------------
 
-int run_number(const std::string& name) {
-  if (name.rfind("run-", 0) != 0 || name.size() < 5 || name.size() > 12) return -1;
-  for (size_t i = 4; i < name.size(); ++i)
-    if (!std::isdigit(static_cast<unsigned char>(name[i]))) return -1;
-  return std::stoi(name.substr(4));
-}
-
 /// Runs argv[0] (a full path) in `cwd`, calling `out` with every chunk of its stdout and stderr.
+/// `started` gets the child's pid once it runs, `ended` is called once it has exited and before its
+/// pid is released (so that nobody signals a recycled pid). The child gets SIGTERM when the thread that started
+/// it ends (PR_SET_PDEATHSIG), so a killed studio leaves no tool running, and starts with no
+/// signal blocked (the server blocks SIGINT/SIGTERM for its own threads).
 /// Returns the exit status (128 + signal when killed). \throws IoError when it cannot start.
 int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& cwd,
-                   const std::function<void(const std::string&)>& out) {
+                   const std::function<void(const std::string&)>& out, const std::function<void(pid_t)>& started,
+                   const std::function<void()>& ended) {
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) throw IoError("cannot create a pipe for " + argv[0]);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-  posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  close(fds[1]);
-  if (rc != 0) {
-    close(fds[0]);
-    throw IoError("cannot start " + argv[0] + ": " + std::strerror(rc));
+  int err_pipe[2];  // the child writes errno here when exec fails
+  if (pipe2(err_pipe, O_CLOEXEC) != 0) {
+    close(fds[0]), close(fds[1]);
+    throw IoError("cannot create a pipe for " + argv[0]);
   }
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    // Only async-signal-safe calls from here to exec.
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) _exit(127);  // the studio died before prctl
+    sigset_t none;
+    sigemptyset(&none);
+    sigprocmask(SIG_SETMASK, &none, nullptr);
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    signal(SIGPIPE, SIG_DFL);
+    dup2(fds[1], 1);
+    dup2(fds[1], 2);
+    int e = 0;
+    if (chdir(cwd.c_str()) != 0) e = errno;
+    else {
+      execve(argv[0].c_str(), args.data(), environ);
+      e = errno;
+    }
+    ssize_t ignored = write(err_pipe[1], &e, sizeof e);
+    (void)ignored;
+    _exit(127);
+  }
+  close(fds[1]);
+  close(err_pipe[1]);
+  if (pid < 0) {
+    const int e = errno;
+    close(fds[0]), close(err_pipe[0]);
+    throw IoError("cannot start " + argv[0] + ": " + std::strerror(e));
+  }
+  int exec_errno = 0;
+  ssize_t got;
+  while ((got = read(err_pipe[0], &exec_errno, sizeof exec_errno)) < 0 && errno == EINTR) {
+  }
+  close(err_pipe[0]);
+  if (got == static_cast<ssize_t>(sizeof exec_errno)) {
+    close(fds[0]);
+    while (waitpid(pid, nullptr, 0) < 0 && errno == EINTR) {
+    }
+    throw IoError("cannot start " + argv[0] + ": " + std::strerror(exec_errno));
+  }
+  started(pid);
   char buf[4096];
   for (;;) {
     const ssize_t n = read(fds[0], buf, sizeof buf);
@@ -295,12 +354,73 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& cwd,
     else if (n == 0 || errno != EINTR) break;
   }
   close(fds[0]);
+  siginfo_t info{};
+  while (waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOWAIT) < 0 && errno == EINTR) {
+  }
+  ended();
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return 70;
+}
+
+/// A coordinate for the page: the float it draws with when that is finite (shortest text that
+/// reads back as that float), else the double itself (the page cannot draw it, but the value is
+/// not lost); null only for NaN and infinities (which validation rejects).
+void put_coordinate(std::string& out, double x) {
+  char buf[40];
+  std::to_chars_result r{};
+  const float f = static_cast<float>(x);
+  if (!std::isfinite(x)) {
+    out += "null";
+    return;
+  }
+  if (std::isfinite(f)) r = std::to_chars(buf, buf + sizeof buf, f);
+  else r = std::to_chars(buf, buf + sizeof buf, x);
+  out.append(buf, r.ptr);
+}
+
+void put_int(std::string& out, long long v) {
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+/// {"positions": [...], "faces": [...]} members for a mesh, written without a JSON document (a
+/// large mesh would need gigabytes as nlohmann values). Faces with an index out of range become
+/// 0,0,0 (they keep the face ids and draw nothing).
+void put_mesh(std::string& out, const TriMesh& m) {
+  out += "\"positions\":[";
+  bool first = true;
+  for (const auto& p : m.positions)
+    for (int k = 0; k < 3; ++k) {
+      if (!first) out += ',';
+      first = false;
+      put_coordinate(out, p[k]);
+    }
+  out += "],\"faces\":[";
+  const int n = m.num_vertices();
+  first = true;
+  for (const auto& t : m.faces) {
+    const bool ok = t[0] >= 0 && t[1] >= 0 && t[2] >= 0 && t[0] < n && t[1] < n && t[2] < n;
+    for (int k = 0; k < 3; ++k) {
+      if (!first) out += ',';
+      first = false;
+      put_int(out, ok ? t[k] : 0);
+    }
+  }
+  out += ']';
+}
+
+/// Every entry name in FOLDER/runs (none when it does not exist).
+std::vector<std::string> run_folder_names(const fs::path& root) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  if (fs::is_directory(root / "runs", ec))
+    for (const auto& e : fs::directory_iterator(root / "runs", ec)) names.push_back(e.path().filename().string());
+  return names;
 }
 
 json list_files(const fs::path& root, const fs::path& dir) {
@@ -336,67 +456,286 @@ std::string plain_summary(const std::string& kind) {
 RunRequest parse_run_request(const std::string& text, int max_meshes) {
   json j;
   try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw InvalidInput(std::string("the run request is not valid JSON: ") + e.what());
+    j = json_strict::parse(text, "the run request");
+  } catch (const InvalidInput& e) {
+    throw HttpError(400, e.what());
   }
-  if (!j.is_object()) throw InvalidInput("the run request must be a JSON object");
+  if (!j.is_object()) throw InvalidInput("the run request must be a JSON object, found " + json_strict::describe(j));
   RunRequest r;
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     const json& v = it.value();
+    long long n = 0;
+    double x = 0;
     if (k == "meshes") {
       if (!v.is_array() || v.empty())
-        throw InvalidInput("\"meshes\" must be a non-empty array of mesh file names");
+        throw InvalidInput("\"meshes\" must be a non-empty array of mesh file names, found " + json_strict::describe(v));
+      if (static_cast<long long>(v.size()) > max_meshes)
+        throw InvalidInput("a run takes at most " + std::to_string(max_meshes) + " meshes, got " +
+                           std::to_string(v.size()));
       for (const auto& m : v) {
-        if (!m.is_string()) throw InvalidInput("\"meshes\" holds a value that is not a file name: " + m.dump());
+        if (!m.is_string())
+          throw InvalidInput("\"meshes\" holds a value that is not a file name: " + json_strict::describe(m));
         r.meshes.push_back(m.get<std::string>());
       }
     } else if (k == "level") {
-      if (!v.is_number_integer() || v.get<int>() < 0 || v.get<int>() > 6)
-        throw InvalidInput("\"level\" must be an integer from 0 to 6, found " + v.dump());
-      r.level = v.get<int>();
+      if (!json_strict::integer_in(v, 0, 6, n))
+        throw InvalidInput("\"level\" must be an integer from 0 to 6, found " + json_strict::describe(v));
+      r.level = static_cast<int>(n);
     } else if (k == "bake_size") {
-      if (!v.is_number_integer() || v.get<int>() < 16 || v.get<int>() > 2048)
-        throw InvalidInput("\"bake_size\" must be an integer from 16 to 2048, found " + v.dump());
-      r.bake_size = v.get<int>();
+      if (!json_strict::integer_in(v, 16, 2048, n))
+        throw InvalidInput("\"bake_size\" must be an integer from 16 to 2048, found " + json_strict::describe(v));
+      r.bake_size = static_cast<int>(n);
     } else if (k == "max_area") {
-      if (!v.is_number() || !(v.get<double>() >= 0 && v.get<double>() <= 1))
-        throw InvalidInput("\"max_area\" must be a number from 0 to 1 (0: off), found " + v.dump());
-      r.max_area = v.get<double>();
+      if (!json_strict::finite_number(v, x) || !(x >= 0 && x <= 1))
+        throw InvalidInput("\"max_area\" must be a number from 0 to 1 (0: off), found " + json_strict::describe(v));
+      r.max_area = x;
     } else if (k == "morph") {
-      if (!v.is_boolean()) throw InvalidInput("\"morph\" must be true or false, found " + v.dump());
+      if (!v.is_boolean()) throw InvalidInput("\"morph\" must be true or false, found " + json_strict::describe(v));
       r.morph = v.get<bool>();
     } else {
-      throw InvalidInput("unknown key \"" + k + "\" in the run request; expected meshes, level, bake_size, "
-                         "max_area, morph");
+      throw InvalidInput("unknown key \"" + printable(k, 60) +
+                         "\" in the run request; expected meshes, level, bake_size, max_area, morph");
     }
   }
   if (r.meshes.empty()) throw InvalidInput("the run request has no \"meshes\"");
-  if (static_cast<int>(r.meshes.size()) > max_meshes)
-    throw InvalidInput("a run takes at most " + std::to_string(max_meshes) + " meshes, got " +
-                       std::to_string(r.meshes.size()));
   std::set<std::string> stems;
   for (const auto& m : r.meshes) {
     check_mesh_name(m);
     if (fs::path(m).stem().string().find(',') != std::string::npos)
-      throw InvalidInput("mesh '" + m + "' has a ',' in its name, which qs-morph's --path cannot take; rename it");
+      throw InvalidInput("mesh " + quote(m) + " has a ',' in its name, which qs-morph's --path cannot take; rename it");
     if (!stems.insert(fs::path(m).stem().string()).second)
-      throw InvalidInput("two meshes of the run are named '" + fs::path(m).stem().string() +
-                         "' (file stems name the shapes of a set); rename one");
+      throw InvalidInput("two meshes of the run are named " + quote(fs::path(m).stem().string()) +
+                         " (file stems name the shapes of a set); rename one");
   }
   return r;
 }
 
-Studio::Studio(StudioOptions options) : opt_(std::move(options)) {
-  std::error_code ec;
-  if (!fs::exists(opt_.folder, ec)) throw IoError("folder '" + opt_.folder.string() + "' does not exist");
-  if (!fs::is_directory(opt_.folder, ec)) throw InvalidInput("'" + opt_.folder.string() + "' is not a folder");
-  root_ = fs::canonical(opt_.folder);
-  web_root_ = fs::exists(opt_.web_dir, ec) ? fs::canonical(opt_.web_dir) : opt_.web_dir;
+std::string run_number(const std::string& name) {
+  if (name.size() < 5 || name.compare(0, 4, "run-") != 0) return "";
+  for (size_t i = 4; i < name.size(); ++i)
+    if (!std::isdigit(static_cast<unsigned char>(name[i]))) return "";
+  const size_t nz = name.find_first_not_of('0', 4);
+  return nz == std::string::npos ? "0" : name.substr(nz);
 }
 
-Studio::~Studio() { wait_for_run(); }
+namespace {
+/// Orders run numbers (decimal strings without leading zeros) by value.
+bool number_less(const std::string& a, const std::string& b) {
+  return a.size() != b.size() ? a.size() < b.size() : a < b;
+}
+}  // namespace
+
+std::string next_run_name(const std::vector<std::string>& existing) {
+  std::string largest = "0";
+  for (const auto& n : existing) {
+    const std::string k = run_number(n);
+    if (!k.empty() && number_less(largest, k)) largest = k;
+  }
+  // largest + 1 in decimal
+  std::string next = largest;
+  int i = static_cast<int>(next.size()) - 1;
+  for (; i >= 0 && next[i] == '9'; --i) next[i] = '0';
+  if (i < 0) next.insert(next.begin(), '1');
+  else ++next[i];
+  return "run-" + next;
+}
+
+CheckedRequest check_request(const Request& r, const StudioOptions& opt) {
+  using Route = CheckedRequest::Route;
+  CheckedRequest c;
+  const std::string& p = r.path;
+  if (!json_strict::is_clean_text(p))
+    throw HttpError(400, "the URL path " + quote(p) + " is not valid UTF-8 or holds control characters");
+  auto only = [&](const char* method) {
+    if (r.method != method)
+      throw HttpError(405, "method " + printable(r.method, 20) + " is not allowed on " + printable(p, 100) + "; use " +
+                               method);
+  };
+  const bool has_body = !r.body.empty() || !r.body_file.empty();
+  auto no_body = [&] {
+    if (has_body) throw HttpError(413, "a " + printable(r.method, 20) + " request to " + printable(p, 100) + " takes no body");
+  };
+  if (p == "/api/meshes") {
+    only("GET"), no_body();
+    c.route = Route::Meshes;
+  } else if (p == "/api/mesh") {
+    only("GET"), no_body();
+    c.route = Route::Mesh;
+    c.name = param(r, "path");
+    if (!is_mesh_name(c.name)) throw HttpError(400, quote(c.name) + " is not a mesh file (.obj, .off, .ply, .stl)");
+    check_relative_path(c.name);
+  } else if (p == "/api/landmarks" || p == "/api/seed-loop") {
+    const bool save = p == "/api/landmarks" && r.method != "GET";
+    if (p == "/api/seed-loop" || save) only("POST");
+    else no_body();
+    c.name = param(r, "name");
+    check_mesh_name(c.name);
+    c.route = p == "/api/seed-loop" ? Route::SeedLoop : save ? Route::SaveLandmarks : Route::GetLandmarks;
+    if (c.route != Route::GetLandmarks) check_landmark_body(parse_json_body(r, opt.max_json_bytes), c.route == Route::SeedLoop);
+  } else if (p == "/api/upload") {
+    only("POST");
+    c.route = Route::Upload;
+    auto it = r.query.find("name");
+    c.name = it != r.query.end() && !it->second.empty() ? it->second : r.body_file_name;
+    if (c.name.empty())
+      throw HttpError(400, "missing query parameter 'name' (the new file's name, e.g. /api/upload?name=horse.obj)");
+    check_mesh_name(c.name);
+    if (r.body_file.empty()) {
+      check_body_size(r.body.size(), opt.max_upload_bytes);
+      if (r.body.empty()) throw HttpError(400, "the upload is empty; expected the contents of a mesh file");
+    }
+  } else if (p == "/api/run") {
+    if (r.method == "GET") {
+      no_body();
+      c.route = Route::RunState;
+    } else {
+      only("POST");
+      check_body_size(r.body.size(), opt.max_json_bytes);
+      c.route = Route::StartRun;
+      c.run = parse_run_request(r.body, opt.max_meshes_per_run);
+    }
+  } else if (p == "/api/runs") {
+    only("GET"), no_body();
+    c.route = Route::Runs;
+  } else if (p.rfind("/files/", 0) == 0) {
+    only("GET"), no_body();
+    c.route = Route::File;
+    c.name = p.substr(7);
+    check_relative_path(c.name);
+    auto it = r.query.find("download");
+    c.download = it != r.query.end() && it->second == "1";
+  } else if (p.rfind("/api/", 0) == 0) {
+    throw HttpError(404, "no such API: " + printable(p, 100));
+  } else {
+    only("GET"), no_body();
+    c.route = Route::Page;
+    c.name = p;
+    if (p == "/" || p == "/index.html" || p == "/favicon.ico") {
+    } else if (p.rfind("/app/", 0) == 0 || p.rfind("/node_modules/three/", 0) == 0) {
+      check_relative_path(p.substr(1));
+    } else {
+      throw HttpError(404, "not found: " + printable(p, 100));
+    }
+  }
+  return c;
+}
+
+Studio::Studio(StudioOptions options) : opt_(std::move(options)) {
+  std::error_code ec;
+  if (!fs::exists(opt_.folder, ec)) throw IoError("folder " + quote(opt_.folder.string()) + " does not exist");
+  if (!fs::is_directory(opt_.folder, ec)) throw InvalidInput(quote(opt_.folder.string()) + " is not a folder");
+  root_ = fs::canonical(opt_.folder);
+  web_root_ = fs::exists(opt_.web_dir, ec) ? fs::canonical(opt_.web_dir) : opt_.web_dir;
+  clean_stale_staging();
+}
+
+Studio::~Studio() {
+  // A studio going away (stopped server, failed start) leaves no tool running.
+  stop_run();
+}
+
+namespace {
+
+bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+/// Removes the run staging folders (.run-N.partial) under runs/. \pre the folder lock is held.
+void remove_run_staging(const fs::path& root) {
+  std::error_code ec;
+  const fs::path runs = root / "runs";
+  const auto st = fs::symlink_status(runs, ec);
+  if (ec || !fs::is_directory(st)) return;
+  for (const auto& e : fs::directory_iterator(runs, ec)) {
+    const std::string n = e.path().filename().string();
+    if (starts_with(n, ".run-") && n.size() > 8 && n.compare(n.size() - 8, 8, ".partial") == 0 && !e.is_symlink())
+      fs::remove_all(e.path(), ec);
+  }
+}
+
+/// The folder's run lock (one run per folder across processes), or -1 when another holds it.
+int try_lock_folder(const fs::path& root) {
+  const int fd = open(root.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw IoError("cannot open the folder " + quote(root.string()));
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+}  // namespace
+
+void Studio::clean_stale_staging() {
+  std::error_code ec;
+  // Uploads in progress hold a lock on their file: only unlocked ones are left-overs.
+  for (const auto& e : fs::directory_iterator(root_, ec)) {
+    const std::string n = e.path().filename().string();
+    if (!starts_with(n, ".upload-") || e.is_symlink() || !e.is_regular_file()) continue;
+    const int fd = open(e.path().c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd < 0) continue;
+    if (flock(fd, LOCK_EX | LOCK_NB) == 0) fs::remove(e.path(), ec);
+    close(fd);
+  }
+  // Run staging of a killed studio: only when no run is going in this folder.
+  const int lock = try_lock_folder(root_);
+  if (lock >= 0) {
+    remove_run_staging(root_);
+    close(lock);
+  }
+}
+
+Studio::UploadFile::~UploadFile() {
+  if (fd_ < 0) return;
+  std::error_code ec;
+  fs::remove(path_, ec);  // still here unless the upload was moved into place
+  close(fd_);
+}
+
+Studio::UploadFile::UploadFile(UploadFile&& o) noexcept : path_(std::move(o.path_)), fd_(o.fd_), bytes_(o.bytes_) {
+  o.fd_ = -1;
+}
+
+void Studio::UploadFile::write(const char* data, size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd_, data, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw IoError("cannot write the upload into the studio's folder: " + std::string(std::strerror(errno)));
+    }
+    data += w, n -= static_cast<size_t>(w), bytes_ += static_cast<size_t>(w);
+  }
+}
+
+Studio::UploadFile Studio::new_upload_file(const std::string& extension) {
+  static std::atomic<unsigned long> counter{0};
+  std::string ext;
+  for (char c : extension)
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == '.') ext += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const fs::path path = root_ / (".upload-" + std::to_string(getpid()) + "-" + std::to_string(++counter) + ext.substr(0, 16));
+    const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
+    if (fd < 0) {
+      if (errno == EEXIST) continue;
+      throw IoError("cannot create a file for the upload in the studio's folder: " + std::string(std::strerror(errno)));
+    }
+    flock(fd, LOCK_EX);
+    return UploadFile(path, fd);
+  }
+  throw IoError("cannot create a file for the upload in the studio's folder");
+}
+
+void Studio::check_upload_target(const std::string& name) const {
+  check_mesh_name(name);
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(resolve_for_writing(root_, name), ec)))
+    throw HttpError(409, quote(name) + " exists already; the studio never replaces a mesh (rename the upload)");
+}
+
+BodyLimit Studio::body_limit(const std::string& method, const std::string& path) const {
+  if (method != "POST" && method != "PUT" && method != "PATCH" && method != "DELETE") return {0, false};
+  if (path == "/api/upload") return {opt_.max_upload_bytes, true};
+  return {opt_.max_json_bytes, false};  // JSON requests, and room for a 404/405 on anything else
+}
 
 void Studio::wait_for_run() {
   std::thread t;
@@ -407,6 +746,27 @@ void Studio::wait_for_run() {
   if (t.joinable()) t.join();
 }
 
+void Studio::stop_run() {
+  {
+    std::lock_guard lock(mutex_);
+    if (state_.status == "running") {
+      stop_requested_ = true;
+      if (child_ > 0) kill(child_, SIGTERM);
+    }
+  }
+  // The tools clean up after SIGTERM; one that does not end within 2 s is killed.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  for (;;) {
+    {
+      std::lock_guard lock(mutex_);
+      if (state_.status != "running") break;
+      if (std::chrono::steady_clock::now() > deadline && child_ > 0) kill(child_, SIGKILL);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  wait_for_run();
+}
+
 RunState Studio::run_state() const {
   std::lock_guard lock(mutex_);
   return state_;
@@ -414,9 +774,10 @@ RunState Studio::run_state() const {
 
 Response Studio::handle(const Request& request) {
   try {
-    return route(request);
+    const CheckedRequest checked = check_request(request, opt_);
+    return route(request, checked);
   } catch (const HttpError& e) {
-    return error_response(e.status, e.what());
+    return error_response(e.status(), e.what());
   } catch (const PathRefused& e) {
     return error_response(403, e.what());
   } catch (const InvalidInput& e) {
@@ -428,33 +789,22 @@ Response Studio::handle(const Request& request) {
   }
 }
 
-Response Studio::route(const Request& r) {
-  const std::string& p = r.path;
-  auto only = [&](const char* method) {
-    if (r.method != method)
-      throw HttpError(405, "method " + r.method + " is not allowed on " + p + "; use " + method);
-  };
-  if (p == "/api/meshes") return only("GET"), list_meshes();
-  if (p == "/api/mesh") return only("GET"), mesh_data(r);
-  if (p == "/api/landmarks") {
-    if (r.method == "GET") return get_landmarks(r);
-    return only("POST"), save_landmarks(r);
+Response Studio::route(const Request& r, const CheckedRequest& c) {
+  using Route = CheckedRequest::Route;
+  switch (c.route) {
+    case Route::Meshes: return list_meshes();
+    case Route::Mesh: return mesh_data(c.name);
+    case Route::GetLandmarks: return get_landmarks(c.name);
+    case Route::SaveLandmarks: return save_landmarks(c.name, r);
+    case Route::SeedLoop: return seed_loop(c.name, r);
+    case Route::Upload: return upload(c.name, r);
+    case Route::RunState: return json_response(state_json(run_state()));
+    case Route::StartRun: return start_run(c.run);
+    case Route::Runs: return runs();
+    case Route::File: return folder_file(c.name, c.download);
+    case Route::Page: return static_file(c.name);
   }
-  if (p == "/api/seed-loop") return only("POST"), seed_loop(r);
-  if (p == "/api/upload") return only("POST"), upload(r);
-  if (p == "/api/run") {
-    if (r.method == "GET") return json_response(state_json(run_state()));
-    return only("POST"), start_run(r);
-  }
-  if (p == "/api/runs") return only("GET"), runs();
-  if (p.rfind("/files/", 0) == 0) {
-    only("GET");
-    auto it = r.query.find("download");
-    return folder_file(p.substr(7), it != r.query.end() && it->second == "1");
-  }
-  if (p.rfind("/api/", 0) == 0) throw HttpError(404, "no such API: " + p);
-  only("GET");
-  return static_file(p);
+  throw HttpError(404, "not found");
 }
 
 Response Studio::static_file(const std::string& p) {
@@ -463,7 +813,7 @@ Response Studio::static_file(const std::string& p) {
   else if (p.rfind("/app/", 0) == 0) rel = p.substr(1);
   else if (p.rfind("/node_modules/three/", 0) == 0) rel = p.substr(1);
   else if (p == "/favicon.ico") return Response{204, "text/plain", "", {}, false};
-  else throw HttpError(404, "not found: " + p);
+  else throw HttpError(404, "not found: " + printable(p, 100));
   if (rel == "index.html" && !fs::exists(web_root_ / "node_modules/three/build/three.module.js")) {
     // The page cannot work without three.js: say so instead of a blank page.
     Response res;
@@ -498,6 +848,13 @@ Response Studio::list_meshes() {
   std::sort(names.begin(), names.end());
   json list = json::array();
   for (const auto& name : names) {
+    if (!json_strict::is_clean_text(name)) {
+      // Put there by other means: listed (so that it is not a mystery) under a printable name,
+      // but the page cannot name it back.
+      list.push_back({{"name", printable(name)}, {"read", false}, {"accepted", false}, {"problems", json::array()},
+                      {"summary", "cannot be used: the file name is not valid UTF-8 (rename the file)"}});
+      continue;
+    }
     fs::path file;
     try {
       file = resolve_existing(root_, name);
@@ -526,6 +883,16 @@ Response Studio::list_meshes() {
     }
     for (const auto& note : m->read.report.notes)
       problems.push_back({{"kind", "read_note"}, {"severity", "note"}, {"plain", note}, {"message", note}});
+    if (rep.accepted) {
+      double largest = 0;
+      for (const auto& p : m->valid.mesh.positions) largest = std::max(largest, p.cwiseAbs().maxCoeff());
+      if (largest > FLT_MAX) {
+        const std::string words = "coordinates up to " + json_strict::describe(json(largest)) +
+                                  " are beyond what the page can draw (3.4e38, single precision); the tools "
+                                  "take them, the views stay empty (scale the mesh down to see it)";
+        problems.push_back({{"kind", "viewer_range"}, {"severity", "note"}, {"plain", words}, {"message", words}});
+      }
+    }
     j["problems"] = problems;
     j["summary"] = rep.accepted ? "ready: a closed surface in one piece without handles (" +
                                       std::to_string(rep.vertices) + " vertices, " + std::to_string(rep.faces) +
@@ -550,40 +917,32 @@ Response Studio::list_meshes() {
   return json_response(json{{"folder", root_.filename().string()}, {"meshes", list}});
 }
 
-Response Studio::mesh_data(const Request& r) {
-  const std::string rel = param(r, "path");
-  if (!is_mesh_name(rel)) throw HttpError(400, "'" + rel + "' is not a mesh file (.obj, .off, .ply, .stl)");
+Response Studio::mesh_data(const std::string& rel) {
   const fs::path file = existing(root_, rel);
-  json positions = json::array(), faces = json::array();
-  auto put = [&](const TriMesh& m) {
-    for (const auto& p : m.positions)
-      for (int k = 0; k < 3; ++k) positions.push_back(static_cast<float>(p[k]));
-    const int n = m.num_vertices();
-    for (const auto& t : m.faces) {
-      if (t[0] < 0 || t[1] < 0 || t[2] < 0 || t[0] >= n || t[1] >= n || t[2] >= n) {
-        faces.push_back(0), faces.push_back(0), faces.push_back(0);  // keeps face ids; draws nothing
-        continue;
-      }
-      for (int k = 0; k < 3; ++k) faces.push_back(t[k]);
-    }
-  };
-  json out;
+  std::string out = "{\"path\":" + json_strict::dump(json(rel), -1) + ",";
   if (rel.size() > 10 && lower(rel.substr(rel.size() - 10)) == ".chart.ply") {
     const dissect::Chart chart = dissect::read_chart_ply(file);
-    put(chart.mesh);
-    out = {{"path", rel}, {"positions", positions}, {"faces", faces}, {"patch", chart.face_patch},
-           {"patches", chart.patches.size()}};
+    put_mesh(out, chart.mesh);
+    out += ",\"patch\":[";
+    for (size_t i = 0; i < chart.face_patch.size(); ++i) {
+      if (i) out += ',';
+      put_int(out, chart.face_patch[i]);
+    }
+    out += "],\"patches\":";
+    put_int(out, static_cast<long long>(chart.patches.size()));
   } else {
     auto m = load_mesh(file);
     if (!m->read_ok) throw HttpError(400, m->read_error);
-    put(m->read.mesh);
-    out = {{"path", rel}, {"positions", positions}, {"faces", faces}, {"accepted", m->valid.report.accepted}};
+    put_mesh(out, m->read.mesh);
+    out += std::string(",\"accepted\":") + (m->valid.report.accepted ? "true" : "false");
   }
-  return json_response(out);
+  out += '}';
+  Response res;
+  res.body = std::move(out);
+  return res;
 }
 
-Response Studio::get_landmarks(const Request& r) {
-  const std::string name = param(r, "name");
+Response Studio::get_landmarks(const std::string& name) {
   auto m = accepted_mesh(root_, name);
   const fs::path file = existing(root_, name);
   json out = {{"file", nullptr}, {"seeds", json::array()}, {"features", json::array()}};
@@ -595,29 +954,20 @@ Response Studio::get_landmarks(const Request& r) {
   return json_response(out);
 }
 
-Response Studio::save_landmarks(const Request& r) {
-  const std::string name = param(r, "name");
+Response Studio::save_landmarks(const std::string& name, const Request& r) {
   auto m = accepted_mesh(root_, name);
-  const json j = parse_json_body(r, opt_.max_json_bytes);
-  if (!j.is_object()) throw HttpError(400, "landmarks must be a JSON object {\"seeds\": [...], \"features\": {...}}");
-  for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key() != "seeds" && it.key() != "features")
-      throw HttpError(400, "unknown key \"" + it.key() + "\" in the landmarks; expected seeds and features");
+  const json j = parse_json_body(r, opt_.max_json_bytes);  // its shape was checked by check_request
   const std::string target = fs::path(name).stem().string() + ".landmarks.json";
   // The same reader qs-dissect uses: what it refuses is refused here, before anything is written.
   const auto lm = landmarks::parse_landmarks(r.body, landmarks::LandmarkFormat::Json, target, m->valid);
   std::lock_guard lock(write_mutex_);
   const fs::path out = resolve_for_writing(root_, target);
-  write_file_atomically(out, j.dump(2) + "\n");
+  write_file_atomically(out, json_strict::dump(j, 2) + "\n");
   return json_response(json{{"file", target}, {"seeds", lm.seeds.size()}, {"features", lm.features.size()}});
 }
 
-Response Studio::seed_loop(const Request& r) {
-  const std::string name = param(r, "name");
+Response Studio::seed_loop(const std::string& name, const Request& r) {
   auto m = accepted_mesh(root_, name);
-  const json j = parse_json_body(r, opt_.max_json_bytes);
-  if (!j.is_object() || !j.contains("seeds"))
-    throw HttpError(400, "expected {\"seeds\": [4 references], \"features\": {...}}");
   const auto lm = landmarks::parse_landmarks(r.body, landmarks::LandmarkFormat::Json, name + " (seed loop)", m->valid);
   if (lm.seeds.size() != 4) throw HttpError(400, "the seed loop needs 4 seeds");
   PointInserter ins(m->valid.mesh);
@@ -649,35 +999,50 @@ Response Studio::seed_loop(const Request& r) {
   return json_response(json{{"paths", paths}, {"length", length}});
 }
 
-Response Studio::upload(const Request& r) {
-  const std::string name = param(r, "name");
-  check_mesh_name(name);
-  if (r.body.size() > opt_.max_upload_bytes)
-    throw HttpError(413, "upload of " + std::to_string(r.body.size()) + " bytes; at most " +
-                             std::to_string(opt_.max_upload_bytes) + " are accepted");
-  if (r.body.empty()) throw HttpError(400, "the upload is empty; expected the contents of a mesh file");
-  std::lock_guard lock(write_mutex_);
+Response Studio::upload(const std::string& name, const Request& r) {
+  const std::string ext = lower(fs::path(name).extension().string());
+  std::optional<UploadFile> held;  // a body given in memory goes through a file too
+  fs::path staged = r.body_file;
+  if (staged.empty()) {
+    held.emplace(new_upload_file(ext));
+    held->write(r.body.data(), r.body.size());
+    staged = held->path();
+  }
+  std::error_code ec;
+  const uintmax_t bytes = fs::file_size(staged, ec);
+  if (ec) throw IoError("the upload's file is gone from the studio's folder");
+  if (bytes == 0) throw HttpError(400, "the upload is empty; expected the contents of a mesh file");
+  if (bytes > opt_.max_upload_bytes)
+    throw HttpError(413, "upload of " + std::to_string(bytes) + " bytes; at most " + std::to_string(opt_.max_upload_bytes) +
+                             " are accepted");
+  check_upload_target(name);
   const fs::path out = resolve_for_writing(root_, name);
-  if (fs::exists(fs::symlink_status(out)))
-    throw HttpError(409, "'" + name + "' exists already; the studio never replaces a mesh (rename the upload)");
   try {
-    (void)io::read_mesh_from_memory(r.body, io::format_from_path(name), name);
+    std::string bytes_read(static_cast<size_t>(bytes), '\0');
+    {
+      std::ifstream in(staged, std::ios::binary);
+      if (!in.read(bytes_read.data(), static_cast<std::streamsize>(bytes)))
+        throw IoError("cannot read the upload back from the studio's folder");
+    }
+    (void)io::read_mesh_from_memory(bytes_read, io::format_from_path(name), name);
   } catch (const InvalidInput& e) {
     throw HttpError(400, std::string("not a mesh file: ") + e.what());
   }
-  write_file_atomically(out, r.body);
-  return json_response(json{{"file", name}, {"bytes", r.body.size()}}, 201);
+  std::lock_guard lock(write_mutex_);
+  // Moved into place only if nothing has that name (never replaces, never follows a link).
+  if (renameat2(AT_FDCWD, staged.c_str(), AT_FDCWD, out.c_str(), RENAME_NOREPLACE) != 0) {
+    if (errno == EEXIST)
+      throw HttpError(409, quote(name) + " exists already; the studio never replaces a mesh (rename the upload)");
+    throw IoError("cannot move the upload into place as " + quote(name) + ": " + std::strerror(errno));
+  }
+  return json_response(json{{"file", name}, {"bytes", bytes}}, 201);
 }
 
-Response Studio::start_run(const Request& r) {
-  if (r.body.size() > opt_.max_json_bytes)
-    throw HttpError(413, "request body of " + std::to_string(r.body.size()) + " bytes; at most " +
-                             std::to_string(opt_.max_json_bytes) + " are accepted here");
-  RunRequest req = parse_run_request(r.body, opt_.max_meshes_per_run);
+Response Studio::start_run(RunRequest req) {
   for (const auto& m : req.meshes) (void)existing(root_, m);
   for (const char* tool : {"qs-dissect", "qs-remesh", "qs-bake", "qs-morph"})
     if (access((opt_.tools_dir / tool).c_str(), X_OK) != 0)
-      throw HttpError(500, std::string(tool) + " not found in " + opt_.tools_dir.string() +
+      throw HttpError(500, std::string(tool) + " not found in " + printable(opt_.tools_dir.string()) +
                                " (build it, or start qs-studio with --tools DIR)");
   {
     // Runs are written under FOLDER/runs: never through a link (it could point out of the folder).
@@ -691,23 +1056,16 @@ Response Studio::start_run(const Request& r) {
   if (state_.status == "running")
     throw HttpError(409, "a run (" + state_.name + ") is already going in this folder; wait until it ends");
   // One run per folder across processes too: an exclusive lock on the folder itself.
-  const int fd = open(root_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) throw IoError("cannot open the folder " + root_.string());
-  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    close(fd);
-    throw HttpError(409, "another qs-studio is running a job in this folder; wait until it ends");
-  }
-  int next = 1;
-  std::error_code ec;
-  if (fs::is_directory(root_ / "runs", ec))
-    for (const auto& e : fs::directory_iterator(root_ / "runs"))
-      next = std::max(next, run_number(e.path().filename().string()) + 1);
-  const std::string name = "run-" + std::to_string(next);
+  const int fd = try_lock_folder(root_);
+  if (fd < 0) throw HttpError(409, "another qs-studio is running a job in this folder; wait until it ends");
+  remove_run_staging(root_);  // left by a killed studio (nobody else can be running: we hold the lock)
   if (worker_.joinable()) worker_.join();  // the previous run's thread has finished (status is not running)
   state_ = RunState{};
-  state_.name = name;
+  state_.name = next_run_name(run_folder_names(root_));
   state_.status = "running";
   state_.meshes = req.meshes;
+  stop_requested_ = false;
+  const std::string name = state_.name;
   worker_ = std::thread(&Studio::run_thread, this, std::move(req), name, fd);
   return json_response(json{{"name", name}, {"status", "running"}}, 202);
 }
@@ -771,6 +1129,10 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       std::string stage_out;
       size_t scanned = 0;
       const std::string prefix = stages[i].tool + ": ";
+      {
+        std::lock_guard lock(mutex_);
+        if (stop_requested_) throw InvalidInput("stopped (the studio is shutting down)");
+      }
       const int code = spawn_and_wait(argv, staging, [&](const std::string& s) {
         stage_out += s;
         // Whole lines go to the log, except progress lines ("qs-dissect: quinary subdivision
@@ -791,6 +1153,13 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
             append(line + "\n");
           }
         }
+      }, [&](pid_t pid) {
+        std::lock_guard lock(mutex_);
+        child_ = pid;
+        if (stop_requested_) kill(pid, SIGTERM);
+      }, [&] {
+        std::lock_guard lock(mutex_);
+        child_ = 0;
       });
       if (scanned < stage_out.size()) append(stage_out.substr(scanned) + "\n");  // a last line without '\n'
       std::lock_guard lock(mutex_);
@@ -818,12 +1187,27 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       json st = json::array();
       for (const auto& s : stages) st.push_back({{"tool", s.tool}, {"args", s.args}});
       j["stages"] = st;
-      write_file_atomically(staging / "run.json", j.dump(2) + "\n");
-      fs::rename(staging, runs_dir / name);
+      // The final name: claimed with a rename that never replaces; a run-N made meanwhile (by hand)
+      // moves this run to the next free number.
+      std::string final_name = name;
+      for (int attempt = 0;; ++attempt) {
+        j["name"] = final_name;
+        write_file_atomically(staging / "run.json", json_strict::dump(j, 2) + "\n");
+        if (renameat2(AT_FDCWD, staging.c_str(), AT_FDCWD, (runs_dir / final_name).c_str(), RENAME_NOREPLACE) == 0) break;
+        if ((errno != EEXIST && errno != ENOTEMPTY) || attempt >= 100)
+          throw IoError("cannot move the run into place as runs/" + final_name + ": " + std::strerror(errno));
+        final_name = next_run_name(run_folder_names(root_));
+      }
+      std::lock_guard lock(mutex_);
+      state_.name = final_name;
     }
   } catch (const std::exception& e) {
     ok = false;
     error = std::string("the run could not be carried out: ") + e.what();
+  }
+  {
+    std::lock_guard lock(mutex_);
+    if (!ok && stop_requested_) error = "stopped: the studio was shut down during the run (nothing was kept)";
   }
   if (!ok) {
     // A failed run leaves the folder as it was.
@@ -843,22 +1227,21 @@ Response Studio::runs() {
   std::error_code ec;
   const fs::path dir = root_ / "runs";
   if (fs::is_directory(dir, ec) && !fs::is_symlink(dir, ec)) {
-    std::vector<std::pair<int, std::string>> names;
-    for (const auto& e : fs::directory_iterator(dir)) {
+    std::vector<std::pair<std::string, std::string>> names;  // number, name
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
       const std::string n = e.path().filename().string();
-      const int k = run_number(n);
-      if (k >= 0 && e.is_directory() && !e.is_symlink()) names.emplace_back(k, n);
+      const std::string k = run_number(n);
+      if (!k.empty() && e.is_directory() && !e.is_symlink()) names.emplace_back(k, n);
     }
-    std::sort(names.begin(), names.end());
+    std::sort(names.begin(), names.end(), [](const auto& a, const auto& b) {
+      return number_less(a.first, b.first) || (a.first == b.first && a.second < b.second);
+    });
     for (const auto& [k, n] : names) {
       json run = {{"name", n}, {"files", list_files(root_, dir / n)}};
-      std::ifstream in(dir / n / "run.json");
-      if (in) {
-        try {
-          run["run"] = json::parse(in);
-        } catch (const json::parse_error&) {
-          run["run"] = nullptr;
-        }
+      try {
+        run["run"] = json_strict::parse(json_strict::read_text_file(dir / n / "run.json", "run file"), n + "/run.json");
+      } catch (const Error&) {
+        run["run"] = nullptr;
       }
       list.push_back(run);
     }

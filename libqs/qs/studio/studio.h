@@ -14,14 +14,16 @@
 //                                   writes <stem>.landmarks.json atomically
 //   POST /api/seed-loop?name=M      the seed loop qs-dissect would route for the body's seeds and
 //                                   features: four polylines of 3D points
-//   POST /api/upload?name=F         a new mesh file (must parse as its extension says; never
-//                                   replaces a file)
+//   POST /api/upload?name=F         a new mesh file: the raw body, or one file of a multipart form
+//                                   (F defaults to its file name); must parse as its extension says;
+//                                   never replaces a file
 //   POST /api/run                   starts a run (dissect, remesh, bake, morph) in the background
 //   GET  /api/run                   the current or last run: stage, progress, log, error
 //   GET  /api/runs                  the finished runs with their files
 //   GET  /files/P                   any file of the folder (downloads, GLBs for the viewer)
-// Errors are JSON {"error": message} with 400 (bad request), 404 (not found), 405, 409 (a run is
-// going, a file exists), 413 (too large) or 500 (a bug).
+// Errors are JSON {"error": message} with 400 (bad request), 403 (a path rule), 404 (not found),
+// 405, 409 (a run is going, a file exists), 413 (too large) or 500 (a bug, or a missing tool;
+// never for a malformed request). Messages quote request text only as short, printable excerpts.
 
 #include <atomic>
 #include <filesystem>
@@ -31,6 +33,10 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <sys/types.h>
+
+#include "qs/core/error.h"
 
 namespace qs::studio {
 
@@ -48,6 +54,28 @@ struct Request {
   std::string path;    ///< decoded URL path, e.g. "/api/mesh"
   std::map<std::string, std::string> query;
   std::string body;
+  /// An upload streamed to disk by the server (a file from Studio::new_upload_file()) instead of
+  /// `body`; handle() moves it into place when it is accepted, its UploadFile removes it otherwise.
+  std::filesystem::path body_file;
+  std::string body_file_name;  ///< the file name a multipart form gave for it (used when ?name= is absent)
+};
+
+/// A refusal with its HTTP status (4xx: the request; 5xx: the server's own state).
+class HttpError : public Error {
+ public:
+  HttpError(int status, const std::string& message)
+      : Error(status < 500 ? ErrorCode::InvalidInput : ErrorCode::Internal, message), status_(status) {}
+  int status() const { return status_; }
+
+ private:
+  int status_;
+};
+
+/// The request bodies a route accepts, from its method and path alone (checked from the headers
+/// before any byte of the body is read).
+struct BodyLimit {
+  size_t bytes = 0;     ///< the largest body accepted (413 beyond)
+  bool upload = false;  ///< a mesh upload: streamed to a file, raw or multipart/form-data
 };
 
 struct Response {
@@ -66,6 +94,17 @@ struct RunRequest {
   int bake_size = 128;              ///< qs-bake --size (16..2048)
   double max_area = 0.15;           ///< qs-dissect --max-area (0: off; 0.15 is its default)
   bool morph = true;                ///< qs-morph GLB when there are two meshes or more
+};
+
+/// A request checked without touching the file system: the route, its names (path syntax, mesh
+/// names, UTF-8), the body's size and, for JSON bodies, strict JSON (depth, duplicate keys, finite
+/// numbers, integer ranges, known keys). Studio::handle checks every request this way first.
+struct CheckedRequest {
+  enum class Route { Page, Meshes, Mesh, GetLandmarks, SaveLandmarks, SeedLoop, Upload, RunState, StartRun, Runs, File };
+  Route route = Route::Page;
+  std::string name;       ///< mesh name (landmarks, seed loop, upload), relative path (mesh, file), URL path (page)
+  bool download = false;  ///< GET /files/P?download=1
+  RunRequest run;         ///< POST /api/run
 };
 
 /// One stage of a run: a tool and its arguments.
@@ -97,20 +136,55 @@ class Studio {
 
   Response handle(const Request& request);
 
+  /// A new, empty, exclusively locked file in the folder to stream an upload into (hidden, never
+  /// listed or served; `extension` keeps the format); removed by its destructor unless handle()
+  /// took it. Left-over ones of a killed studio are removed when the next one starts.
+  class UploadFile {
+   public:
+    ~UploadFile();
+    UploadFile(UploadFile&&) noexcept;
+    UploadFile& operator=(UploadFile&&) = delete;
+    /// Appends bytes. \throws IoError (disk full ...).
+    void write(const char* data, size_t n);
+    size_t bytes() const { return bytes_; }
+    const std::filesystem::path& path() const { return path_; }
+
+   private:
+    friend class Studio;
+    UploadFile(std::filesystem::path path, int fd) : path_(std::move(path)), fd_(fd) {}
+    std::filesystem::path path_;
+    int fd_ = -1;
+    size_t bytes_ = 0;
+  };
+  UploadFile new_upload_file(const std::string& extension);
+
+  /// Refuses (HttpError 409, PathRefused) an upload name that is taken or cannot be written, so
+  /// that the server can say so before it reads the body. The upload checks again when it ends.
+  void check_upload_target(const std::string& name) const;
+
+  /// The body limit of a route (for the server, before it reads a body).
+  BodyLimit body_limit(const std::string& method, const std::string& path) const;
+
+  /// Stops the run in progress: its tool gets SIGTERM (SIGKILL after 2 s), the run ends "failed"
+  /// with nothing left in runs/. For shutdown.
+  void stop_run();
+
   const std::filesystem::path& folder() const { return root_; }
+  const StudioOptions& options() const { return opt_; }
   /// Blocks until the current run (if any) has finished. For tests and shutdown.
   void wait_for_run();
   RunState run_state() const;
 
  private:
-  Response route(const Request& request);
+  Response route(const Request& request, const CheckedRequest& checked);
   Response list_meshes();
-  Response mesh_data(const Request& request);
-  Response get_landmarks(const Request& request);
-  Response save_landmarks(const Request& request);
-  Response seed_loop(const Request& request);
-  Response upload(const Request& request);
-  Response start_run(const Request& request);
+  Response mesh_data(const std::string& rel);
+  Response get_landmarks(const std::string& name);
+  Response save_landmarks(const std::string& name, const Request& request);
+  Response seed_loop(const std::string& name, const Request& request);
+  Response upload(const std::string& name, const Request& request);
+  Response start_run(RunRequest request);
+  void clean_stale_staging();
   Response runs();
   Response static_file(const std::string& path);
   Response folder_file(const std::string& rel, bool download);
@@ -122,10 +196,23 @@ class Studio {
   std::mutex write_mutex_;  ///< one landmark save or upload at a time (their temporary names are per process)
   RunState state_;
   std::thread worker_;
+  pid_t child_ = 0;           ///< the running tool (guarded by mutex_)
+  bool stop_requested_ = false;
 };
 
 /// Parses and checks POST /api/run's body. \throws InvalidInput naming the field.
 RunRequest parse_run_request(const std::string& json, int max_meshes);
+
+/// The checks of CheckedRequest. Pure (no file system, no state). \throws HttpError (4xx),
+/// PathRefused (403) or InvalidInput (400) with a printable message; never anything else.
+CheckedRequest check_request(const Request& request, const StudioOptions& options);
+
+/// The run folder name after the given ones: "run-" + (largest number + 1), for numbers of any
+/// length (decimal strings, never overflowing); names that are not run-<digits> are ignored.
+std::string next_run_name(const std::vector<std::string>& existing);
+/// The number of a run folder name as a decimal string without leading zeros, or "" when the name
+/// is not run-<digits>. Runs sort by (length, string) of this.
+std::string run_number(const std::string& name);
 
 /// The person-readable summary of a mesh's validation, e.g. "ready: a closed surface in one piece
 /// without handles" or "rejected: the surface has holes (it is not closed)".
