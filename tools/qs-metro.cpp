@@ -9,7 +9,13 @@
 // --correspondence DIR: a qs-dissect folder measured against ground truth (map files, or identical
 // face lists): qs::correspondence, docs/correspondence.md. Exit 2 also for meshes without a
 // common domain or a map of another mesh.
+//
+// Outputs: -o is written under a temporary name and renamed; the --error-map folder is staged
+// and moved into place only after every pair was measured and the report written. An output
+// that is one of the run's inputs (a mesh, a map file, the dissection's charts or its
+// dissection.json) is a usage error.
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -23,10 +29,12 @@
 #include "qs/correspondence/correspondence.h"
 #include "qs/dissect/dissection_json.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/core/output_folder.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
+#include "dissection_names.h"
 #include "tool_main.h"
 
 namespace {
@@ -143,13 +151,35 @@ nlohmann::json json_report(const Input& a, const Input& b, const qs::metro::Metr
 /// A mesh file named in dissection.json: as written (relative to the working folder), else
 /// relative to the dissection folder or its parent, else its file name in either.
 std::filesystem::path find_mesh(const std::string& file, const std::filesystem::path& folder) {
-  namespace fs = std::filesystem;
-  const fs::path name = fs::path(file).filename();
-  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file, folder / name,
-                            folder.parent_path() / name})
-    if (fs::exists(p)) return p;
-  throw qs::IoError(file + ": mesh of the dissection " + folder.string() +
-                    " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)");
+  const auto found = qs::tools::dissected_mesh_candidates(file, folder);
+  if (!found.empty()) return found.front();
+  const bool lossy = file.find("\xEF\xBF\xBD") != std::string::npos;  // U+FFFD
+  throw qs::IoError(qs::json_strict::printable(file) + ": mesh of the dissection " +
+                    qs::json_strict::printable(folder.string()) +
+                    " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)" +
+                    (lossy ? "; its path was not UTF-8, which dissection.json (JSON) cannot hold, so it holds U+FFFD "
+                             "in place of those bytes: put the mesh in or beside the dissection folder, or give it a "
+                             "UTF-8 path and dissect it again"
+                           : ""));
+}
+
+/// The report file of -o, opened (under a temporary name) before any work so that an output that
+/// cannot be written is found first; committed last.
+void open_report(const std::optional<std::string>& output, std::optional<qs::AtomicFile>& file) {
+  std::error_code ec;
+  if (output && std::filesystem::is_directory(*output, ec))
+    throw qs::IoError(*output + ": is a folder; -o names the report file");
+  if (output) file.emplace(*output);
+}
+
+/// Writes the report into the file of open_report (flushed: a full disk shows here), or to stdout.
+void write_report(std::optional<qs::AtomicFile>& file, const std::optional<std::string>& output,
+                  const std::string& report) {
+  if (!file) {
+    std::cout << report;
+    return;
+  }
+  if (!(file->stream() << report).flush()) throw qs::IoError(*output + ": cannot write the report");
 }
 
 nlohmann::json stats_json(const qs::correspondence::ErrorStats& s) {
@@ -185,25 +215,53 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                        const std::optional<std::string>& output, const ErrorMapOptions& error_map) {
   namespace fs = std::filesystem;
   const fs::path folder(folder_name);
-  const qs::dissect::LoadedDissection loaded = qs::dissect::read_dissection(folder);
+  const qs::dissect::LoadedDissection loaded = qs::tools::read_dissection_folder(folder);
   const int n = static_cast<int>(loaded.meshes.size());
   if (n < 2) throw qs::InvalidInput(folder_name + ": the dissection holds 1 mesh; a correspondence needs 2 or more");
   if (!maps.empty() && static_cast<int>(maps.size()) != n)
     throw qs::UsageError("--map: " + std::to_string(maps.size()) + " files given for " + std::to_string(n) +
                          " meshes (one per mesh in the dissection's order, '-' for a mesh without a map)");
-  std::vector<qs::correspondence::TruthMesh> truth_meshes;
-  std::vector<std::string> map_used;
+  // Every input first (the dissection's files, the meshes and their maps), checked against the
+  // outputs before anything is read further or written.
+  std::vector<fs::path> mesh_files, input_paths = {folder / "dissection.json"};
+  std::vector<std::optional<fs::path>> map_files;
   for (int i = 0; i < n; ++i) {
-    const fs::path mesh_file = find_mesh(loaded.meshes[i].file, folder);
+    input_paths.push_back(folder / loaded.meshes[i].chart_file);
+    mesh_files.push_back(find_mesh(loaded.meshes[i].file, folder));
+    input_paths.push_back(mesh_files.back());
     std::optional<fs::path> map;
     if (!maps.empty()) {
       if (maps[i] != "-") map = maps[i];
     } else {
-      const fs::path beside = mesh_file.parent_path() / (mesh_file.stem().string() + ".map.json");
+      const fs::path beside = mesh_files.back().parent_path() / (mesh_files.back().stem().string() + ".map.json");
       if (fs::exists(beside)) map = beside;
     }
-    truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_file, map));
-    map_used.push_back(map ? map->string() : "");
+    if (map) input_paths.push_back(*map);
+    map_files.push_back(map);
+  }
+  if (output) qs::check_not_an_input(*output, input_paths, "-o");
+  // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal).
+  std::vector<std::string> stems(n);
+  if (error_map.folder) {
+    for (int i = 0; i < n; ++i) stems[i] = mesh_files[i].stem().string();
+    bool unique = true;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) unique = unique && stems[i] != stems[j];
+    if (!unique)
+      for (int i = 0; i < n; ++i) stems[i] = std::to_string(i) + "_" + stems[i];
+    std::vector<fs::path> taken = input_paths;
+    if (output) taken.push_back(*output);
+    for (int b = 1; b < n; ++b)
+      qs::check_not_an_input(fs::path(*error_map.folder) / (stems[0] + "_to_" + stems[b] + ".error.ply"), taken,
+                             "--error-map");
+  }
+  std::optional<qs::AtomicFile> report_file;
+  open_report(output, report_file);
+  std::vector<qs::correspondence::TruthMesh> truth_meshes;
+  std::vector<std::string> map_used;
+  for (int i = 0; i < n; ++i) {
+    truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_files[i], map_files[i]));
+    map_used.push_back(map_files[i] ? map_files[i]->string() : "");
   }
   const qs::correspondence::GroundTruth truth(std::move(truth_meshes));
   std::vector<qs::correspondence::DissectedInput> inputs(n);
@@ -217,19 +275,10 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   mo.level = level;
   mo.threads = threads;
   mo.vertex_errors = error_map.folder.has_value() || error_map.worst > 0;
-  // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal),
-  // staged and moved into the folder only when every pair has been measured and written.
+  // The error maps are staged and moved into the folder only when every pair has been measured
+  // and the report written.
   std::optional<qs::OutputFolder> map_folder;
-  std::vector<std::string> stems(n);
-  if (error_map.folder) {
-    map_folder.emplace(*error_map.folder);
-    for (int i = 0; i < n; ++i) stems[i] = fs::path(truth.mesh(i).name).stem().string();
-    bool unique = true;
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) unique = unique && stems[i] != stems[j];
-    if (!unique)
-      for (int i = 0; i < n; ++i) stems[i] = std::to_string(i) + "_" + stems[i];
-  }
+  if (error_map.folder) map_folder.emplace(*error_map.folder);
   std::ostringstream text;
   nlohmann::json pairs = nlohmann::json::array();
   text << "qs-metro: correspondence of " << folder_name << " (" << n << " meshes, "
@@ -327,16 +376,18 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
       pairs.back()["worst_vertices"] = list;
     }
   }
-  if (map_folder) map_folder->commit();
   nlohmann::json doc = {{"dissection", folder_name},
                         {"meshes", n},
                         {"patches", loaded.meshes[0].dissection.chart.patches.size()},
                         {"seed", seed},
                         {"level", level},
                         {"pairs", pairs}};
-  const std::string report = as_json ? doc.dump(2) + "\n" : text.str();
-  if (output) qs::write_file_atomically(*output, report);
-  else std::cout << report;
+  // Names that are not UTF-8 (the folder, a mesh, a map file) become U+FFFD in JSON.
+  const std::string report = as_json ? qs::json_strict::dump(doc, 2) + "\n" : text.str();
+  write_report(report_file, output, report);
+  // Everything is measured and written: now the error maps, then the report, move into place.
+  if (map_folder) map_folder->commit();
+  if (report_file) report_file->commit();
   return 0;
 }
 
@@ -399,6 +450,10 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
 
   return qs::tools::run_tool(app, argc, argv, [&] {
+    // CLI11's PositiveNumber lets NaN and infinity through.
+    if (!std::isfinite(error_map.scale))
+      throw qs::UsageError("--error-scale " + std::to_string(error_map.scale) +
+                           " is not a finite positive number (the error in % of B's diagonal drawn red)");
     if (samples > max_samples)
       throw qs::UsageError("--samples " + std::to_string(samples) + " is more than --max-samples " +
                            std::to_string(max_samples) + " (the time grows linearly with the count); raise "
@@ -415,6 +470,8 @@ int main(int argc, char** argv) {
     if (level != 0) throw qs::UsageError("--level needs --correspondence");
     if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");
     if (output) qs::check_not_an_input(*output, {file_a, file_b}, "-o");
+    std::optional<qs::AtomicFile> report_file;
+  open_report(output, report_file);
     const Input a = load(file_a, "A");
     const Input b = load(file_b, "B");
     qs::metro::MetroOptions opt;
@@ -428,9 +485,9 @@ int main(int argc, char** argv) {
     } catch (const qs::InvalidInput& e) {  // the library names the meshes "A" and "B"
       throw qs::InvalidInput(std::string(e.what()) + " (A = " + a.file + ", B = " + b.file + ")");
     }
-    const std::string report = as_json ? json_report(a, b, r, seed).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n" : text_report(a, b, r);
-    if (output) qs::write_file_atomically(*output, report);
-    else std::cout << report;
+    const std::string report = as_json ? qs::json_strict::dump(json_report(a, b, r, seed), 2) + "\n" : text_report(a, b, r);
+    write_report(report_file, output, report);
+    if (report_file) report_file->commit();
     return 0;
   });
 }

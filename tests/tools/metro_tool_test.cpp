@@ -172,3 +172,20 @@ TEST_F(MetroTool, ExitCodesForUsageIoAndInvalidInput) {
   EXPECT_THAT(flat.out, HasSubstr("A: every face has zero area"));
   EXPECT_THAT(flat.out, HasSubstr("A = " + (dir_ / "flat.off").string()));
 }
+
+// -o is opened before any work: a report that cannot be written (a folder, a missing folder) is
+// an i/o error without measuring; a report that is an input is a usage error.
+TEST_F(MetroTool, AReportThatCannotBeWrittenFailsBeforeMeasuring) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(2));
+  const std::string b = write("b.obj", scaled(qs::shapes::icosphere(2), 1.1));
+  RunResult r = run(a + " " + b + " -o " + dir_.string());
+  EXPECT_EQ(r.exit, 3) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is a folder"));
+  r = run(a + " " + b + " -o " + (dir_ / "nodir" / "r.txt").string());
+  EXPECT_EQ(r.exit, 3) << r.out;
+  r = run(a + " " + b + " -o " + (dir_ / "." / "b.obj").string());
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is an input of this run"));
+  // Only the inputs are left.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
+}
