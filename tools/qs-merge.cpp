@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
       };
       ia = index(pair.substr(0, comma));
       ib = index(pair.substr(comma + 1));
-      if (ia == ib) throw qs::InvalidInput("--pair names '" + stems[ia] + "' twice; merge two different meshes");
+      if (ia == ib) throw qs::UsageError("--pair names '" + stems[ia] + "' twice; merge two different meshes");
     } else if (in.meshes.size() != 2) {
       throw qs::InvalidInput(folder + ": a dissection of " + std::to_string(in.meshes.size()) +
                              " meshes (" + known() + "); qs-merge merges exactly two: name them with --pair A,B");

@@ -15,8 +15,10 @@
 // that is one of the run's inputs (a mesh, a map file, the dissection's charts or its
 // dissection.json) is a usage error.
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -424,10 +426,9 @@ int main(int argc, char** argv) {
   app.add_option("--error-map", error_map.folder,
                  "With --correspondence: also write, per pair, A's mesh with each vertex's error (and the "
                  "baseline's) as a coloured PLY into this folder: <A>_to_<B>.error.ply");
-  app.add_option("--error-scale", error_map.scale,
+  auto* error_scale = app.add_option("--error-scale", error_map.scale,
                  "With --error-map: the error (% of B's diagonal) drawn red (default: each pair's largest vertex "
-                 "error)")
-      ->check(CLI::PositiveNumber);
+                 "error)");
   app.add_option("--worst", error_map.worst,
                  "With --correspondence: also list, per pair, A's N vertices with the largest error (position, "
                  "error, the baseline's error, A's patch and the patch of the exact image on B), 0..1000")
@@ -435,8 +436,18 @@ int main(int argc, char** argv) {
   app.add_option("--samples", samples,
                  "Surface samples per direction (default: max(100000, 2 x the larger face count)); with "
                  "--correspondence: points on A per pair (default 100000)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--seed", seed, "Seed of the sampling (the same seed gives the same numbers)");
+      ->check(CLI::Range(1L, std::numeric_limits<long>::max()));
+  app.add_option("--seed", seed, "Seed of the sampling, 0..18446744073709551615 (the same seed gives the same numbers)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            // CLI11 reads "-1" into an unsigned as 2^64 - 1: only plain digits in range are seeds.
+            std::uint64_t value = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+            if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+              return text + " is not a whole number in 0..18446744073709551615";
+            return {};
+          },
+          "UINT64"));
   app.add_flag("--no-vertices", no_vertices, "Do not measure at the vertices (surface samples only)");
   app.add_flag("--json", as_json, "Print a JSON object instead of text");
   app.add_option("-o,--output", output, "Write the report to this file instead of stdout");
@@ -447,12 +458,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-samples", max_samples,
                  "Refuse a --samples count above this up front (the run time grows linearly with it)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1L, std::numeric_limits<long>::max()));
 
   return qs::tools::run_tool(app, argc, argv, [&] {
-    // CLI11's PositiveNumber lets NaN and infinity through.
-    if (!std::isfinite(error_map.scale))
-      throw qs::UsageError("--error-scale " + std::to_string(error_map.scale) +
+    if (error_scale->count() && !(std::isfinite(error_map.scale) && error_map.scale > 0))
+      throw qs::UsageError("--error-scale " + error_scale->as<std::string>() +
                            " is not a finite positive number (the error in % of B's diagonal drawn red)");
     if (samples > max_samples)
       throw qs::UsageError("--samples " + std::to_string(samples) + " is more than --max-samples " +
@@ -461,10 +471,10 @@ int main(int argc, char** argv) {
     if (correspondence) {
       if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
       if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
-      if (error_map.scale > 0 && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
+      if (error_scale->count() && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
       return run_correspondence(*correspondence, maps, samples, seed, level, threads, as_json, output, error_map);
     }
-    if (error_map.folder || error_map.scale > 0 || error_map.worst > 0)
+    if (error_map.folder || error_scale->count() || error_map.worst > 0)
       throw qs::UsageError("--error-map, --error-scale and --worst need --correspondence");
     if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
     if (level != 0) throw qs::UsageError("--level needs --correspondence");
