@@ -18,9 +18,9 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -264,6 +264,16 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   for (int i = 0; i < n; ++i) {
     truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_files[i], map_files[i]));
     map_used.push_back(map_files[i] ? map_files[i]->string() : "");
+    // A "surface" map's reference mesh (relative to the map file's folder) is an input too.
+    const auto& map = truth_meshes.back().map;
+    if (map && map->domain == qs::family::MapDomain::Surface) {
+      fs::path ref(map->reference);
+      if (ref.is_relative()) ref = map_files[i]->parent_path() / ref;
+      if (output) qs::check_not_an_input(*output, {ref}, "-o");
+      for (int b = 1; b < n && error_map.folder; ++b)
+        qs::check_not_an_input(fs::path(*error_map.folder) / (stems[0] + "_to_" + stems[b] + ".error.ply"), {ref},
+                               "--error-map");
+    }
   }
   const qs::correspondence::GroundTruth truth(std::move(truth_meshes));
   std::vector<qs::correspondence::DissectedInput> inputs(n);

@@ -467,3 +467,17 @@ TEST_F(CorrespondenceTool, NamesThatAreNotUtf8AreReportedCleanly) {
   EXPECT_EQ(r.exit, 3) << r.out;
   EXPECT_THAT(r.out, HasSubstr("its path was not UTF-8"));
 }
+
+// The reference mesh of "surface" map files is an input too.
+TEST_F(CorrespondenceTool, RefusesToWriteOverTheReferenceOfSurfaceMaps) {
+  for (const char* r : {"r1", "r2"})
+    ASSERT_EQ(run_tool("qs-family", "retessellate " + mesh(1) + " --faces " + (r[1] == '1' ? "1200" : "1400") +
+                                        " -q -o " + d() + "/" + r + ".obj").exit, 0);
+  ASSERT_EQ(run_tool("qs-dissect", d() + "/r1.obj " + d() + "/r2.obj -q -o " + d() + "/pair").exit, 0);
+  const std::string before = read_text(mesh(1));
+  const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + mesh(1));
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is an input of this run"));
+  EXPECT_EQ(read_text(mesh(1)), before);
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + d() + "/ok.txt").exit, 0);
+}
