@@ -481,3 +481,33 @@ TEST_F(CorrespondenceTool, RefusesToWriteOverTheReferenceOfSurfaceMaps) {
   EXPECT_EQ(read_text(mesh(1)), before);
   EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + d() + "/ok.txt").exit, 0);
 }
+
+// Map files are read as hostile JSON: a number too large for a double, an integer that would
+// wrap, a repeated key or deep nesting is invalid input naming the file (not an internal error).
+TEST_F(CorrespondenceTool, MalformedMapFilesAreInvalidInput) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  const std::string head = R"({"format": "qs-map", "version": 1, )";
+  const std::string cases[] = {
+      head + R"("domain": "sphere", "vertices": 1e400, "sphere": []})",
+      head + R"("domain": "sphere", "vertices": 4294967298, "sphere": []})",
+      head + R"("domain": "sphere", "vertices": -1, "sphere": []})",
+      head + R"("domain": "sphere", "domain": "sphere", "vertices": 0, "sphere": []})",
+      head + R"("domain": "sphere", "vertices": 1, "sphere": [[1e400, 0, 0]]})",
+      head + R"("domain": "surface", "vertices": 1, "reference": "r.obj", "reference_vertices": 4,
+                 "reference_faces": 4, "origins": [[4294967296, 1, 0, 0]]})",
+      head + R"("domain": "surface", "vertices": 1, "reference": 7, "reference_vertices": 4,
+                 "reference_faces": 4, "origins": [[0, 1, 0, 0]]})",
+      head + R"("domain": "sphere", "vertices": 0, "sphere": [], "x": )" + std::string(100, '[') +
+          std::string(100, ']') + "}",
+      R"({"fotices": 55555555555555555555555555555000006e691691896258]]})",
+  };
+  int k = 0;
+  for (const std::string& text : cases) {
+    const std::string file = d() + "/bad" + std::to_string(k++) + ".map.json";
+    std::ofstream(file) << text;
+    const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 100 --map " +
+                                                 d() + "/shape00.map.json " + file);
+    EXPECT_EQ(r.exit, 2) << text << "\n" << r.out;
+    EXPECT_THAT(r.out, HasSubstr(file)) << text;
+  }
+}
