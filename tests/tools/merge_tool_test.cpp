@@ -244,4 +244,14 @@ TEST_F(MergeTool, AChartNameThatWasNotUtf8GetsAClearMessage) {
   EXPECT_FALSE(fs::exists(dir_ / "odd_merge"));
   fs::remove_all(dir_ / "odd");
   fs::remove(odd);
+  // A dissection folder whose own name is not UTF-8 merges (remesh.json's names with U+FFFD).
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  const fs::path folder = dir_ / "ab\xfe";
+  fs::copy(dir_ / "ab", folder, fs::copy_options::recursive);
+  const RunResult ok = run_tool("qs-merge", "'" + folder.string() + "' -q");
+  EXPECT_EQ(ok.exit, 0) << ok.out;
+  const nlohmann::json doc = nlohmann::json::parse(slurp(folder / "merge" / "remesh.json"));
+  EXPECT_EQ(doc["dissection"], "ab\xEF\xBF\xBD");
+  EXPECT_EQ(doc["dissection_path"], "..");
+  fs::remove_all(folder);
 }
