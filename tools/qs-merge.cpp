@@ -3,9 +3,11 @@
 // list, positions on A and on B) and OUTDIR/remesh.json with mode "merge", which qs-morph reads
 // like a remesh.
 //
-// Exit codes: 0 done, 1 usage, 2 invalid input (not a dissection of two meshes, a flipped or
-// degenerate uv triangle), 3 i/o, 4 solver (side points that cannot be ordered consistently),
-// 70 internal error.
+// Exit codes: 0 done, 1 usage (also an output that would replace an input: a mesh of the
+// dissection, its charts or dissection.json), 2 invalid input (not a dissection of two meshes, a
+// flipped or degenerate uv triangle), 3 i/o, 4 solver (side points that cannot be ordered
+// consistently), 70 internal error. Everything is written into a staging folder beside OUTDIR
+// and moved into place only when the whole run succeeded (qs::OutputFolder).
 
 #include <chrono>
 #include <filesystem>
@@ -16,10 +18,13 @@
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
+#include "qs/core/output_folder.h"
 #include "qs/dissect/dissection_json.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/io/write_mesh.h"
 #include "qs/merge/merge.h"
+#include "dissection_names.h"
 #include "tool_main.h"
 
 namespace fs = std::filesystem;
@@ -59,8 +64,11 @@ int main(int argc, char** argv) {
 
   return qs::tools::run_tool(app, argc, argv, [&] {
     const auto t0 = Clock::now();
+    // CLI11's range check lets NaN through (every comparison with it is false).
+    if (!(sliver >= 0 && sliver <= 60))
+      throw qs::UsageError("--sliver-degrees " + std::to_string(sliver) + " is not a number of degrees in 0..60");
     if (!fs::is_directory(folder)) throw qs::IoError(folder + ": no such folder (expected a qs-dissect output folder)");
-    const qs::dissect::LoadedDissection in = qs::dissect::read_dissection(folder);
+    const qs::dissect::LoadedDissection in = qs::tools::read_dissection_folder(folder);
     std::vector<std::string> stems;
     for (const auto& dm : in.meshes) stems.push_back(qs::dissect::chart_stem(dm.chart_file));
     auto known = [&] {
@@ -80,13 +88,30 @@ int main(int argc, char** argv) {
       };
       ia = index(pair.substr(0, comma));
       ib = index(pair.substr(comma + 1));
-      if (ia == ib) throw qs::InvalidInput("--pair names '" + stems[ia] + "' twice; merge two different meshes");
+      if (ia == ib) throw qs::UsageError("--pair names '" + stems[ia] + "' twice; merge two different meshes");
     } else if (in.meshes.size() != 2) {
       throw qs::InvalidInput(folder + ": a dissection of " + std::to_string(in.meshes.size()) +
                              " meshes (" + known() + "); qs-merge merges exactly two: name them with --pair A,B");
     }
     const auto& A = in.meshes[ia];
     const auto& B = in.meshes[ib];
+    // The outputs may not replace an input: dissection.json, a chart, or a dissected mesh (where
+    // it is found: as written, or in or beside the dissection folder).
+    if (outdir.empty()) outdir = (fs::path(folder) / "merge").string();
+    const std::string stem_a = stems[ia], stem_b = stems[ib];
+    const std::string out_a = stem_a + "." + format, out_b = stem_b + "." + format;
+    {
+      std::vector<fs::path> inputs = {fs::path(folder) / "dissection.json"};
+      for (const auto& dm : in.meshes) {
+        inputs.push_back(fs::path(folder) / dm.chart_file);
+        for (const fs::path& p : qs::tools::dissected_mesh_candidates(dm.file, folder)) inputs.push_back(p);
+      }
+      for (const std::string& name : {out_a, out_b, std::string("remesh.json")})
+        qs::check_not_an_input(fs::path(outdir) / name, inputs, "-o");
+    }
+    // Staged: nothing in OUTDIR changes unless everything was written. Created before the merge
+    // so that an output folder that cannot be written is reported before any work.
+    qs::OutputFolder out_folder(outdir);
     const auto t1 = Clock::now();
     qs::merge::MergeOptions options;
     options.threads = threads;
@@ -103,14 +128,8 @@ int main(int argc, char** argv) {
     }
     const auto t2 = Clock::now();
 
-    if (outdir.empty()) outdir = (fs::path(folder) / "merge").string();
-    std::error_code ec;
-    fs::create_directories(outdir, ec);
-    if (ec) throw qs::IoError(outdir + ": cannot create the folder (" + ec.message() + ")");
-    const std::string stem_a = stems[ia], stem_b = stems[ib];
-    const std::string out_a = stem_a + "." + format, out_b = stem_b + "." + format;
-    qs::io::write_mesh(fs::path(outdir) / out_a, m.mesh_a());
-    qs::io::write_mesh(fs::path(outdir) / out_b, m.mesh_b());
+    qs::io::write_mesh(out_folder.staging() / out_a, m.mesh_a());
+    qs::io::write_mesh(out_folder.staging() / out_b, m.mesh_b());
 
     const auto& st = m.stats;
     const int inputs = st.input_faces_a + st.input_faces_b;
@@ -159,7 +178,9 @@ int main(int argc, char** argv) {
     doc["meshes"] = meshes;
     doc["vertex_patch"] = patch;
     doc["vertex_uv"] = uv;
-    qs::write_file_atomically(fs::path(outdir) / "remesh.json", doc.dump(1) + "\n");
+    qs::write_file_atomically(out_folder.staging() / "remesh.json",
+                              qs::json_strict::dump(doc, 1) + "\n");
+    out_folder.commit();
     const auto t3 = Clock::now();
     if (!quiet) {
       std::cout << std::setprecision(4) << "merge of " << stem_a << " (" << st.input_faces_a << " chart faces) and "

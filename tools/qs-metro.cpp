@@ -9,10 +9,18 @@
 // --correspondence DIR: a qs-dissect folder measured against ground truth (map files, or identical
 // face lists): qs::correspondence, docs/correspondence.md. Exit 2 also for meshes without a
 // common domain or a map of another mesh.
+//
+// Outputs: -o is written under a temporary name and renamed; the --error-map folder is staged
+// and moved into place only after every pair was measured and the report written. An output
+// that is one of the run's inputs (a mesh, a map file, the dissection's charts or its
+// dissection.json) is a usage error.
 
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -23,10 +31,12 @@
 #include "qs/correspondence/correspondence.h"
 #include "qs/dissect/dissection_json.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/core/output_folder.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/metro/metro.h"
+#include "dissection_names.h"
 #include "tool_main.h"
 
 namespace {
@@ -143,13 +153,35 @@ nlohmann::json json_report(const Input& a, const Input& b, const qs::metro::Metr
 /// A mesh file named in dissection.json: as written (relative to the working folder), else
 /// relative to the dissection folder or its parent, else its file name in either.
 std::filesystem::path find_mesh(const std::string& file, const std::filesystem::path& folder) {
-  namespace fs = std::filesystem;
-  const fs::path name = fs::path(file).filename();
-  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file, folder / name,
-                            folder.parent_path() / name})
-    if (fs::exists(p)) return p;
-  throw qs::IoError(file + ": mesh of the dissection " + folder.string() +
-                    " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)");
+  const auto found = qs::tools::dissected_mesh_candidates(file, folder);
+  if (!found.empty()) return found.front();
+  const bool lossy = file.find("\xEF\xBF\xBD") != std::string::npos;  // U+FFFD
+  throw qs::IoError(qs::json_strict::printable(file) + ": mesh of the dissection " +
+                    qs::json_strict::printable(folder.string()) +
+                    " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)" +
+                    (lossy ? "; its path was not UTF-8, which dissection.json (JSON) cannot hold, so it holds U+FFFD "
+                             "in place of those bytes: put the mesh in or beside the dissection folder, or give it a "
+                             "UTF-8 path and dissect it again"
+                           : ""));
+}
+
+/// The report file of -o, opened (under a temporary name) before any work so that an output that
+/// cannot be written is found first; committed last.
+void open_report(const std::optional<std::string>& output, std::optional<qs::AtomicFile>& file) {
+  std::error_code ec;
+  if (output && std::filesystem::is_directory(*output, ec))
+    throw qs::IoError(*output + ": is a folder; -o names the report file");
+  if (output) file.emplace(*output);
+}
+
+/// Writes the report into the file of open_report (flushed: a full disk shows here), or to stdout.
+void write_report(std::optional<qs::AtomicFile>& file, const std::optional<std::string>& output,
+                  const std::string& report) {
+  if (!file) {
+    std::cout << report;
+    return;
+  }
+  if (!(file->stream() << report).flush()) throw qs::IoError(*output + ": cannot write the report");
 }
 
 nlohmann::json stats_json(const qs::correspondence::ErrorStats& s) {
@@ -185,25 +217,63 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                        const std::optional<std::string>& output, const ErrorMapOptions& error_map) {
   namespace fs = std::filesystem;
   const fs::path folder(folder_name);
-  const qs::dissect::LoadedDissection loaded = qs::dissect::read_dissection(folder);
+  const qs::dissect::LoadedDissection loaded = qs::tools::read_dissection_folder(folder);
   const int n = static_cast<int>(loaded.meshes.size());
   if (n < 2) throw qs::InvalidInput(folder_name + ": the dissection holds 1 mesh; a correspondence needs 2 or more");
   if (!maps.empty() && static_cast<int>(maps.size()) != n)
     throw qs::UsageError("--map: " + std::to_string(maps.size()) + " files given for " + std::to_string(n) +
                          " meshes (one per mesh in the dissection's order, '-' for a mesh without a map)");
-  std::vector<qs::correspondence::TruthMesh> truth_meshes;
-  std::vector<std::string> map_used;
+  // Every input first (the dissection's files, the meshes and their maps), checked against the
+  // outputs before anything is read further or written.
+  std::vector<fs::path> mesh_files, input_paths = {folder / "dissection.json"};
+  std::vector<std::optional<fs::path>> map_files;
   for (int i = 0; i < n; ++i) {
-    const fs::path mesh_file = find_mesh(loaded.meshes[i].file, folder);
+    input_paths.push_back(folder / loaded.meshes[i].chart_file);
+    mesh_files.push_back(find_mesh(loaded.meshes[i].file, folder));
+    input_paths.push_back(mesh_files.back());
     std::optional<fs::path> map;
     if (!maps.empty()) {
       if (maps[i] != "-") map = maps[i];
     } else {
-      const fs::path beside = mesh_file.parent_path() / (mesh_file.stem().string() + ".map.json");
+      const fs::path beside = mesh_files.back().parent_path() / (mesh_files.back().stem().string() + ".map.json");
       if (fs::exists(beside)) map = beside;
     }
-    truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_file, map));
-    map_used.push_back(map ? map->string() : "");
+    if (map) input_paths.push_back(*map);
+    map_files.push_back(map);
+  }
+  if (output) qs::check_not_an_input(*output, input_paths, "-o");
+  // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal).
+  std::vector<std::string> stems(n);
+  if (error_map.folder) {
+    for (int i = 0; i < n; ++i) stems[i] = mesh_files[i].stem().string();
+    bool unique = true;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) unique = unique && stems[i] != stems[j];
+    if (!unique)
+      for (int i = 0; i < n; ++i) stems[i] = std::to_string(i) + "_" + stems[i];
+    std::vector<fs::path> taken = input_paths;
+    if (output) taken.push_back(*output);
+    for (int b = 1; b < n; ++b)
+      qs::check_not_an_input(fs::path(*error_map.folder) / (stems[0] + "_to_" + stems[b] + ".error.ply"), taken,
+                             "--error-map");
+  }
+  std::optional<qs::AtomicFile> report_file;
+  open_report(output, report_file);
+  std::vector<qs::correspondence::TruthMesh> truth_meshes;
+  std::vector<std::string> map_used;
+  for (int i = 0; i < n; ++i) {
+    truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_files[i], map_files[i]));
+    map_used.push_back(map_files[i] ? map_files[i]->string() : "");
+    // A "surface" map's reference mesh (relative to the map file's folder) is an input too.
+    const auto& map = truth_meshes.back().map;
+    if (map && map->domain == qs::family::MapDomain::Surface) {
+      fs::path ref(map->reference);
+      if (ref.is_relative()) ref = map_files[i]->parent_path() / ref;
+      if (output) qs::check_not_an_input(*output, {ref}, "-o");
+      for (int b = 1; b < n && error_map.folder; ++b)
+        qs::check_not_an_input(fs::path(*error_map.folder) / (stems[0] + "_to_" + stems[b] + ".error.ply"), {ref},
+                               "--error-map");
+    }
   }
   const qs::correspondence::GroundTruth truth(std::move(truth_meshes));
   std::vector<qs::correspondence::DissectedInput> inputs(n);
@@ -217,19 +287,10 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   mo.level = level;
   mo.threads = threads;
   mo.vertex_errors = error_map.folder.has_value() || error_map.worst > 0;
-  // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal),
-  // staged and moved into the folder only when every pair has been measured and written.
+  // The error maps are staged and moved into the folder only when every pair has been measured
+  // and the report written.
   std::optional<qs::OutputFolder> map_folder;
-  std::vector<std::string> stems(n);
-  if (error_map.folder) {
-    map_folder.emplace(*error_map.folder);
-    for (int i = 0; i < n; ++i) stems[i] = fs::path(truth.mesh(i).name).stem().string();
-    bool unique = true;
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) unique = unique && stems[i] != stems[j];
-    if (!unique)
-      for (int i = 0; i < n; ++i) stems[i] = std::to_string(i) + "_" + stems[i];
-  }
+  if (error_map.folder) map_folder.emplace(*error_map.folder);
   std::ostringstream text;
   nlohmann::json pairs = nlohmann::json::array();
   text << "qs-metro: correspondence of " << folder_name << " (" << n << " meshes, "
@@ -327,16 +388,18 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
       pairs.back()["worst_vertices"] = list;
     }
   }
-  if (map_folder) map_folder->commit();
   nlohmann::json doc = {{"dissection", folder_name},
                         {"meshes", n},
                         {"patches", loaded.meshes[0].dissection.chart.patches.size()},
                         {"seed", seed},
                         {"level", level},
                         {"pairs", pairs}};
-  const std::string report = as_json ? doc.dump(2) + "\n" : text.str();
-  if (output) qs::write_file_atomically(*output, report);
-  else std::cout << report;
+  // Names that are not UTF-8 (the folder, a mesh, a map file) become U+FFFD in JSON.
+  const std::string report = as_json ? qs::json_strict::dump(doc, 2) + "\n" : text.str();
+  write_report(report_file, output, report);
+  // Everything is measured and written: now the error maps, then the report, move into place.
+  if (map_folder) map_folder->commit();
+  if (report_file) report_file->commit();
   return 0;
 }
 
@@ -373,10 +436,9 @@ int main(int argc, char** argv) {
   app.add_option("--error-map", error_map.folder,
                  "With --correspondence: also write, per pair, A's mesh with each vertex's error (and the "
                  "baseline's) as a coloured PLY into this folder: <A>_to_<B>.error.ply");
-  app.add_option("--error-scale", error_map.scale,
+  auto* error_scale = app.add_option("--error-scale", error_map.scale,
                  "With --error-map: the error (% of B's diagonal) drawn red (default: each pair's largest vertex "
-                 "error)")
-      ->check(CLI::PositiveNumber);
+                 "error)");
   app.add_option("--worst", error_map.worst,
                  "With --correspondence: also list, per pair, A's N vertices with the largest error (position, "
                  "error, the baseline's error, A's patch and the patch of the exact image on B), 0..1000")
@@ -384,8 +446,18 @@ int main(int argc, char** argv) {
   app.add_option("--samples", samples,
                  "Surface samples per direction (default: max(100000, 2 x the larger face count)); with "
                  "--correspondence: points on A per pair (default 100000)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--seed", seed, "Seed of the sampling (the same seed gives the same numbers)");
+      ->check(CLI::Range(1L, std::numeric_limits<long>::max()));
+  app.add_option("--seed", seed, "Seed of the sampling, 0..18446744073709551615 (the same seed gives the same numbers)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            // CLI11 reads "-1" into an unsigned as 2^64 - 1: only plain digits in range are seeds.
+            std::uint64_t value = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+            if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+              return text + " is not a whole number in 0..18446744073709551615";
+            return {};
+          },
+          "UINT64"));
   app.add_flag("--no-vertices", no_vertices, "Do not measure at the vertices (surface samples only)");
   app.add_flag("--json", as_json, "Print a JSON object instead of text");
   app.add_option("-o,--output", output, "Write the report to this file instead of stdout");
@@ -396,9 +468,12 @@ int main(int argc, char** argv) {
   app.add_option("--max-samples", max_samples,
                  "Refuse a --samples count above this up front (the run time grows linearly with it)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1L, std::numeric_limits<long>::max()));
 
   return qs::tools::run_tool(app, argc, argv, [&] {
+    if (error_scale->count() && !(std::isfinite(error_map.scale) && error_map.scale > 0))
+      throw qs::UsageError("--error-scale " + error_scale->as<std::string>() +
+                           " is not a finite positive number (the error in % of B's diagonal drawn red)");
     if (samples > max_samples)
       throw qs::UsageError("--samples " + std::to_string(samples) + " is more than --max-samples " +
                            std::to_string(max_samples) + " (the time grows linearly with the count); raise "
@@ -406,15 +481,17 @@ int main(int argc, char** argv) {
     if (correspondence) {
       if (!file_a.empty()) throw qs::UsageError("--correspondence takes a dissection folder, not meshes A and B");
       if (no_vertices) throw qs::UsageError("--no-vertices does not apply to --correspondence");
-      if (error_map.scale > 0 && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
+      if (error_scale->count() && !error_map.folder) throw qs::UsageError("--error-scale needs --error-map");
       return run_correspondence(*correspondence, maps, samples, seed, level, threads, as_json, output, error_map);
     }
-    if (error_map.folder || error_map.scale > 0 || error_map.worst > 0)
+    if (error_map.folder || error_scale->count() || error_map.worst > 0)
       throw qs::UsageError("--error-map, --error-scale and --worst need --correspondence");
     if (!maps.empty()) throw qs::UsageError("--map needs --correspondence");
     if (level != 0) throw qs::UsageError("--level needs --correspondence");
     if (file_a.empty() || file_b.empty()) throw qs::UsageError("two meshes A and B are needed (or --correspondence DIR)");
     if (output) qs::check_not_an_input(*output, {file_a, file_b}, "-o");
+    std::optional<qs::AtomicFile> report_file;
+  open_report(output, report_file);
     const Input a = load(file_a, "A");
     const Input b = load(file_b, "B");
     qs::metro::MetroOptions opt;
@@ -428,9 +505,9 @@ int main(int argc, char** argv) {
     } catch (const qs::InvalidInput& e) {  // the library names the meshes "A" and "B"
       throw qs::InvalidInput(std::string(e.what()) + " (A = " + a.file + ", B = " + b.file + ")");
     }
-    const std::string report = as_json ? json_report(a, b, r, seed).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n" : text_report(a, b, r);
-    if (output) qs::write_file_atomically(*output, report);
-    else std::cout << report;
+    const std::string report = as_json ? qs::json_strict::dump(json_report(a, b, r, seed), 2) + "\n" : text_report(a, b, r);
+    write_report(report_file, output, report);
+    if (report_file) report_file->commit();
     return 0;
   });
 }

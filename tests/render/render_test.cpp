@@ -2,6 +2,7 @@
 // the qs-render tool's exit codes.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -227,6 +228,53 @@ TEST(RenderMesh, RejectsBadInput) {
   EXPECT_THROW(qs::render::render_mesh(sphere, nullptr, front_view(), &edges), qs::InvalidInput);
 }
 
+// The picture depends on the shape only: a mesh moved far away and scaled to the largest
+// doubles draws like the unit one (not black, not empty), while NaN is still refused.
+TEST(RenderMesh, ExtremeButFiniteCoordinatesDrawTheSamePicture) {
+  const qs::TriMesh unit = qs::shapes::icosphere(2);
+  RenderOptions o = front_view(64);
+  o.view_dir = qs::Vec3(0.3, 0.4, 1);
+  o.wireframe = true;
+  const Image reference = qs::render::render_mesh(unit, nullptr, o);
+  // Scaled by a power of two: every normalized position is bitwise the same.
+  qs::TriMesh pow2 = unit;
+  for (auto& p : pow2.positions) p *= std::ldexp(1.0, 1022);
+  EXPECT_EQ(qs::render::render_mesh(pow2, nullptr, o).rgb, reference.rgb);
+  for (const double scale : {1e308, 1e-300}) {
+    qs::TriMesh far = unit;
+    for (auto& p : far.positions) p = scale * p + qs::Vec3(0.5 * scale, 0, 0);
+    const Image img = qs::render::render_mesh(far, nullptr, o);
+    int differ = 0, dark = 0;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        differ += pixel(img, x, y) != pixel(reference, x, y);
+        const Rgb c = pixel(reference, x, y);
+        dark += c == pixel(img, x, y) ? 0 : pixel(img, x, y)[0] < 20;
+      }
+    EXPECT_LT(differ, 64 * 64 / 50) << scale;  // rounding on a few edge pixels at most
+    EXPECT_EQ(dark, 0) << scale;
+  }
+  // A tetrahedron spanning the whole double range (its differences overflow): shaded grey, like
+  // the unit one.
+  qs::TriMesh small;
+  small.positions = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, -1, -1}};
+  small.faces = {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}};
+  qs::TriMesh tet = small;
+  for (auto& p : tet.positions) p *= std::ldexp(1.0, 1023);
+  const Image small_img = qs::render::render_mesh(small, nullptr, front_view(64));
+  EXPECT_EQ(qs::render::render_mesh(tet, nullptr, front_view(64)).rgb, small_img.rgb);
+  for (auto& p : tet.positions) p = p / std::ldexp(1.0, 1023) * 1.79e308;
+  const Image big_img = qs::render::render_mesh(tet, nullptr, front_view(64));
+  int differ = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) differ += pixel(big_img, x, y) != pixel(small_img, x, y);
+  EXPECT_LT(differ, 64 * 64 / 50);
+  EXPECT_NE(pixel(big_img, 32, 32), (Rgb{0, 0, 0}));
+  qs::TriMesh nan = tet;
+  nan.positions[2].y() = std::nan("");
+  EXPECT_THROW(qs::render::render_mesh(nan, nullptr, front_view(64)), qs::InvalidInput);
+}
+
 TEST(RenderMesh, UpParallelToViewStillRenders) {
   RenderOptions o = front_view(50);
   o.up = qs::Vec3(0, 0, 5);
@@ -428,4 +476,48 @@ TEST_F(RenderTool, ErrorsGiveDocumentedExitCodesAndNoOutput) {
   EXPECT_FALSE(fs::exists(out));
   // Only the inputs are left: no output, no temporaries.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 3);
+}
+
+TEST_F(RenderTool, ExtremeCoordinatesRenderLikeTheUnitShape) {
+  const std::string mesh = (dir_ / "tet.obj").string(), unit = (dir_ / "unit.obj").string();
+  // 2^1023 (differences of these overflow), so that the picture must be bitwise the unit one's.
+  const std::string m = "8.9884656743115795e307";
+  std::ofstream(mesh) << "v " << m << " 0 0\nv 0 " << m << " 0\nv 0 0 " << m << "\nv -" << m << " -" << m << " -"
+                      << m << "\nf 1 2 3\nf 1 4 2\nf 2 4 3\nf 3 4 1\n";
+  std::ofstream(unit) << "v 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 -1 -1\nf 1 2 3\nf 1 4 2\nf 2 4 3\nf 3 4 1\n";
+  const std::string a = (dir_ / "a.png").string(), b = (dir_ / "b.png").string();
+  RunResult r = run_tool(mesh + " -q --size 48 -o " + a);
+  ASSERT_EQ(r.exit, 0) << r.out;
+  r = run_tool(unit + " -q --size 48 -o " + b);
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_EQ(read_bytes(a), read_bytes(b));
+}
+
+// The estimate covers the measured peak (an 8192 x 8192 view of a small mesh: 1.12 GiB resident)
+// and the refusal comes before any reading or drawing, with the figure.
+TEST_F(RenderTool, RefusesAPictureOverMaxMemoryUpFrontWithTheEstimate) {
+  const std::string s = sphere(), out = (dir_ / "big.png").string();
+  // CPU time of the tool (not wall time, which depends on the machine's load).
+  const auto child_cpu = [] {
+    rusage u{};
+    getrusage(RUSAGE_CHILDREN, &u);
+    return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+  };
+  const double cpu0 = child_cpu();
+  RunResult r = run_tool(s + " --size 8192 --max-memory 0.7 -o " + out);
+  const double cpu = child_cpu() - cpu0;
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("1 view of 8192 x 8192 needs about 1.53 GiB of memory, more than --max-memory 0.7 GiB"));
+  EXPECT_LT(cpu, 2.0);  // no drawing: that takes about 9 s of CPU at this size
+  EXPECT_FALSE(fs::exists(out));
+  // Several views count each kept view and the joined picture.
+  r = run_tool(s + " " + s + " --size 4096x8192 --max-memory 0.9 -o " + out);
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("2 views of 4096 x 8192 needs about 1.03 GiB"));
+  for (const char* bad : {"nan", "inf", "-1", "0"}) {
+    r = run_tool(s + " --max-memory " + bad + " -o " + out);
+    EXPECT_EQ(r.exit, 1) << bad << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("--max-memory")) << bad;
+  }
+  EXPECT_FALSE(fs::exists(out));
 }

@@ -387,3 +387,127 @@ TEST_F(CorrespondenceTool, SamePoseFallsBackToOldMapsBeforeGivingUpThePose) {
   EXPECT_LT(e["mean_percent"].get<double>(), 0.8);
   EXPECT_LT(e["max_percent"].get<double>(), 16.0);
 }
+
+// An output that is one of the run's inputs (dissection.json, a chart, a mesh, a map file), under
+// any spelling or through a link, is refused before any work, and the input is left as it was.
+TEST_F(CorrespondenceTool, RefusesAnOutputThatIsAnInput) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  const std::string json = read_text(d() + "/pair/dissection.json"), map = read_text(d() + "/shape01.map.json");
+  fs::create_symlink(dir_ / "pair" / "dissection.json", dir_ / "link.json");
+  for (const std::string& out :
+       {d() + "/pair/dissection.json", d() + "/pair/./dissection.json", d() + "/pair/../pair/dissection.json",
+        d() + "/link.json", d() + "/pair/shape00.chart.ply", mesh(1), d() + "/shape01.map.json"}) {
+    const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --json -o " + out);
+    EXPECT_EQ(r.exit, 1) << out << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("is an input of this run")) << out;
+  }
+  // An error map that would replace an input (the report, here).
+  const RunResult em = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --error-map " + d() +
+                                                "/maps -o " + d() + "/maps/shape00_to_shape01.error.ply");
+  EXPECT_EQ(em.exit, 1) << em.out;
+  EXPECT_FALSE(fs::exists(d() + "/maps"));
+  EXPECT_EQ(read_text(d() + "/pair/dissection.json"), json);
+  EXPECT_EQ(read_text(d() + "/shape01.map.json"), map);
+}
+
+// The error-map folder is staged and moved into place only after every pair was measured and the
+// report written: a report that cannot be written leaves no error maps (and no staging folder).
+TEST_F(CorrespondenceTool, ErrorMapsAreCommittedOnlyWithTheReport) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  for (const std::string& out : {d() + "/nodir/r.json", d() + "/pair"}) {
+    const RunResult r =
+        run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --error-map " + d() + "/maps -o " + out);
+    EXPECT_EQ(r.exit, 3) << out << ": " << r.out;
+    EXPECT_FALSE(fs::exists(d() + "/maps")) << out;
+  }
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  const RunResult ok = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --error-map " + d() +
+                                                "/maps -o " + d() + "/r.txt");
+  ASSERT_EQ(ok.exit, 0) << ok.out;
+  EXPECT_TRUE(fs::exists(d() + "/maps/shape00_to_shape01.error.ply"));
+  EXPECT_THAT(read_text(d() + "/r.txt"), HasSubstr("error map: "));
+}
+
+TEST_F(CorrespondenceTool, NonFiniteErrorScaleIsAUsageError) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  for (const char* v : {"nan", "inf", "-inf", "-1", "0", "1e400"}) {
+    const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 --error-map " + d() +
+                                                 "/maps --error-scale " + v);
+    EXPECT_EQ(r.exit, 1) << v << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("--error-scale")) << v;
+    EXPECT_FALSE(fs::exists(d() + "/maps")) << v;
+  }
+}
+
+// Folder, mesh and map file names that are not UTF-8: measured, printed as they are in text and
+// with U+FFFD in --json (valid JSON); a mesh that dissection.json cannot name is reported.
+TEST_F(CorrespondenceTool, NamesThatAreNotUtf8AreReportedCleanly) {
+  const fs::path odd = dir_ / "f\xff";
+  fs::create_directories(odd);
+  for (const char* f : {"shape00.obj", "shape01.obj", "shape00.map.json", "shape01.map.json"})
+    fs::copy_file(dir_ / f, odd / f);
+  fs::copy_file(dir_ / "shape01.map.json", dir_ / "m\xfe.map.json");
+  const std::string q = "'" + odd.string() + "'";
+  ASSERT_EQ(run_tool("qs-dissect", q + "/shape00.obj " + q + "/shape01.obj --quiet -o " + q + "/pair").exit, 0);
+  RunResult r = run_tool("qs-metro", "--correspondence " + q + "/pair --samples 1000 --json --worst 2 --error-map " +
+                                         q + "/maps -o " + d() + "/r.json");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  const auto doc = nlohmann::json::parse(read_text(d() + "/r.json"));  // valid UTF-8 JSON
+  EXPECT_EQ(doc["dissection"], d() + "/f\xEF\xBF\xBD/pair");
+  EXPECT_EQ(doc["pairs"][0]["b"], d() + "/f\xEF\xBF\xBD/shape01.obj");
+  EXPECT_TRUE(fs::exists(odd / "maps" / "shape00_to_shape01.error.ply"));
+  r = run_tool("qs-metro", "--correspondence " + q + "/pair --samples 1000 --map " + q + "/shape00.map.json '" + d() +
+                               "/m\xfe.map.json'");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("(ground truth: " + d() + "/m\xfe.map.json)"));
+  // Dissected elsewhere: dissection.json holds the meshes' path with U+FFFD; not found, and why.
+  ASSERT_EQ(run_tool("qs-dissect", q + "/shape00.obj " + q + "/shape01.obj --quiet -o " + d() + "/sub/pair").exit, 0);
+  r = run_tool("qs-metro", "--correspondence " + d() + "/sub/pair --samples 1000 --json");
+  EXPECT_EQ(r.exit, 3) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("its path was not UTF-8"));
+}
+
+// The reference mesh of "surface" map files is an input too.
+TEST_F(CorrespondenceTool, RefusesToWriteOverTheReferenceOfSurfaceMaps) {
+  for (const char* r : {"r1", "r2"})
+    ASSERT_EQ(run_tool("qs-family", "retessellate " + mesh(1) + " --faces " + (r[1] == '1' ? "1200" : "1400") +
+                                        " -q -o " + d() + "/" + r + ".obj").exit, 0);
+  ASSERT_EQ(run_tool("qs-dissect", d() + "/r1.obj " + d() + "/r2.obj -q -o " + d() + "/pair").exit, 0);
+  const std::string before = read_text(mesh(1));
+  const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + mesh(1));
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is an input of this run"));
+  EXPECT_EQ(read_text(mesh(1)), before);
+  EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + d() + "/ok.txt").exit, 0);
+}
+
+// Map files are read as hostile JSON: a number too large for a double, an integer that would
+// wrap, a repeated key or deep nesting is invalid input naming the file (not an internal error).
+TEST_F(CorrespondenceTool, MalformedMapFilesAreInvalidInput) {
+  ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
+  const std::string head = R"({"format": "qs-map", "version": 1, )";
+  const std::string cases[] = {
+      head + R"("domain": "sphere", "vertices": 1e400, "sphere": []})",
+      head + R"("domain": "sphere", "vertices": 4294967298, "sphere": []})",
+      head + R"("domain": "sphere", "vertices": -1, "sphere": []})",
+      head + R"("domain": "sphere", "domain": "sphere", "vertices": 0, "sphere": []})",
+      head + R"("domain": "sphere", "vertices": 1, "sphere": [[1e400, 0, 0]]})",
+      head + R"("domain": "surface", "vertices": 1, "reference": "r.obj", "reference_vertices": 4,
+                 "reference_faces": 4, "origins": [[4294967296, 1, 0, 0]]})",
+      head + R"("domain": "surface", "vertices": 1, "reference": 7, "reference_vertices": 4,
+                 "reference_faces": 4, "origins": [[0, 1, 0, 0]]})",
+      head + R"("domain": "sphere", "vertices": 0, "sphere": [], "x": )" + std::string(100, '[') +
+          std::string(100, ']') + "}",
+      R"({"fotices": 55555555555555555555555555555000006e691691896258]]})",
+  };
+  int k = 0;
+  for (const std::string& text : cases) {
+    const std::string file = d() + "/bad" + std::to_string(k++) + ".map.json";
+    std::ofstream(file) << text;
+    const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 100 --map " +
+                                                 d() + "/shape00.map.json " + file);
+    EXPECT_EQ(r.exit, 2) << text << "\n" << r.out;
+    EXPECT_THAT(r.out, HasSubstr(file)) << text;
+  }
+}

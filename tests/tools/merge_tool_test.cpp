@@ -18,6 +18,7 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 namespace {
 
@@ -149,4 +150,108 @@ TEST_F(MergeTool, BadInputGivesDocumentedExitCodes) {
   EXPECT_EQ(flipped.exit, 2) << flipped.out;
   EXPECT_THAT(flipped.out, HasSubstr("a.chart.ply: patch"));
   EXPECT_THAT(flipped.out, HasSubstr("degenerate uv triangle"));
+}
+
+// An output that would replace an input (a dissected mesh, a chart, dissection.json), under any
+// spelling or through a link, is refused before any work; the inputs stay as they were.
+TEST_F(MergeTool, RefusesAnOutputThatReplacesAnInput) {
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  const std::string a_before = slurp(dir_ / "a.obj"), b_before = slurp(dir_ / "b.obj");
+  const std::string json_before = slurp(dir_ / "ab" / "dissection.json");
+  std::error_code ec;
+  fs::create_directory_symlink(dir_, dir_ / "link", ec);
+  ASSERT_FALSE(ec) << ec.message();
+  for (const fs::path& out : {dir_, dir_ / "ab" / "..", dir_ / "ab" / ".." / ".", dir_ / "link"}) {
+    const RunResult r = run_tool("qs-merge", (dir_ / "ab").string() + " -o " + out.string());
+    EXPECT_EQ(r.exit, 1) << out << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("is an input of this run")) << out;
+  }
+  // Output PLY: a.ply does not collide with a.obj.
+  const RunResult ply = run_tool("qs-merge", (dir_ / "ab").string() + " -q --format ply -o " + (dir_ / "link").string());
+  EXPECT_EQ(ply.exit, 0) << ply.out;
+  EXPECT_TRUE(fs::exists(dir_ / "a.ply"));
+  fs::remove(dir_ / "a.ply");
+  fs::remove(dir_ / "b.ply");
+  fs::remove(dir_ / "remesh.json");
+  // A dissection whose chart would be replaced: a copy of the folder with the chart renamed to
+  // the output's name.
+  fs::create_directories(dir_ / "c2");
+  for (const char* f : {"a.chart.ply", "b.chart.ply"}) fs::copy_file(dir_ / "ab" / f, dir_ / "c2" / f);
+  std::string json = json_before;
+  for (size_t at; (at = json.find("\"a.chart.ply\"")) != std::string::npos;) json.replace(at, 13, "\"a.obj\"");
+  std::ofstream(dir_ / "c2" / "dissection.json", std::ios::binary) << json;
+  fs::rename(dir_ / "c2" / "a.chart.ply", dir_ / "c2" / "a.obj");
+  const std::string chart_before = slurp(dir_ / "c2" / "a.obj");
+  const RunResult chart = run_tool("qs-merge", (dir_ / "c2").string() + " -o " + (dir_ / "c2").string());
+  EXPECT_EQ(chart.exit, 1) << chart.out;
+  EXPECT_THAT(chart.out, HasSubstr("is an input of this run"));
+  EXPECT_EQ(slurp(dir_ / "c2" / "a.obj"), chart_before);
+
+  EXPECT_EQ(slurp(dir_ / "a.obj"), a_before);
+  EXPECT_EQ(slurp(dir_ / "b.obj"), b_before);
+  EXPECT_EQ(slurp(dir_ / "ab" / "dissection.json"), json_before);
+  EXPECT_FALSE(fs::exists(dir_ / "remesh.json"));
+  fs::remove(dir_ / "link");
+  fs::remove_all(dir_ / "c2");
+}
+
+// Everything is staged: a run that fails when moving its files into place (a folder where
+// remesh.json should go) leaves the output folder exactly as it was, and no staging folder.
+TEST_F(MergeTool, AFailedRunLeavesTheOutputFolderAsItWas) {
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  const fs::path out = dir_ / "staged";
+  fs::create_directories(out / "remesh.json");
+  std::ofstream(out / "a.obj") << "old";
+  const RunResult r = run_tool("qs-merge", (dir_ / "ab").string() + " -q -o " + out.string());
+  EXPECT_EQ(r.exit, 3) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is a folder"));
+  EXPECT_EQ(slurp(out / "a.obj"), "old");
+  EXPECT_FALSE(fs::exists(out / "b.obj"));
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  // A new output folder under a file: an i/o error before any work, nothing created.
+  std::ofstream(dir_ / "plain") << "x";
+  const RunResult under = run_tool("qs-merge", (dir_ / "ab").string() + " -q -o " + (dir_ / "plain" / "m").string());
+  EXPECT_EQ(under.exit, 3) << under.out;
+  EXPECT_THAT(under.out, Not(HasSubstr("merge of")));
+  fs::remove_all(out);
+  fs::remove(dir_ / "plain");
+}
+
+TEST_F(MergeTool, NonFiniteOrOutOfRangeSliverDegreesAreUsageErrors) {
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  for (const char* v : {"nan", "NaN", "inf", "-inf", "-1", "61", "1e400"}) {
+    const RunResult r =
+        run_tool("qs-merge", (dir_ / "ab").string() + " --sliver-degrees " + v + " -o " + (dir_ / "sl").string());
+    EXPECT_EQ(r.exit, 1) << v << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("--sliver-degrees")) << v;
+    EXPECT_FALSE(fs::exists(dir_ / "sl")) << v;
+  }
+}
+
+// A mesh whose file name is not UTF-8: dissection.json (JSON) cannot name its chart, which
+// qs-dissect writes with U+FFFD in its place. qs-merge says so (exit 2), not "no such file".
+TEST_F(MergeTool, AChartNameThatWasNotUtf8GetsAClearMessage) {
+  const fs::path odd = dir_ / "x\xff.obj";
+  fs::copy_file(dir_ / "a.obj", odd, fs::copy_options::overwrite_existing);
+  const RunResult d = run_tool("qs-dissect", "'" + odd.string() + "' " + (dir_ / "b.obj").string() +
+                                                 " --tau 2 --min-faces 60 -q -o " + (dir_ / "odd").string());
+  ASSERT_EQ(d.exit, 0) << d.out;
+  const RunResult r = run_tool("qs-merge", (dir_ / "odd").string() + " -o " + (dir_ / "odd_merge").string());
+  EXPECT_EQ(r.exit, 2) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("its file name was not UTF-8"));
+  EXPECT_THAT(r.out, HasSubstr("rename the mesh to a UTF-8 name and dissect it again"));
+  EXPECT_FALSE(fs::exists(dir_ / "odd_merge"));
+  fs::remove_all(dir_ / "odd");
+  fs::remove(odd);
+  // A dissection folder whose own name is not UTF-8 merges (remesh.json's names with U+FFFD).
+  ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
+  const fs::path folder = dir_ / "ab\xfe";
+  fs::copy(dir_ / "ab", folder, fs::copy_options::recursive);
+  const RunResult ok = run_tool("qs-merge", "'" + folder.string() + "' -q");
+  EXPECT_EQ(ok.exit, 0) << ok.out;
+  const nlohmann::json doc = nlohmann::json::parse(slurp(folder / "merge" / "remesh.json"));
+  EXPECT_EQ(doc["dissection"], "ab\xEF\xBF\xBD");
+  EXPECT_EQ(doc["dissection_path"], "..");
+  fs::remove_all(folder);
 }

@@ -16,6 +16,7 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 namespace {
 
@@ -171,4 +172,37 @@ TEST_F(MetroTool, ExitCodesForUsageIoAndInvalidInput) {
   EXPECT_EQ(flat.exit, 2) << flat.out;
   EXPECT_THAT(flat.out, HasSubstr("A: every face has zero area"));
   EXPECT_THAT(flat.out, HasSubstr("A = " + (dir_ / "flat.off").string()));
+}
+
+// -o is opened before any work: a report that cannot be written (a folder, a missing folder) is
+// an i/o error without measuring; a report that is an input is a usage error.
+TEST_F(MetroTool, AReportThatCannotBeWrittenFailsBeforeMeasuring) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(2));
+  const std::string b = write("b.obj", scaled(qs::shapes::icosphere(2), 1.1));
+  RunResult r = run(a + " " + b + " -o " + dir_.string());
+  EXPECT_EQ(r.exit, 3) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is a folder"));
+  r = run(a + " " + b + " -o " + (dir_ / "nodir" / "r.txt").string());
+  EXPECT_EQ(r.exit, 3) << r.out;
+  r = run(a + " " + b + " -o " + (dir_ / "." / "b.obj").string());
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("is an input of this run"));
+  // Only the inputs are left.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
+}
+
+// Every numeric option is checked for range (without wrapping) and finiteness before any work.
+TEST_F(MetroTool, NumericOptionsOutOfRangeAreUsageErrors) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(1));
+  const std::string b = write("b.obj", scaled(qs::shapes::icosphere(1), 1.1));
+  for (const char* bad : {"--seed -1", "--seed 18446744073709551616", "--seed 1.5", "--seed 0x10", "--samples 0",
+                          "--samples -5", "--samples 1e400", "--samples nan", "--max-samples 0", "--threads -1",
+                          "--samples 20 --max-samples 10"}) {
+    const RunResult r = run(a + " " + b + " " + bad);
+    EXPECT_EQ(r.exit, 1) << bad << ": " << r.out;
+    EXPECT_THAT(r.out, Not(HasSubstr("qs-metro: A = "))) << bad;
+  }
+  const RunResult top = run(a + " " + b + " --samples 100 --seed 18446744073709551615 --json");
+  ASSERT_EQ(top.exit, 0) << top.out;
+  EXPECT_EQ(nlohmann::json::parse(top.out)["seed"], 18446744073709551615ull);
 }

@@ -183,6 +183,24 @@ Frame camera_frame(const Vec3& view_dir, const Vec3& up) {
   return f;
 }
 
+// The used positions moved and scaled uniformly into [-1/2, 1/2]^3 around their bounding box's
+// centre: the same picture (the view fits the box), but every difference, cross product and
+// depth stays finite for any finite input, up to the largest double. Halves are taken before
+// subtracting so that nothing overflows on the way.
+std::vector<Vec3> normalized_positions(const std::vector<Vec3>& positions, const std::vector<char>& used) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (size_t v = 0; v < positions.size(); ++v)
+    if (used[v]) lo = lo.cwiseMin(positions[v]), hi = hi.cwiseMax(positions[v]);
+  std::vector<Vec3> out(positions.size(), Vec3::Zero());
+  if (!(lo.x() <= hi.x())) return out;  // no used vertex
+  const Vec3 centre = 0.5 * lo + 0.5 * hi;
+  const double half = (0.5 * hi - 0.5 * lo).maxCoeff();  // finite: at most the largest double
+  if (!(half > 0)) return out;                             // a single point
+  for (size_t v = 0; v < positions.size(); ++v)
+    if (used[v]) out[v] = (0.5 * positions[v] - 0.5 * centre) / half;
+  return out;
+}
+
 }  // namespace
 
 Image render_mesh(const TriMesh& mesh, const std::vector<Rgb>* face_colours, const RenderOptions& options,
@@ -211,6 +229,7 @@ Image render_mesh(const TriMesh& mesh, const std::vector<Rgb>* face_colours, con
   for (int v = 0; v < nv; ++v)
     if (used[v] && !mesh.positions[v].allFinite())
       throw InvalidInput("vertex " + std::to_string(v) + " has a position that is not finite");
+  const std::vector<Vec3> pos = normalized_positions(mesh.positions, used);
 
   // Project; fit the used vertices' screen box into the image with a margin.
   std::vector<Vec3> s(nv);  // screen x, y (pixels, y down), depth (larger is nearer)
@@ -218,7 +237,7 @@ Image render_mesh(const TriMesh& mesh, const std::vector<Rgb>* face_colours, con
   double z_lo = x_lo, z_hi = -x_lo;
   for (int v = 0; v < nv; ++v) {
     if (!used[v]) continue;
-    const Vec3& p = mesh.positions[v];
+    const Vec3& p = pos[v];
     s[v] = Vec3(p.dot(cam.x), p.dot(cam.y), p.dot(cam.z));
     x_lo = std::min(x_lo, s[v].x());
     x_hi = std::max(x_hi, s[v].x());
@@ -245,7 +264,7 @@ Image render_mesh(const TriMesh& mesh, const std::vector<Rgb>* face_colours, con
   std::vector<Vec3> face_n(nf);
   for (int f = 0; f < nf; ++f) {
     const auto& t = mesh.faces[f];
-    face_n[f] = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+    face_n[f] = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
   }
   std::vector<Vec3> vert_n;
   if (options.smooth) {

@@ -41,7 +41,9 @@ struct Image {
 /// flat per face or smooth (options.smooth). Faces take face_colours[f] (#F entries), or light
 /// grey when face_colours is null. highlight_edges are vertex pairs drawn as thick dark lines
 /// (e.g. patch boundaries); they and the wireframe are depth-tested, so hidden ones don't show.
-/// An empty mesh gives a background-only image.
+/// An empty mesh gives a background-only image. The picture depends only on the shape, not on
+/// its position or size: any finite coordinates (up to the largest double) draw like the same
+/// mesh scaled to unit size.
 /// \throws InvalidInput for a size out of range, a zero view direction, a vertex id out of range
 /// (naming the face or edge), a non-finite position, or a face_colours of the wrong size.
 Image render_mesh(const TriMesh& mesh, const std::vector<Rgb>* face_colours, const RenderOptions& options,
