@@ -282,6 +282,17 @@ TEST_F(DfiTool, BadOptionsAndFailuresLeaveNothingBehind) {
     for (const auto& e : fs::directory_iterator(dir_))
       EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << c.args << ": " << e.path();
   }
+  // A failure after the staging began (the warp finds no interior voxel in a shape 1e-20 times
+  // the other's size): neither a frame nor the GLB, and no staging folder.
+  const std::string tiny = write("tiny.obj", scaled(qs::shapes::icosphere(2), 1e-20));
+  const RunResult late = run_tool("qs-dfi", tiny + " " + b + " --frames 3 --grid 16 -q -o " + out.string() +
+                                                " --glb " + (dir_ / "g.glb").string());
+  EXPECT_EQ(late.exit, 2) << late.out;
+  EXPECT_THAT(late.out, HasSubstr("no interior voxel"));
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir_ / "g.glb"));
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
   // A GLB in folders that do not exist yet: made at the end; the extreme frame rates validate.
   for (const char* fps : {"0.001", "1000"}) {
     const fs::path glb = dir_ / "new" / fps / "m.glb";
