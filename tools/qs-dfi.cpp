@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
                                                        "field on a grid R times finer (default 3; 1: the morph's grid)")
       ->check(CLI::Range(1, 8));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
-  app.add_option("-o,--output", outdir, "Output folder (default dfi-out; created)");
+  app.add_option("-o,--output", outdir, "Output folder (default dfi-out; written beside it and moved into place when the whole run succeeded)");
   app.add_option("--format", format, "Frame format: obj (default) or ply")->check(CLI::IsMember({"obj", "ply"}));
   app.add_option("--glb", glb, "Also write a GLB that plays the frames (one node per frame, stepped scale)");
   app.add_option("--fps", fps, "Frames per second of the GLB animation, 0.001 to 1000 (default 12)");
