@@ -231,7 +231,7 @@ int main(int argc, char** argv) {
       throw qs::UsageError("--fps " + num(fps) + ": expected 0.001 to 1000 frames per second");
     if (!(max_memory >= 0.001 && max_memory <= 1e6))
       throw qs::UsageError("--max-memory " + num(max_memory) + ": expected 0.001 to 1e6 GiB");
-    if (static_cast<long>(grid) * endpoint_refine > 2048)
+    if (!exact_endpoints && static_cast<long>(grid) * endpoint_refine > 2048)
       throw qs::UsageError("--grid " + std::to_string(grid) + " with --endpoint-refine " + std::to_string(endpoint_refine) +
                            ": the end frames' grid would exceed 2048 cells; expected grid x refine <= 2048");
     if (outdir.empty()) throw qs::UsageError("-o: expected a folder name");
@@ -300,10 +300,10 @@ int main(int argc, char** argv) {
     }
     // The memory estimate, before anything large is allocated.
     {
-      const qs::dfi::MorphSize size = qs::dfi::morph_size(source.mesh, target.mesh, opt, endpoint_refine);
       qs::dfi::MemoryRequest req;
       req.frames = frames;
       req.endpoint_refine = exact_endpoints ? 1 : endpoint_refine;
+      const qs::dfi::MorphSize size = qs::dfi::morph_size(source.mesh, target.mesh, opt, req.endpoint_refine);
       req.even_timing = timing == "even";
       req.keep_frames = glb.has_value();
       const double bytes = qs::dfi::estimate_memory(size, req, !no_warp);
