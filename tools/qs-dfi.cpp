@@ -4,10 +4,16 @@
 // OUTDIR/frame_NNNN.<fmt> (connectivity differs per frame), OUTDIR/dfi.json and optionally a GLB
 // that plays the frames (one node per frame, scale animated in steps).
 //
-// Exit codes: 0 done, 1 usage, 2 invalid input (a mesh that is open, non-manifold, inconsistently
-// oriented, in several components, or encloses no volume; genus is reported, never rejected),
-// 3 i/o, 4 solver (the warp still folds after smoothing), 70 internal error.
+// Exit codes: 0 done, 1 usage (also an output that is an input, a request over --max-memory),
+// 2 invalid input (a mesh that is open, non-manifold, inconsistently oriented, in several
+// components, or encloses no volume; genus is reported, never rejected), 3 i/o, 4 solver (the
+// warp still folds after smoothing), 70 internal error.
+//
+// Every option, every input and the memory estimate are checked before any work; the frames and
+// dfi.json are staged beside OUTDIR (qs::OutputFolder) and the GLB written under a temporary name,
+// all moved into place only when the whole run succeeded.
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iomanip>
@@ -19,6 +25,8 @@
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
+#include "qs/core/output_folder.h"
 #include "qs/dfi/pipeline.h"
 #include "qs/dfi/retime.h"
 #include "qs/gltf/sequence.h"
@@ -26,6 +34,7 @@
 #include "qs/io/write_mesh.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/mesh/validate.h"
+#include "resource_limits.h"
 #include "tool_main.h"
 
 namespace fs = std::filesystem;
@@ -67,6 +76,72 @@ std::string frame_stem(int f, int frames) {
 }
 
 nlohmann::ordered_json vec_json(const qs::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+// A file name as it may appear in dfi.json or a message: bytes that are not UTF-8 written \xNN.
+std::string shown(const std::string& name) { return qs::json_strict::printable(name, std::string::npos); }
+
+// The GLB plays frames at these rates: its key times (float) stay finite, positive and distinct.
+constexpr double kMinFps = 0.001, kMaxFps = 1000;
+// A GLB stores float positions: inputs of larger coordinates, or smaller sizes, are refused for it.
+constexpr double kGlbMaxCoordinate = 1e30, kGlbMinSize = 1e-30;
+
+// Removes the folders it created unless disarmed.
+struct CreatedFolders {
+  std::vector<fs::path> made;  // deepest last
+  bool keep = false;
+  ~CreatedFolders() {
+    std::error_code ec;
+    if (!keep)
+      for (auto it = made.rbegin(); it != made.rend(); ++it) fs::remove(*it, ec);
+  }
+};
+
+// The GLB's folder: its nearest existing ancestor must be a writable folder (checked before any
+// work); the missing ones are created only when the GLB is written.
+void check_glb_destination(const fs::path& glb) {
+  std::error_code ec;
+  if (glb.filename().empty()) throw qs::UsageError("--glb " + shown(glb.string()) + ": expected a file name");
+  if (fs::is_directory(glb, ec)) throw qs::IoError("--glb " + shown(glb.string()) + ": is a folder; expected a file name");
+  fs::path p = glb.parent_path();
+  if (p.empty()) p = ".";
+  while (!fs::exists(fs::symlink_status(p, ec))) {
+    fs::path up = p.parent_path();
+    if (up.empty()) up = ".";
+    if (up == p) break;
+    p = up;
+  }
+  if (!fs::is_directory(p, ec))
+    throw qs::IoError("--glb " + shown(glb.string()) + ": " + shown(p.string()) + " is not a folder");
+  if (::access(p.c_str(), W_OK | X_OK) != 0)
+    throw qs::IoError("--glb " + shown(glb.string()) + ": the folder " + shown(p.string()) + " is not writable");
+}
+
+void make_glb_folder(const fs::path& glb, CreatedFolders& created) {
+  std::error_code ec;
+  std::vector<fs::path> missing;
+  for (fs::path p = glb.parent_path(); !p.empty() && !fs::exists(fs::symlink_status(p, ec)); p = p.parent_path()) {
+    missing.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    if (!fs::create_directory(*it, ec) || ec)
+      throw qs::IoError("--glb " + shown(glb.string()) + ": cannot create the folder " + shown(it->string()) +
+                        (ec ? " (" + ec.message() + ")" : std::string()));
+    created.made.push_back(*it);
+  }
+}
+
+std::string num(double x) {
+  std::ostringstream s;
+  s << x;
+  return s.str();
+}
+
+double largest_coordinate(const qs::TriMesh& m) {
+  double c = 0;
+  for (const qs::Vec3& p : m.positions) c = std::max(c, p.cwiseAbs().maxCoeff());
+  return c;
+}
 
 // A skeleton as JSON, its nodes mapped by `place` (morph space -> the shape's own coordinates).
 template <class Place>
@@ -136,21 +211,68 @@ int main(int argc, char** argv) {
                                                        "field on a grid R times finer (default 3; 1: the morph's grid)")
       ->check(CLI::Range(1, 8));
   app.add_flag("--exact-endpoints", exact_endpoints, "Write the inputs themselves as the first and last frames");
-  app.add_option("-o,--output", outdir, "Output folder (default dfi-out; created)");
+  app.add_option("-o,--output", outdir, "Output folder (default dfi-out; written beside it and moved into place when the whole run succeeded)");
   app.add_option("--format", format, "Frame format: obj (default) or ply")->check(CLI::IsMember({"obj", "ply"}));
   app.add_option("--glb", glb, "Also write a GLB that plays the frames (one node per frame, stepped scale)");
-  app.add_option("--fps", fps, "Frames per second of the GLB animation (default 12)")->check(CLI::PositiveNumber);
+  app.add_option("--fps", fps, "Frames per second of the GLB animation, 0.001 to 1000 (default 12)");
   app.add_option("--band", band, "Cells around the surface with exact distances (default 3; 0: exact "
                                  "everywhere, slow)")->check(CLI::Range(0, 64));
   app.add_option("--threads", threads, "Threads (0: all hardware threads; the output does not depend on it)")
       ->capture_default_str()
       ->check(CLI::Range(0, 4096));
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
+  double max_memory = qs::tools::kDefaultMaxMemoryGiB;
+  qs::tools::add_max_memory_option(app, max_memory);
 
   return qs::tools::run_tool(app, argc, argv, [&] {
     const auto t_start = Clock::now();
+    // Options first: nothing is read or written before they all hold.
+    if (!(fps >= kMinFps && fps <= kMaxFps))
+      throw qs::UsageError("--fps " + num(fps) + ": expected 0.001 to 1000 frames per second");
+    if (!(max_memory >= 0.001 && max_memory <= 1e6))
+      throw qs::UsageError("--max-memory " + num(max_memory) + ": expected 0.001 to 1e6 GiB");
+    if (!exact_endpoints && static_cast<long>(grid) * endpoint_refine > 2048)
+      throw qs::UsageError("--grid " + std::to_string(grid) + " with --endpoint-refine " + std::to_string(endpoint_refine) +
+                           ": the end frames' grid would exceed 2048 cells; expected grid x refine <= 2048");
+    if (outdir.empty()) throw qs::UsageError("-o: expected a folder name");
+    // No output replaces an input (under any spelling, through links).
+    std::vector<fs::path> inputs = {source_file, target_file};
+    for (const auto& l : landmark_files) inputs.push_back(l);
+    std::vector<std::string> outputs{"dfi.json"};  // names this run writes into OUTDIR
+    for (int f = 0; f < frames; ++f) outputs.push_back(frame_stem(f, frames) + "." + format);
+    const auto ours = [&](const std::string& name) {
+      return name == "dfi.json" || (name.rfind("frame_", 0) == 0 && std::find(outputs.begin(), outputs.end(), name) != outputs.end());
+    };
+    if (glb) {
+      qs::check_not_an_input(*glb, inputs, "--glb");
+      std::error_code ec;
+      const fs::path g = fs::weakly_canonical(fs::absolute(*glb), ec);
+      if (!ec && g.parent_path() == fs::weakly_canonical(fs::absolute(outdir), ec) && ours(g.filename().string()))
+        throw qs::UsageError("--glb " + shown(*glb) + " is a file this run writes into " + shown(outdir) +
+                             "; name the GLB otherwise");
+      check_glb_destination(*glb);
+    }
+    {
+      // An input can only be one of the outputs if it already exists in OUTDIR.
+      std::error_code ec;
+      const fs::path dir = fs::weakly_canonical(fs::absolute(outdir), ec);  // "x/../in" names "in"
+      if (!ec && fs::is_directory(dir, ec))
+        for (const auto& e : fs::directory_iterator(dir, ec))
+          if (ours(e.path().filename().string())) qs::check_not_an_input(e.path(), inputs, "-o");
+    }
     const Shape source = load(source_file, "source");
     const Shape target = load(target_file, "target");
+    if (glb)
+      for (const Shape* s : {&source, &target}) {
+        const double big = largest_coordinate(s->mesh), size = qs::bounding_box(s->mesh.positions).diagonal();
+        if (!(big <= kGlbMaxCoordinate) || !(size >= kGlbMinSize)) {
+          std::ostringstream m;
+          m << "--glb: " << shown(s->file) << " has coordinates up to " << big << " and size " << size
+            << "; a GLB stores 32-bit floats, so its inputs need coordinates up to " << kGlbMaxCoordinate
+            << " and a size of at least " << kGlbMinSize << " (scale the meshes, or leave out --glb)";
+          throw qs::InvalidInput(m.str());
+        }
+      }
     qs::Context ctx;
     ctx.threads = threads;
     qs::dfi::MorphOptions opt;
@@ -173,28 +295,48 @@ int main(int argc, char** argv) {
         for (const auto& fb : lb.features)
           if (fa.name == fb.name) opt.landmarks.push_back({fa.name, fa.position, fb.position});
       if (opt.landmarks.empty())
-        throw qs::InvalidInput(landmark_files[0] + " and " + landmark_files[1] +
+        throw qs::InvalidInput(shown(landmark_files[0]) + " and " + shown(landmark_files[1]) +
                                ": no feature name in common; name the landmarks that should match alike");
+    }
+    // The memory estimate, before anything large is allocated.
+    {
+      qs::dfi::MemoryRequest req;
+      req.frames = frames;
+      req.endpoint_refine = exact_endpoints ? 1 : endpoint_refine;
+      const qs::dfi::MorphSize size = qs::dfi::morph_size(source.mesh, target.mesh, opt, req.endpoint_refine);
+      req.even_timing = timing == "even";
+      req.keep_frames = glb.has_value();
+      const double bytes = qs::dfi::estimate_memory(size, req, !no_warp);
+      std::ostringstream what;
+      what << "--grid " << grid << " (" << size.grid_dims[0] << " x " << size.grid_dims[1] << " x " << size.grid_dims[2]
+           << " samples";
+      if (req.endpoint_refine > 1)
+        what << ", end frames on up to " << std::max(size.source_end_dims[0], size.target_end_dims[0]) << " x "
+             << std::max(size.source_end_dims[1], size.target_end_dims[1]) << " x "
+             << std::max(size.source_end_dims[2], size.target_end_dims[2]);
+      what << ") with --frames " << frames << (req.even_timing ? " (even timing)" : "") << (glb ? " and --glb" : "");
+      qs::tools::check_memory(bytes, max_memory, what.str());
     }
     auto say = [&](const std::string& m) {
       if (!quiet) std::cerr << "qs-dfi: " << m << "\n";
     };
-    say("source " + source_file + ": " + std::to_string(source.mesh.num_vertices()) + " vertices, genus " +
-        std::to_string(source.report.genus) + "; target " + target_file + ": " +
+    // The output folder is staged: nothing appears in OUTDIR before the run succeeded.
+    qs::OutputFolder out_folder(outdir);
+    const fs::path staging = out_folder.staging();
+    say("source " + shown(source_file) + ": " + std::to_string(source.mesh.num_vertices()) + " vertices, genus " +
+        std::to_string(source.report.genus) + "; target " + shown(target_file) + ": " +
         std::to_string(target.mesh.num_vertices()) + " vertices, genus " + std::to_string(target.report.genus));
     const qs::dfi::PreparedMorph morph = qs::dfi::prepare_morph(source.mesh, target.mesh, opt, ctx);
     const double prep_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+    const double unit = 1 / morph.source_to_morph.scale;  // morph space -> source units, for lengths
     {
       std::ostringstream m;
       m << "grid " << morph.source_sdf.dims[0] << " x " << morph.source_sdf.dims[1] << " x "
-        << morph.source_sdf.dims[2] << " (spacing " << morph.source_sdf.spacing << "), distance fields"
+        << morph.source_sdf.dims[2] << " (spacing " << morph.spacing() << "), distance fields"
         << (morph.warp ? " and correspondence" : "") << " in "
         << std::fixed << std::setprecision(2) << prep_s << " s";
       say(m.str());
     }
-    std::error_code ec;
-    fs::create_directories(outdir, ec);
-    if (ec || !fs::is_directory(outdir)) throw qs::IoError(outdir + ": cannot create the output folder: " + ec.message());
 
     // Frame times: uniform, or at equal steps of the change between cheap dense frames.
     std::vector<double> times(frames);
@@ -208,7 +350,9 @@ int main(int argc, char** argv) {
       timing_json["dense_samples"] = r.dense_times.size();
       timing_json["coarsen"] = ro.coarsen;
       timing_json["dense_t"] = r.dense_times;
-      timing_json["dense_change"] = r.dense_change;
+      std::vector<double> change = r.dense_change;
+      for (double& c : change) c *= unit;  // in the source's units
+      timing_json["dense_change"] = change;
       std::ostringstream m;
       m << "even frame times from " << r.dense_times.size() << " dense frames in " << std::fixed << std::setprecision(2)
         << std::chrono::duration<double>(Clock::now() - t0).count() << " s";
@@ -238,7 +382,7 @@ int main(int argc, char** argv) {
       if (!exact && !st.closed_manifold)
         throw qs::InternalError("frame " + std::to_string(f) + " is not a closed oriented surface");
       const std::string file = frame_stem(f, frames) + "." + format;
-      qs::io::write_mesh(fs::path(outdir) / file, mesh);
+      qs::io::write_mesh(staging / file, mesh);
       frames_json.push_back({{"index", f},
                              {"t", t},
                              {"file", file},
@@ -267,7 +411,7 @@ int main(int argc, char** argv) {
       say(m.str());
     }
     const auto shape_json = [](const Shape& s, double volume) {
-      return nlohmann::ordered_json{{"file", s.file},
+      return nlohmann::ordered_json{{"file", shown(s.file)},
                                     {"vertices", s.mesh.num_vertices()},
                                     {"faces", s.mesh.num_faces()},
                                     {"genus", s.report.genus},
@@ -284,7 +428,9 @@ int main(int argc, char** argv) {
                      {"exact_endpoints", exact_endpoints}, {"frame_format", format}, {"timing", timing},
                      {"endpoint_refine", endpoint_refine}, {"volume", volume}, {"topology_control", !no_topology}}},
         {"timing", timing_json},
-        {"grid", {{"dims", {g.dims[0], g.dims[1], g.dims[2]}}, {"spacing", g.spacing}, {"origin", vec_json(g.origin)}}},
+        {"grid", {{"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+                  {"spacing", morph.spacing()},
+                  {"origin", vec_json(morph.source_to_morph.inverse().apply(g.origin))}}},
         {"alignment", {{"scale", morph.target_to_source.scale},
                        {"rotation", {morph.target_to_source.rotation.row(0).eval(), morph.target_to_source.rotation.row(1).eval(),
                                      morph.target_to_source.rotation.row(2).eval()}},
@@ -296,8 +442,10 @@ int main(int argc, char** argv) {
         {"correspondence", nullptr},
         {"frames", frames_json}};
     if (morph.warp) {
-      const auto to_target = [&](const qs::Vec3& p) { return qs::dfi::placement(morph.target_to_source, 1.0, p); };
-      const auto same = [](const qs::Vec3& p) { return p; };
+      // Morph space -> the source's and the target's own coordinates.
+      const qs::dfi::Similarity to_source = morph.source_to_morph.inverse(), to_target_units = morph.target_to_morph.inverse();
+      const auto to_target = [&](const qs::Vec3& p) { return to_target_units.apply(p); };
+      const auto same = [&](const qs::Vec3& p) { return to_source.apply(p); };
       report["skeletons"] = {{"source", skeleton_json(morph.source_skeleton, morph.source_branches, same)},
                              {"target", skeleton_json(morph.target_skeleton, morph.target_branches, to_target)}};
       nlohmann::ordered_json nodes = nlohmann::ordered_json::array(), branches = nlohmann::ordered_json::array(),
@@ -306,7 +454,7 @@ int main(int argc, char** argv) {
         nodes.push_back({{"source", n.source}, {"target", n.target}, {"forced", n.forced}, {"name", n.name}});
       for (const auto& b : morph.matching.branches)
         branches.push_back({{"source", b.source}, {"target", b.target}, {"reversed", b.reversed}});
-      for (const auto& a : morph.anchors) anchors.push_back({{"source", vec_json(a.source)}, {"target", vec_json(to_target(a.target))}});
+      for (const auto& a : morph.anchors) anchors.push_back({{"source", vec_json(same(a.source))}, {"target", vec_json(to_target(a.target))}});
       report["matches"] = {{"nodes", nodes}, {"branches", branches}};
       report["anchors"] = anchors;
       report["correspondence"] = {{"transport", global_transport ? "global" : "per part"},
@@ -336,15 +484,22 @@ int main(int argc, char** argv) {
         << (morph.bones.empty() ? ", linear warp" : ", part warp with " + std::to_string(morph.bones.size()) + " bones");
       say(m.str());
     }
+    // dfi.json staged, then the GLB (written under a temporary name and renamed), then the folder
+    // moved into place: a failure before the last step leaves OUTDIR and the GLB as they were.
+    qs::write_file_atomically(staging / "dfi.json",
+                              report.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
+    CreatedFolders glb_folders;
     if (glb) {
       qs::gltf::SequenceOptions so;
       so.seconds_per_frame = 1.0 / fps;
       so.name = "dfi";
+      make_glb_folder(*glb, glb_folders);
       qs::gltf::write_sequence_glb(*glb, seq, so);
     }
-    qs::write_file_atomically(fs::path(outdir) / "dfi.json", report.dump(2) + "\n");
+    out_folder.commit();
+    glb_folders.keep = true;
     std::ostringstream m;
-    m << "wrote " << frames << " frames to " << outdir << (glb ? " and " + *glb : std::string()) << " in "
+    m << "wrote " << frames << " frames to " << shown(outdir) << (glb ? " and " + shown(*glb) : std::string()) << " in "
       << std::fixed << std::setprecision(2) << std::chrono::duration<double>(Clock::now() - t_start).count() << " s";
     say(m.str());
     return 0;

@@ -34,7 +34,7 @@ TEST(Pipeline, SphereToTorusFramesAreClosedAndEndpointsWithinAVoxel) {
         EXPECT_EQ(s.genus, f == 0 ? 0 : 1);
         EXPECT_EQ(s.components, 1);
         const metro::MetroResult r = metro::metro(mesh, f == 0 ? sphere : torus);
-        EXPECT_LT(r.max, m.source_sdf.spacing) << "frame " << f << " Hausdorff " << r.max;
+        EXPECT_LT(r.max, m.spacing()) << "frame " << f << " Hausdorff " << r.max;
       }
     }
   }
@@ -55,7 +55,7 @@ TEST(Pipeline, SimilarityAlignmentMovesFromSourceToTargetPlacement) {
   const Box3 box = bounding_box(last.positions);
   EXPECT_NEAR(0.5 * (box.min + box.max).x(), 5.0, 0.05);
   EXPECT_NEAR(box.max.y() - box.min.y(), 4.0, 0.1);
-  EXPECT_LT(metro::metro(last, b).max, 2.0 * m.source_sdf.spacing);  // a morph-space voxel, scaled by 2
+  EXPECT_LT(metro::metro(last, b).max, 2.0 * m.spacing());  // a morph-space voxel, scaled by 2
 }
 
 TEST(Pipeline, SimilarityAlignmentFindsTheRotationOfAnElongatedShape) {
@@ -76,5 +76,5 @@ TEST(Pipeline, SimilarityAlignmentFindsTheRotationOfAnElongatedShape) {
   const double volume = 4.0 / 3.0 * M_PI * 2.0 * 1.0 * 0.5;
   const MeshStats mid = mesh_stats(frame_mesh(m, blend_field(m, 0.5), 0.0));
   EXPECT_NEAR(mid.volume, volume, 0.03 * volume);
-  EXPECT_LT(metro::metro(frame_mesh(m, blend_field(m, 1.0), 1.0), b).max, 3.0 * m.source_sdf.spacing);
+  EXPECT_LT(metro::metro(frame_mesh(m, blend_field(m, 1.0), 1.0), b).max, 3.0 * m.spacing());
 }

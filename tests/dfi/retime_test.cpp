@@ -95,9 +95,9 @@ TEST(EndpointFrame, AFinerGridHoldsAPlateThinnerThanAVoxel) {
   EXPECT_GT(s.volume, 0);
   EXPECT_EQ(test_support::self_intersections(fine), 0);
   const double refined = metro::metro(fine, plate).max;
-  EXPECT_LT(refined, 0.6 * m.source_sdf.spacing) << "coarse " << coarse;
+  EXPECT_LT(refined, 0.6 * m.spacing()) << "coarse " << coarse;
   EXPECT_LT(refined, coarse);
   // The target's end in its own coordinates (frame_mesh at t = 1 puts it there too).
-  EXPECT_LT(metro::metro(endpoint_frame(m, ball, true, 2), ball).max, 0.5 * m.source_sdf.spacing);
+  EXPECT_LT(metro::metro(endpoint_frame(m, ball, true, 2), ball).max, 0.5 * m.spacing());
   EXPECT_THROW(endpoint_frame(m, ball, true, 0), InvalidInput);
 }

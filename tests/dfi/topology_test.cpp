@@ -177,5 +177,5 @@ TEST(MakeBall, AnEndFrameCarriesItsGenusZeroInputsGenus) {
   const TriMesh end = endpoint_frame(on, plate, false, 2, {}, {}, &report);
   EXPECT_GT(report.removed, 0u);
   expect_sphere(end, "plate end frame");
-  EXPECT_LT(metro::metro(end, plate).max, on.source_sdf.spacing);
+  EXPECT_LT(metro::metro(end, plate).max, on.spacing());
 }

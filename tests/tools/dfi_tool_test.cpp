@@ -1,14 +1,21 @@
 // qs-dfi as a user runs it: outputs, dfi.json, exit codes and messages.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "../common/gltf_test_support.h"
+#include "qs/core/mesh.h"
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
 #include "tool_runner.h"
@@ -161,4 +168,191 @@ TEST_F(DfiTool, PartWarpGivesTheSameBytesOnOneOrTwoThreads) {
   EXPECT_EQ(bytes[0][0], bytes[1][0]);
   EXPECT_EQ(bytes[0][1], bytes[1][1]);
   EXPECT_EQ(bytes[0][2], bytes[1][2]);  // the refined endpoint frame
+}
+
+namespace {
+
+qs::TriMesh scaled(qs::TriMesh m, double s) {
+  for (qs::Vec3& p : m.positions) p *= s;
+  return m;
+}
+
+std::string bytes_of(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+// The vertices of an OBJ frame, as written.
+std::vector<qs::Vec3> obj_vertices(const fs::path& p) {
+  std::vector<qs::Vec3> v;
+  std::ifstream f(p);
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream s(line.substr(2));
+      qs::Vec3 x;
+      s >> x.x() >> x.y() >> x.z();
+      v.push_back(x);
+    }
+  return v;
+}
+
+}  // namespace
+
+TEST_F(DfiTool, ExtremeCoordinatesMorphLikeTheUnitSizedPair) {
+  const qs::TriMesh a = qs::shapes::ellipsoid(1.5, 0.7, 0.6, 2), b = qs::shapes::torus(32, 12);
+  const std::string opts = " --no-warp --timing uniform --frames 3 --grid 16 --endpoint-refine 2 -q -o ";
+  ASSERT_EQ(run_tool("qs-dfi", write("a.obj", a) + " " + write("b.obj", b) + opts + (dir_ / "o1").string()).exit, 0);
+  for (const double s : {1e30, 1e-30}) {
+    const std::string tag = s > 1 ? "big" : "small";
+    const fs::path out = dir_ / tag;
+    const RunResult r = run_tool("qs-dfi", write(tag + "a.obj", scaled(a, s)) + " " + write(tag + "b.obj", scaled(b, s)) +
+                                               opts + out.string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    for (const char* f : {"frame_0000.obj", "frame_0001.obj", "frame_0002.obj"}) {
+      const auto one = obj_vertices(dir_ / "o1" / f), many = obj_vertices(out / f);
+      ASSERT_EQ(one.size(), many.size()) << tag << " " << f;
+      ASSERT_GT(one.size(), 100u);
+      double worst = 0;
+      for (size_t i = 0; i < one.size(); ++i) worst = std::max(worst, (many[i] / s - one[i]).norm());
+      EXPECT_LT(worst, 1e-12) << tag << " " << f;  // the same frames, scaled
+    }
+  }
+  // With the warp and the alignment: a pair at 1e90, and a target 1e90 times the source.
+  const std::string big_a = write("ha.obj", scaled(a, 1e90)), big_b = write("hb.obj", scaled(b, 1e90));
+  const std::string warp = " --frames 3 --grid 16 --emd-voxels 200 --endpoint-refine 1 -q -o ";
+  RunResult r = run_tool("qs-dfi", big_a + " " + big_b + warp + (dir_ / "w90").string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-dfi", write("sa.obj", a) + " " + big_b + warp + (dir_ / "s90").string() + " --align similarity");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(dir_ / "s90" / "dfi.json"));
+  EXPECT_NEAR(std::log10(j["alignment"]["scale"].get<double>()), -90, 0.5);
+  for (const char* f : {"frame_0000.obj", "frame_0001.obj", "frame_0002.obj"})
+    for (const auto& p : obj_vertices(dir_ / "s90" / f)) ASSERT_TRUE(p.allFinite()) << f;
+  // The last frame is the target, in its own units (within two of its voxels).
+  qs::Vec3 lo = qs::Vec3::Constant(1e300), hi = -lo;
+  for (const auto& p : obj_vertices(dir_ / "s90" / "frame_0002.obj")) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const qs::Box3 tb = qs::bounding_box(scaled(b, 1e90).positions);
+  EXPECT_LT((lo - tb.min).norm() + (hi - tb.max).norm(), 0.2 * tb.diagonal());
+}
+
+TEST_F(DfiTool, RefusesOutputsThatAreItsInputs) {
+  fs::create_directories(dir_ / "in");
+  const std::string src = write("in/frame_0000.obj", qs::shapes::icosphere(2));
+  const std::string tgt = write("in/t.obj", qs::shapes::torus(32, 12));
+  const std::string before_src = bytes_of(src), before_tgt = bytes_of(tgt);
+  fs::create_directory_symlink(dir_ / "in", dir_ / "link");
+  const std::string base = src + " " + tgt + " --no-warp --frames 3 --grid 16 -q";
+  for (const std::string& extra :
+       {" --glb " + src, " --glb " + (dir_ / "in" / "." / ".." / "in" / "t.obj").string(), " -o " + (dir_ / "in").string(),
+        " -o " + (dir_ / "link").string() + "/", " -o " + (dir_ / "x" / ".." / "in").string(),
+        " --glb " + (dir_ / "link" / "t.obj").string()}) {
+    const RunResult r = run_tool("qs-dfi", base + extra);
+    EXPECT_EQ(r.exit, 1) << extra << "\n" << r.out;
+    EXPECT_THAT(r.out, HasSubstr("is an input of this run")) << extra;
+  }
+  // The GLB onto a file the run writes into -o.
+  const RunResult r = run_tool("qs-dfi", base + " -o " + (dir_ / "o").string() + " --glb " + (dir_ / "o" / "dfi.json").string());
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_EQ(bytes_of(src), before_src);
+  EXPECT_EQ(bytes_of(tgt), before_tgt);
+  EXPECT_FALSE(fs::exists(dir_ / "o"));
+}
+
+TEST_F(DfiTool, BadOptionsAndFailuresLeaveNothingBehind) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(2)), b = write("b.obj", qs::shapes::torus(32, 12));
+  const fs::path out = dir_ / "out";
+  const std::string base =
+      a + " " + b + " --no-warp --timing uniform --endpoint-refine 1 --frames 3 --grid 16 -q -o " + out.string();
+  struct Case {
+    std::string args;
+    int exit;
+  };
+  for (const Case& c : std::vector<Case>{{" --fps nan --glb " + (dir_ / "g.glb").string(), 1},
+                                         {" --fps 1e-300 --glb " + (dir_ / "g.glb").string(), 1},
+                                         {" --fps 1e300 --glb " + (dir_ / "g.glb").string(), 1},
+                                         {" --fps -1", 1},
+                                         {" --max-memory nan", 1},
+                                         {" --glb " + a + "/x.glb", 3},  // a folder that is a file
+                                         {" --glb " + dir_.string(), 3}}) {
+    const RunResult r = run_tool("qs-dfi", base + c.args);
+    EXPECT_EQ(r.exit, c.exit) << c.args << "\n" << r.out;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+    EXPECT_FALSE(fs::exists(dir_ / "g.glb")) << c.args;
+    for (const auto& e : fs::directory_iterator(dir_))
+      EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << c.args << ": " << e.path();
+  }
+  // A failure after the staging began (the warp finds no interior voxel in a shape 1e-20 times
+  // the other's size): neither a frame nor the GLB, and no staging folder.
+  const std::string tiny = write("tiny.obj", scaled(qs::shapes::icosphere(2), 1e-20));
+  const RunResult late = run_tool("qs-dfi", tiny + " " + b + " --frames 3 --grid 16 -q -o " + out.string() +
+                                                " --glb " + (dir_ / "g.glb").string());
+  EXPECT_EQ(late.exit, 2) << late.out;
+  EXPECT_THAT(late.out, HasSubstr("no interior voxel"));
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir_ / "g.glb"));
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  // A GLB in folders that do not exist yet: made at the end; the extreme frame rates validate.
+  for (const char* fps : {"0.001", "1000"}) {
+    const fs::path glb = dir_ / "new" / fps / "m.glb";
+    const RunResult r = run_tool("qs-dfi", base + fps + std::string("x") + " --fps " + fps + " --glb " + glb.string());
+    ASSERT_EQ(r.exit, 0) << r.out;
+    EXPECT_TRUE(fs::exists(fs::path(out.string() + fps + "x") / "dfi.json"));
+    std::string validator_out;
+    const int rc = qs::testing::run_gltf_validator(glb, &validator_out);
+    if (rc != 3) EXPECT_EQ(rc, 0) << validator_out;
+  }
+}
+
+TEST_F(DfiTool, AnInterruptedRunLeavesNothingInTheTarget) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(2)), b = write("b.obj", qs::shapes::torus(32, 12));
+  const fs::path out = dir_ / "out";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string tool = std::string(QS_TOOLS_DIR) + "/qs-dfi";
+    ::execl(tool.c_str(), "qs-dfi", a.c_str(), b.c_str(), "--no-warp", "--timing", "uniform", "--endpoint-refine", "1",
+            "--frames", "400", "--grid", "24", "-q", "-o", out.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const fs::path third = dir_ / ("out.tmp-" + std::to_string(pid)) / "frame_0002.obj";
+  for (int i = 0; i < 2000 && !fs::exists(third); ++i) ::usleep(5000);
+  EXPECT_TRUE(fs::exists(third));  // three frames written (staged)
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status));
+  EXPECT_FALSE(fs::exists(out));  // the target never saw a frame
+}
+
+TEST_F(DfiTool, NamesThatAreNotUtf8Work) {
+  const std::string a = write("\xff.obj", qs::shapes::icosphere(2)), b = write("b.obj", qs::shapes::torus(32, 12));
+  const fs::path out = dir_ / "d\xfe" / "o";
+  const RunResult r = run_tool("qs-dfi", "'" + a + "' " + b + " --no-warp --frames 3 --grid 16 -o '" + out.string() + "'");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("\\xff.obj"));
+  const auto j = nlohmann::json::parse(std::ifstream(out / "dfi.json"));
+  EXPECT_THAT(j["source"]["file"].get<std::string>(), HasSubstr("\\xff.obj"));
+}
+
+TEST_F(DfiTool, LargeRequestsAreRefusedUpFrontWithTheEstimate) {
+  const std::string a = write("a.obj", qs::shapes::icosphere(2)), b = write("b.obj", qs::shapes::torus(32, 12));
+  const fs::path out = dir_ / "out";
+  for (const std::string& args : {std::string(" --grid 1024 --endpoint-refine 2"), std::string(" --frames 100000"),
+                                  std::string(" --frames 100000 --timing uniform --glb ") + (dir_ / "g.glb").string(),
+                                  std::string(" --max-memory 0.01")}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const RunResult r = run_tool("qs-dfi", a + " " + b + args + " -o " + out.string());
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.exit, 1) << args << "\n" << r.out;
+    EXPECT_THAT(r.out, HasSubstr("GiB of memory, more than --max-memory")) << args;
+    EXPECT_LT(s, 1.0) << args;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(dir_ / "g.glb"));
+  }
+  // The grid of the end frames has its own bound.
+  const RunResult r = run_tool("qs-dfi", a + " " + b + " --grid 1024 -o " + out.string());
+  EXPECT_EQ(r.exit, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("2048"));
 }

@@ -121,13 +121,16 @@ std::vector<int> part_labels(const VoxelSet& v, const Skeleton& s, const std::ve
   return label;
 }
 
-// Skeletons of both shapes, pruned, and their branches.
-void build_skeletons(PreparedMorph& m, const TriMesh& source, const TriMesh& moved, const MorphOptions& o,
-                     const Context& ctx) {
+// Skeletons of both shapes (each computed at unit size, then placed into morph space by
+// `source_place` / `target_place`), pruned, and their branches.
+void build_skeletons(PreparedMorph& m, const TriMesh& source, const Similarity& source_place, const TriMesh& target,
+                     const Similarity& target_place, const MorphOptions& o, const Context& ctx) {
   ctx.report("skeletons", 0.0);
-  const double diagonal = bounding_box(source.positions).diagonal();
+  const double diagonal = bounding_box(source.positions).diagonal() * source_place.scale;
   m.source_skeleton = curve_skeleton(source);
-  m.target_skeleton = curve_skeleton(moved);
+  m.target_skeleton = curve_skeleton(target);
+  for (Vec3& p : m.source_skeleton.nodes) p = source_place.apply(p);
+  for (Vec3& p : m.target_skeleton.nodes) p = target_place.apply(p);
   prune_skeleton(m.source_skeleton, o.prune_fraction * diagonal);
   prune_skeleton(m.target_skeleton, o.prune_fraction * diagonal);
   m.source_branches = skeleton_branches(m.source_skeleton);
@@ -152,8 +155,8 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
   }
   std::vector<NodePair> forced;
   for (const auto& lm : o.landmarks)
-    forced.push_back({nearest_node(m.source_skeleton, lm.source),
-                      nearest_node(m.target_skeleton, m.target_to_source.apply(lm.target)), true, lm.name});
+    forced.push_back({nearest_node(m.source_skeleton, m.source_to_morph.apply(lm.source)),
+                      nearest_node(m.target_skeleton, m.target_to_morph.apply(lm.target)), true, lm.name});
   m.matching = match_skeletons(m.source_skeleton, m.source_branches, m.target_skeleton, m.target_branches, forced,
                                diagonal);
   std::vector<AnchorPair> anchors = sample_anchors(m.source_skeleton, m.source_branches, m.target_skeleton,
@@ -173,12 +176,13 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
   }
   if (v0.sample.empty() || v1.sample.empty())
     throw InvalidInput("a shape has no interior voxel on the correspondence grid (" + std::to_string(cells) +
-                       " cells); it is too thin for it");
+                       " cells): it is too thin for it, or too small beside the other (--align similarity scales "
+                       "the target to the source; --no-warp blends without the correspondence)");
   m.emd_cells = cells;
   m.source_voxels = static_cast<int>(v0.sample.size());
   m.target_voxels = static_cast<int>(v1.sample.size());
   // Anchor voxels, distinct on both sides; without any, the volume centroids.
-  if (anchors.empty()) anchors.push_back({m.target_to_source.to, m.target_to_source.to});
+  if (anchors.empty()) anchors.push_back({m.source_centroid, m.source_centroid});
   std::vector<int> a0, a1;
   std::vector<char> taken0(v0.sample.size(), 0), taken1(v1.sample.size(), 0);
   for (const AnchorPair& a : anchors) {
@@ -358,6 +362,24 @@ Displacement frame_bone_warp(const std::vector<Bone>& bones, const Grid& geometr
 
 }  // namespace
 
+Similarity Similarity::inverse() const {
+  Similarity r;
+  r.scale = 1 / scale;
+  r.rotation = rotation.transpose();
+  r.from = to;
+  r.to = from;
+  return r;
+}
+
+Similarity Similarity::after(const Similarity& first) const {
+  Similarity r;
+  r.scale = scale * first.scale;
+  r.rotation = rotation * first.rotation;
+  r.from = first.from;
+  r.to = apply(first.to);
+  return r;
+}
+
 Vec3 placement(const Similarity& s, double t, const Vec3& y) {
   const double scale = (1 - t) + t * s.scale;
   const Eigen::Quaterniond q = Eigen::Quaterniond::Identity().slerp(t, Eigen::Quaterniond(s.rotation));
@@ -365,48 +387,193 @@ Vec3 placement(const Similarity& s, double t, const Vec3& y) {
   return centre + q.conjugate() * (y - s.to) / scale;
 }
 
-PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options,
-                            const Context& ctx) {
+namespace {
+
+// x -> (x - centre) / diagonal: the box's centre to the origin, its diagonal to 1.
+Similarity unit_box(const Box3& box, const char* what) {
+  const Vec3 extent = box.max - box.min;
+  const double longest = extent.cwiseAbs().maxCoeff();
+  const double d = longest > 0 ? longest * (extent / longest).norm() : 0.0;  // no overflow near 1e308
+  if (!(d > 0) || !std::isfinite(d) || !std::isfinite(1 / d))
+    throw InvalidInput(std::string(what) + ": its bounding box has diagonal " + std::to_string(d) +
+                       "; expected a positive, finite size");
+  Similarity s;
+  s.scale = 1 / d;
+  s.from = 0.5 * (box.min + box.max);
+  return s;
+}
+
+TriMesh moved_by(const TriMesh& m, const Similarity& s) {
+  TriMesh out = m;
+  for (Vec3& p : out.positions) p = s.apply(p);
+  return out;
+}
+
+bool finite(const Similarity& s) {
+  return std::isfinite(s.scale) && s.scale > 0 && s.rotation.allFinite() && s.from.allFinite() && s.to.allFinite();
+}
+
+// The shapes placed as the morph places them (prepare_morph's first step).
+struct Placed {
+  Similarity source_to_morph, target_to_morph, target_to_source;
+  TriMesh source, target;  // in morph space
+  TriMesh unit_source, unit_target;  // each scaled to unit size on its own
+  Similarity unit_source_to_morph, unit_target_to_morph;
+  Vec3 source_centroid = Vec3::Zero();
+  double source_volume = 0, target_volume = 0;  // in the inputs' own units
+  Box3 box;                                     // around both, in morph space
+};
+
+// Each shape is scaled to unit size on its own first: volumes, centroids, principal axes and the
+// rotation search see numbers near 1 whatever the inputs' magnitude. The alignment found there is
+// carried back to the inputs' units (target_to_source), and morph space is the source's units
+// scaled so that the box around the source and the placed target has diagonal 1.
+Placed place_shapes(const TriMesh& source, const TriMesh& target, Align align) {
+  const Similarity ns = unit_box(bounding_box(source.positions), "source");
+  const Similarity nt = unit_box(bounding_box(target.positions), "target");
+  const TriMesh s1 = moved_by(source, ns), t1 = moved_by(target, nt);
+  double vs = 0, vt = 0;
+  const Vec3 c0 = volume_centroid(s1, vs);
+  const Vec3 c1 = volume_centroid(t1, vt);
+  if (!(vs > 0) || !(vt > 0))
+    throw InvalidInput("a shape encloses no volume (source " + std::to_string(vs) + ", target " + std::to_string(vt) +
+                       " of its bounding box's diagonal cubed)");
+  Placed p;
+  p.source_volume = vs / (ns.scale * ns.scale * ns.scale);
+  p.target_volume = vt / (nt.scale * nt.scale * nt.scale);
+  Similarity t_to_s;  // unit target -> unit source
+  if (align == Align::Similarity) {
+    t_to_s.scale = std::cbrt(vs / vt);
+    t_to_s.from = c1;
+    t_to_s.to = c0;
+    t_to_s.rotation = best_rotation(s1, c0, t1, c1, t_to_s.scale);
+  } else {
+    t_to_s = ns.after(nt.inverse());
+  }
+  p.target_to_source = ns.inverse().after(t_to_s.after(nt));
+  const TriMesh moved = moved_by(t1, t_to_s);  // in the unit source's space
+  Box3 box = bounding_box(s1.positions);
+  const Box3 b1 = bounding_box(moved.positions);
+  box.min = box.min.cwiseMin(b1.min);
+  box.max = box.max.cwiseMax(b1.max);
+  const Similarity to_morph = unit_box(box, "the two shapes together");
+  p.source_to_morph = to_morph.after(ns);
+  p.target_to_morph = to_morph.after(t_to_s.after(nt));
+  if (!finite(p.target_to_source) || !finite(p.source_to_morph) || !finite(p.target_to_morph))
+    throw InvalidInput("the shapes' sizes differ by more than double precision can scale (source diagonal " +
+                       std::to_string(1 / ns.scale) + ", target " + std::to_string(1 / nt.scale) + ")");
+  p.source = moved_by(s1, to_morph);
+  p.target = moved_by(moved, to_morph);
+  p.unit_source = s1;
+  p.unit_target = t1;
+  p.unit_source_to_morph = to_morph;
+  p.unit_target_to_morph = to_morph.after(t_to_s);
+  p.source_centroid = to_morph.apply(c0);
+  p.box = bounding_box(p.source.positions);
+  const Box3 b2 = bounding_box(p.target.positions);
+  p.box.min = p.box.min.cwiseMin(b2.min);
+  p.box.max = p.box.max.cwiseMax(b2.max);
+  return p;
+}
+
+void check_morph_options(const MorphOptions& options) {
   if (options.grid < 8 || options.grid > 1024)
     throw InvalidInput("grid is " + std::to_string(options.grid) + " cells; expected 8 to 1024");
   if (options.pad < 2) throw InvalidInput("pad is " + std::to_string(options.pad) + " cells; expected at least 2");
   if (!(options.max_iso_shift >= 0 && options.max_iso_shift <= 64))
     throw InvalidInput("max_iso_shift is " + std::to_string(options.max_iso_shift) + " cells; expected 0 to 64");
+}
+
+// endpoint_frame's grid over an input of `box` (its own units) at `voxel` (its own units).
+Grid endpoint_domain(const Box3& box, double voxel) {
+  const double longest = (box.max - box.min).maxCoeff();
+  const double cells = std::ceil(longest / voxel);
+  if (!(cells <= 2048))
+    throw InvalidInput("endpoint grid of " + std::to_string(cells) + " cells; expected at most 2048 (lower the refinement)");
+  return grid_over(box, std::max(8, static_cast<int>(cells)), 3);
+}
+
+}  // namespace
+
+PreparedMorph prepare_morph(const TriMesh& source, const TriMesh& target, const MorphOptions& options,
+                            const Context& ctx) {
+  check_morph_options(options);
   PreparedMorph m;
   m.volume = options.volume;
   m.max_iso_shift = options.max_iso_shift;
   m.topology_control = options.topology_control;
   m.source_genus = mesh_stats(source).genus;
   m.target_genus = mesh_stats(target).genus;
-  const Vec3 c0 = volume_centroid(source, m.source_volume);
-  const Vec3 c1 = volume_centroid(target, m.target_volume);
-  if (!(m.source_volume > 0) || !(m.target_volume > 0))
-    throw InvalidInput("a shape encloses no volume (source " + std::to_string(m.source_volume) + ", target " +
-                       std::to_string(m.target_volume) + ")");
-  if (options.align == Align::Similarity) {
-    m.target_to_source.scale = std::cbrt(m.source_volume / m.target_volume);
-    m.target_to_source.from = c1;
-    m.target_to_source.to = c0;
-    m.target_to_source.rotation = best_rotation(source, c0, target, c1, m.target_to_source.scale);
-  }
-  TriMesh moved = target;
-  for (Vec3& p : moved.positions) p = m.target_to_source.apply(p);
+  const Placed p = place_shapes(source, target, options.align);
+  m.target_to_source = p.target_to_source;
+  m.source_to_morph = p.source_to_morph;
+  m.target_to_morph = p.target_to_morph;
+  m.source_centroid = p.source_centroid;
+  m.source_volume = p.source_volume;
+  m.target_volume = p.target_volume;
   if (options.warp) {
     check_correspondence_options(options);
-    build_skeletons(m, source, moved, options, ctx);
+    build_skeletons(m, p.unit_source, p.unit_source_to_morph, p.unit_target, p.unit_target_to_morph, options, ctx);
   }
-  Box3 box = bounding_box(source.positions);
-  const Box3 b1 = bounding_box(moved.positions);
-  box.min = box.min.cwiseMin(b1.min);
-  box.max = box.max.cwiseMax(b1.max);
-  const Grid domain = grid_over(box, options.grid, options.pad);
+  const Grid domain = grid_over(p.box, options.grid, options.pad);
   ctx.report("distance fields", 0.0);
-  m.source_sdf = signed_distance(source, domain, options.sdf, ctx.without_progress());
+  m.source_sdf = signed_distance(p.source, domain, options.sdf, ctx.without_progress());
   ctx.report("distance fields", 0.5);
-  m.target_sdf = signed_distance(moved, domain, options.sdf, ctx.without_progress());
+  m.target_sdf = signed_distance(p.target, domain, options.sdf, ctx.without_progress());
   ctx.report("distance fields", 1.0);
-  if (options.warp) build_correspondence(m, source, options, ctx);
+  if (options.warp) build_correspondence(m, p.source, options, ctx);
   return m;
+}
+
+MorphSize morph_size(const TriMesh& source, const TriMesh& target, const MorphOptions& options, int endpoint_refine) {
+  check_morph_options(options);
+  if (endpoint_refine < 1 || endpoint_refine > 8)
+    throw InvalidInput("endpoint refinement is " + std::to_string(endpoint_refine) + "; expected 1 to 8");
+  const Placed p = place_shapes(source, target, options.align);
+  MorphSize s;
+  const Grid domain = grid_over(p.box, options.grid, options.pad);
+  s.grid_dims = domain.dims;
+  s.spacing = domain.spacing;
+  s.source_area = surface_area(p.source);
+  s.target_area = surface_area(p.target);
+  if (endpoint_refine > 1) {
+    s.source_end_dims = endpoint_domain(bounding_box(p.source.positions), domain.spacing / endpoint_refine).dims;
+    s.target_end_dims = endpoint_domain(bounding_box(p.target.positions), domain.spacing / endpoint_refine).dims;
+  }
+  return s;
+}
+
+double estimate_memory(const MorphSize& s, const MemoryRequest& r, bool warp) {
+  const auto samples = [](const std::array<int, 3>& d) { return static_cast<double>(d[0]) * d[1] * d[2]; };
+  const double n = samples(s.grid_dims);
+  const double h = s.spacing;
+  const double area = std::max(s.source_area, s.target_area);
+  // Vertices of a polygonized frame: about 4.5 per (area / spacing^2) measured; 6 counted.
+  const double v_mid = 6 * area / (h * h);
+  const double refine = std::max(1, r.endpoint_refine);
+  const double v_end = v_mid * refine * refine;
+  const double m_end = r.endpoint_refine > 1 ? std::max(samples(s.source_end_dims), samples(s.target_end_dims)) : 0.0;
+  // Bytes: two float fields held throughout (8 per sample); a signed distance field being built
+  // (22 per sample: closest points, distances, flags, values); a frame's blend (warped copies,
+  // the blend, flood-fill marks and stacks, the polygonizer's copy: 28 per sample, 20 without the
+  // warp); a polygonization (150 per vertex: the mesh and its edge table).
+  const double fields = 8 * n;
+  const double sdf = 22 * n;
+  const double blend = (warp ? 28 : 20) * n + 150 * v_mid;
+  const double ends = 22 * m_end + 16 * m_end + 150 * v_end;
+  double retime = 0;
+  if (r.even_timing && r.frames > 2) {
+    const double c = std::max(1, r.coarsen);
+    const double dense = (1.0 + std::max(0, r.refine_passes)) * std::max(1, r.samples_per_frame) * (r.frames - 1.0) + 1;
+    // Each dense frame keeps its mesh (64 bytes per vertex); two distance structures (400 per
+    // vertex) and a coarse blend at a time.
+    const double v_coarse = v_mid / (c * c);
+    retime = dense * 64 * v_coarse + 2 * 400 * v_coarse + (8 + (warp ? 28 : 20)) * n / (c * c * c);
+  }
+  double kept = 0;
+  if (r.keep_frames) kept = 250 * (std::max(0, r.frames - 2) * v_mid + 2 * v_end);
+  const double total = 32.0 * 1024 * 1024 + fields + std::max({sdf, blend, ends, retime}) + kept;
+  return std::isfinite(total) ? total : std::numeric_limits<double>::max();
 }
 
 double volume_below(const Grid& field, double c) {
@@ -502,27 +669,32 @@ bool controls_topology(const PreparedMorph& m, double t) {
 
 TriMesh frame_mesh(const PreparedMorph& m, const Grid& field, double t, const PolygonizeOptions& options) {
   TriMesh mesh = polygonize(field, options);
-  for (Vec3& p : mesh.positions) p = placement(m.target_to_source, t, p);
+  const Similarity back = m.source_to_morph.inverse();
+  for (Vec3& p : mesh.positions) {
+    p = placement(m.target_to_source, t, back.apply(p));
+    if (!p.allFinite()) throw InvalidInput("frame at t = " + std::to_string(t) + ": a position is not finite in the inputs' units");
+  }
   return mesh;
 }
 
 TriMesh endpoint_frame(const PreparedMorph& m, const TriMesh& input, bool is_target, int refine, const SdfOptions& sdf,
                        const PolygonizeOptions& options, BallReport* ball) {
   if (refine < 1 || refine > 8) throw InvalidInput("endpoint refinement is " + std::to_string(refine) + "; expected 1 to 8");
-  const double voxel = (is_target ? m.source_sdf.spacing / m.target_to_source.scale : m.source_sdf.spacing) / refine;
-  const Box3 box = bounding_box(input.positions);
-  const double longest = (box.max - box.min).maxCoeff();
-  const double cells = std::ceil(longest / voxel);
-  if (!(cells <= 2048))
-    throw InvalidInput("endpoint grid of " + std::to_string(cells) + " cells; expected at most 2048 (lower the refinement)");
-  const Grid domain = grid_over(box, std::max(8, static_cast<int>(cells)), 3);
-  Grid field = signed_distance(input, domain, sdf);
+  // The morph's voxel in the input's units, and the input scaled to unit size.
+  const double voxel = m.source_sdf.spacing / (is_target ? m.target_to_morph.scale : m.source_to_morph.scale) / refine;
+  const Similarity unit = unit_box(bounding_box(input.positions), is_target ? "target" : "source");
+  const TriMesh scaled = moved_by(input, unit);
+  const Grid domain = endpoint_domain(bounding_box(scaled.positions), voxel * unit.scale);
+  Grid field = signed_distance(scaled, domain, sdf);
   if (ball) *ball = BallReport{};
   if (controls_topology(m, is_target ? 1.0 : 0.0)) {
     const BallReport r = make_ball(field, {}, options);
     if (ball) *ball = r;
   }
-  return polygonize(field, options);
+  TriMesh mesh = polygonize(field, options);
+  const Similarity back = unit.inverse();
+  for (Vec3& p : mesh.positions) p = back.apply(p);
+  return mesh;
 }
 
 }  // namespace qs::dfi

@@ -6,6 +6,12 @@
 //                  signed distance fields of both shapes on it.
 //   morph_frame:   the field of frame t, polygonized, mapped back along the interpolated alignment.
 //
+// Everything runs in morph space: the source's coordinates translated and scaled (uniformly) so
+// that the box around both shapes has diagonal 1, and the alignment computed on both shapes
+// scaled to unit size. Any finite coordinates the mesh validation accepts (up to 1e100, down to
+// the smallest sizes double holds) therefore give the same frames, relative to the shapes' size,
+// as the shapes scaled to unit size would; the frames come back in the inputs' own units.
+//
 // With the warp (the default), prepare_morph also builds the paper's correspondence: curve
 // skeletons of both shapes, branch matching, anchors along matched branches, harmonic fields on
 // the interior voxels of a coarse grid, the transport per matched part (or globally, the
@@ -13,6 +19,7 @@
 // matched, the rotation-aware part warp of bones.h replaces that displacement. Frame t then
 // blends the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -87,17 +94,25 @@ struct MorphOptions {
   std::vector<Landmark> landmarks;
 };
 
-/// Target space to morph space: y = s R (x - from) + to.
+/// A similarity: y = s R (x - from) + to.
 struct Similarity {
   double scale = 1;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Vec3 from = Vec3::Zero(), to = Vec3::Zero();
   Vec3 apply(const Vec3& x) const { return scale * (rotation * (x - from)) + to; }
+  Similarity inverse() const;
+  /// This after `first`: x -> apply(first.apply(x)).
+  Similarity after(const Similarity& first) const;
 };
 
 struct PreparedMorph {
-  Similarity target_to_source;  ///< identity when Align::None
-  Grid source_sdf, target_sdf;  ///< on the same samples, in morph (source) space
+  Similarity target_to_source;  ///< target coordinates -> source coordinates; identity when Align::None
+  /// Source coordinates -> morph space (a translation and a uniform scale: the box around both
+  /// shapes gets diagonal 1); identity when built by hand.
+  Similarity source_to_morph;
+  Similarity target_to_morph;   ///< target coordinates -> morph space (source_to_morph after target_to_source)
+  Vec3 source_centroid = Vec3::Zero();  ///< the source's volume centroid, in morph space
+  Grid source_sdf, target_sdf;  ///< on the same samples, in morph space
   double source_volume = 0, target_volume = 0;  ///< of the input meshes, in their own units
   FrameVolume volume = FrameVolume::Free;       ///< from MorphOptions (prepare_morph); Free when built by hand
   double max_iso_shift = 4;                     ///< from MorphOptions (cells)
@@ -124,6 +139,8 @@ struct PreparedMorph {
   double bone_min_det = 1;             ///< smallest Jacobian determinant of the part warps (both ways,
                                        ///< s = 0.5 and 1); <= 0: they fold, bones is left empty and the
                                        ///< linear warp runs
+  /// The grid spacing in the source's units.
+  double spacing() const { return source_sdf.spacing / source_to_morph.scale; }
 };
 
 /// \pre both meshes closed, manifold, outward oriented, one component (qs::mesh::validate with
@@ -167,20 +184,48 @@ double iso_for_volume(const Grid& field, double volume, double max_shift);
 Grid blend_field(const PreparedMorph& morph, double t, int threads = 0, BlendInfo* info = nullptr);
 
 /// The frame at t: the zero set of `field`, mapped from morph space to the placement at t (the
-/// source's at 0, the target's at 1, interpolated in between).
+/// source's at 0, the target's at 1, interpolated in between), in the inputs' units. \throws
+/// InvalidInput if a position would not be finite there.
 TriMesh frame_mesh(const PreparedMorph& morph, const Grid& field, double t, const PolygonizeOptions& options = {});
 
 /// Frame 0 (is_target false) or frame K-1 (true) polygonized from the input's own signed distance
 /// field on a grid over the input's bounding box alone, `refine` times finer than the morph's grid
 /// (in the input's own units), in the input's coordinates (what frame_mesh gives at t = 0 or 1):
 /// parts thinner than a morph voxel (ears, tails) that the morph's grid loses. refine 1: the
-/// morph's spacing. With the morph's topology control and a genus-0 input, the field's inside set
+/// morph's spacing. The input is scaled to unit size for the distance field and the polygonization
+/// (its coordinates may be of any finite magnitude). With the morph's topology control and a genus-0 input, the field's inside set
 /// is made a ball first (make_ball; `ball` says what it removed). \throws InvalidInput when
 /// refine is not 1 to 8 or the grid would exceed 2048 cells.
 TriMesh endpoint_frame(const PreparedMorph& morph, const TriMesh& input, bool is_target, int refine,
                        const SdfOptions& sdf = {}, const PolygonizeOptions& options = {}, BallReport* ball = nullptr);
 
-/// The similarity's inverse interpolated at t (identity at 0): morph space -> output space.
+/// The similarity's inverse interpolated at t (identity at 0): source space -> output space.
 Vec3 placement(const Similarity& s, double t, const Vec3& y);
+
+/// What a morph will hold, for an estimate of its memory before any large allocation: the
+/// shapes placed as prepare_morph places them (the alignment included), nothing sampled.
+struct MorphSize {
+  std::array<int, 3> grid_dims{0, 0, 0};                  ///< the morph's grid (both fields)
+  std::array<int, 3> source_end_dims{0, 0, 0}, target_end_dims{0, 0, 0};  ///< endpoint_frame's grids
+  double source_area = 0, target_area = 0;  ///< surface areas in morph space
+  double spacing = 0;                       ///< the grid spacing in morph space
+};
+
+/// The sizes prepare_morph and endpoint_frame(refine) would use. Cheap: the alignment (when
+/// asked for) and bounding boxes only. \throws InvalidInput as prepare_morph does.
+MorphSize morph_size(const TriMesh& source, const TriMesh& target, const MorphOptions& options, int endpoint_refine);
+
+/// What the memory estimate of a run counts besides the grids.
+struct MemoryRequest {
+  int frames = 11;           ///< frames written (one at a time unless kept for a GLB)
+  int endpoint_refine = 3;   ///< endpoint_frame's refinement (1: the ends from the morph's grid)
+  bool even_timing = true;   ///< even_frame_times runs (its dense frames are held together)
+  bool keep_frames = false;  ///< every frame is held until the end (a GLB of all frames)
+  int samples_per_frame = 4, refine_passes = 3, coarsen = 2;  ///< RetimeOptions
+};
+
+/// A conservative estimate of the peak memory (bytes) of a run; the formula is in
+/// docs/tools/qs-dfi.md. Finite for any request (it saturates at DBL_MAX).
+double estimate_memory(const MorphSize& size, const MemoryRequest& request, bool warp);
 
 }  // namespace qs::dfi

@@ -26,27 +26,32 @@ Grid coarser(const Grid& g, int step) {
   return c;
 }
 
-// One dense sample: the coarse frame and its distance structure.
+// One dense sample: the coarse frame. Its distance structure (several times the mesh's memory)
+// is built only while a change is measured, so that many dense frames fit.
 struct Sample {
   double t = 0;
   TriMesh mesh;
-  std::unique_ptr<metro::SurfaceDistance> surface;
 };
 
 Sample make_sample(const PreparedMorph& coarse, double t, int threads) {
   Sample s;
   s.t = t;
   s.mesh = polygonize(blend_field(coarse, t, threads));
-  if (!s.mesh.faces.empty()) s.surface = std::make_unique<metro::SurfaceDistance>(s.mesh, "frame");
   return s;
 }
 
+using Surface = std::unique_ptr<metro::SurfaceDistance>;
+
+Surface surface_of(const Sample& s) {
+  return s.mesh.faces.empty() ? nullptr : std::make_unique<metro::SurfaceDistance>(s.mesh, "frame");
+}
+
 // Two-sided largest distance from the vertices of one frame to the surface of the other.
-double change(const Sample& a, const Sample& b, double empty_change) {
-  if (!a.surface || !b.surface) return a.surface || b.surface ? empty_change : 0.0;
+double change(const Sample& a, const Surface& sa, const Sample& b, const Surface& sb, double empty_change) {
+  if (!sa || !sb) return sa || sb ? empty_change : 0.0;
   double d = 0;
-  for (const Vec3& p : a.mesh.positions) d = std::max(d, b.surface->distance(p));
-  for (const Vec3& p : b.mesh.positions) d = std::max(d, a.surface->distance(p));
+  for (const Vec3& p : a.mesh.positions) d = std::max(d, sb->distance(p));
+  for (const Vec3& p : b.mesh.positions) d = std::max(d, sa->distance(p));
   return d;
 }
 
@@ -109,9 +114,15 @@ Retiming even_frame_times(const PreparedMorph& morph, int frames, const RetimeOp
   const double empty_change = g.spacing * std::max({g.dims[0], g.dims[1], g.dims[2]});
   const int steps = o.samples_per_frame * (frames - 1);
   std::vector<Sample> samples;
-  for (int i = 0; i <= steps; ++i) samples.push_back(make_sample(*m, static_cast<double>(i) / steps, threads));
   std::vector<double> ch(steps);
-  for (int i = 0; i < steps; ++i) ch[i] = change(samples[i], samples[i + 1], empty_change);
+  Surface previous;
+  for (int i = 0; i <= steps; ++i) {
+    samples.push_back(make_sample(*m, static_cast<double>(i) / steps, threads));
+    Surface current = surface_of(samples[i]);
+    if (i > 0) ch[i - 1] = change(samples[i - 1], previous, samples[i], current, empty_change);
+    previous = std::move(current);
+  }
+  previous.reset();
   // Bisect the dense steps that change more than half an output step (a jump cannot be spread over
   // several output frames unless it is sampled finer); at most `steps` new samples per pass.
   for (int pass = 0; pass < o.refine_passes; ++pass) {
@@ -130,7 +141,8 @@ Retiming even_frame_times(const PreparedMorph& morph, int frames, const RetimeOp
         continue;
       }
       Sample mid = make_sample(*m, 0.5 * (a.t + samples[i + 1].t), threads);
-      const double c0 = change(a, mid, empty_change), c1 = change(mid, samples[i + 1], empty_change);
+      const Surface sa = surface_of(a), sm = surface_of(mid), sb = surface_of(samples[i + 1]);
+      const double c0 = change(a, sa, mid, sm, empty_change), c1 = change(mid, sm, samples[i + 1], sb, empty_change);
       next.push_back(std::move(a));
       next_ch.push_back(c0);
       next.push_back(std::move(mid));
