@@ -231,17 +231,29 @@ TEST_F(MergeTool, NonFiniteOrOutOfRangeSliverDegreesAreUsageErrors) {
 
 // A mesh whose file name is not UTF-8: dissection.json (JSON) cannot name its chart, which
 // qs-dissect writes with U+FFFD in its place. qs-merge says so (exit 2), not "no such file".
-TEST_F(MergeTool, AChartNameThatWasNotUtf8GetsAClearMessage) {
+TEST_F(MergeTool, AMeshNameThatIsNotUtf8IsDissectedAndMerged) {
   const fs::path odd = dir_ / "x\xff.obj";
   fs::copy_file(dir_ / "a.obj", odd, fs::copy_options::overwrite_existing);
   const RunResult d = run_tool("qs-dissect", "'" + odd.string() + "' " + (dir_ / "b.obj").string() +
                                                  " --tau 2 --min-faces 60 -q -o " + (dir_ / "odd").string());
   ASSERT_EQ(d.exit, 0) << d.out;
-  const RunResult r = run_tool("qs-merge", (dir_ / "odd").string() + " -o " + (dir_ / "odd_merge").string());
-  EXPECT_EQ(r.exit, 2) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("its file name was not UTF-8"));
-  EXPECT_THAT(r.out, HasSubstr("rename the mesh to a UTF-8 name and dissect it again"));
-  EXPECT_FALSE(fs::exists(dir_ / "odd_merge"));
+  // The chart is named with the odd byte written \xff, and dissection.json names it so.
+  ASSERT_TRUE(fs::exists(dir_ / "odd" / "x\\xff.chart.ply"));
+  const RunResult r = run_tool("qs-merge", (dir_ / "odd").string() + " -q -o " + (dir_ / "odd_merge").string());
+  EXPECT_EQ(r.exit, 0) << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "odd_merge" / "x\\xff.obj"));
+  // A dissection.json that lost the name (U+FFFD for the odd byte) gets a clear message.
+  std::string json = slurp(dir_ / "odd" / "dissection.json");
+  const std::string escaped = "x\\\\xff.chart.ply";  // as JSON writes the backslash
+  ASSERT_NE(json.find(escaped), std::string::npos);
+  json.replace(json.find(escaped), escaped.size(), "x\xEF\xBF\xBD.chart.ply");
+  std::ofstream(dir_ / "odd" / "dissection.json", std::ios::binary) << json;
+  const RunResult lost = run_tool("qs-merge", (dir_ / "odd").string() + " -o " + (dir_ / "odd_merge2").string());
+  EXPECT_EQ(lost.exit, 2) << lost.out;
+  EXPECT_THAT(lost.out, HasSubstr("its file name was not UTF-8"));
+  EXPECT_THAT(lost.out, HasSubstr("rename the mesh to a UTF-8 name and dissect it again"));
+  EXPECT_FALSE(fs::exists(dir_ / "odd_merge2"));
+  fs::remove_all(dir_ / "odd_merge");
   fs::remove_all(dir_ / "odd");
   fs::remove(odd);
   // A dissection folder whose own name is not UTF-8 merges (remesh.json's names with U+FFFD).

@@ -11,6 +11,7 @@
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/pipeline/pipeline.h"
 
@@ -20,12 +21,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Chart file names: <stem>.chart.ply, with -2, -3 ... for repeated stems.
+// Chart file names: <stem>.chart.ply, with -2, -3 ... for repeated stems. A stem that is not
+// UTF-8 text has its odd bytes written \xNN, so that dissection.json (JSON, UTF-8) names the file.
 std::vector<std::string> chart_names(const std::vector<Input>& inputs) {
   std::vector<std::string> names;
   std::map<std::string, int> seen;
   for (const auto& in : inputs) {
-    const std::string stem = fs::path(in.file).stem().string();
+    const std::string stem = json_strict::printable(fs::path(in.file).stem().string(), std::string::npos);
     const int n = ++seen[stem];
     names.push_back(stem + (n > 1 ? "-" + std::to_string(n) : "") + ".chart.ply");
   }
