@@ -13,6 +13,10 @@
 #include "qs/core/json_strict.h"
 #include "qs/studio/paths.h"
 
+// <resolv.h> (through httplib.h) defines _res, a parameter name of Eigen's headers: in a unity
+// build the files after this one would not compile.
+#undef _res
+
 namespace qs::studio {
 
 struct Server::Impl {
