@@ -301,3 +301,26 @@ TEST(Family, ASamplingThatFoldsAFaceIsDrawnAgain) {
   const auto again = qs::family::generate_family(o);
   EXPECT_EQ(again.shapes[1].mesh.positions, fam.shapes[1].mesh.positions);
 }
+
+TEST(Family, StreamedShapesAreTheSameInOrderWhateverTheBatch) {
+  qs::family::FamilyOptions o;
+  o.shapes = 5;
+  o.faces = 400;
+  o.seed = 9;
+  const qs::family::Family whole = qs::family::generate_family(o);
+  for (int threads : {1, 2, 3}) {
+    qs::Context ctx;
+    ctx.threads = threads;
+    std::vector<qs::family::FamilyShape> got;
+    const qs::family::Family head =
+        qs::family::generate_family(o, ctx, [&](qs::family::FamilyShape&& s) { got.push_back(std::move(s)); });
+    EXPECT_TRUE(head.shapes.empty());
+    EXPECT_EQ(head.limb_names, whole.limb_names);
+    ASSERT_EQ(got.size(), whole.shapes.size()) << threads;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].name, whole.shapes[i].name);
+      EXPECT_EQ(got[i].mesh.positions, whole.shapes[i].mesh.positions) << threads << " " << i;
+      EXPECT_EQ(got[i].mesh.faces, whole.shapes[i].mesh.faces);
+    }
+  }
+}

@@ -6,12 +6,14 @@
 #include <cstring>
 
 #include "qs/core/error.h"
+#include "qs/core/output_folder.h"
 
 namespace qs {
 
 AtomicFile::AtomicFile(std::filesystem::path path) : path_(std::move(path)) {
   tmp_ = path_;
   tmp_ += ".tmp-" + std::to_string(::getpid());
+  remove_stale_staging(path_, false);
   out_.open(tmp_, std::ios::binary | std::ios::trunc);
   if (!out_)
     throw IoError(path_.string() + ": cannot open for writing (" + std::strerror(errno) + ")");

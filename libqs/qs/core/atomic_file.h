@@ -1,6 +1,8 @@
 #pragma once
 // Output files are written to a temporary name beside the target and renamed into place
-// only when complete, so that a failure never leaves a half-written file behind.
+// only when complete, so that a failure never leaves a half-written file behind. A killed
+// process leaves its "<path>.tmp-<pid>" file; the next AtomicFile for the same path removes it
+// once that process is gone (remove_stale_staging in output_folder.h).
 
 #include <filesystem>
 #include <fstream>
@@ -10,7 +12,8 @@ namespace qs {
 
 class AtomicFile {
  public:
-  /// Opens "<path>.tmp-<pid>" for binary writing. \throws IoError if it cannot.
+  /// Removes the temporary files of killed runs for `path`, then opens "<path>.tmp-<pid>" for
+  /// binary writing. \throws IoError if it cannot.
   explicit AtomicFile(std::filesystem::path path);
   /// Removes the temporary file if commit() was not reached.
   ~AtomicFile();

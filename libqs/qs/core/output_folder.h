@@ -7,6 +7,13 @@
 //     the user's own files) are kept.
 // Until commit() nothing in the target changes; a run that fails or throws removes its staging
 // folder (and any parent folders it created), leaving the target exactly as it was.
+//
+// A killed run cannot clean up: its staging folder stays. The next OutputFolder for the same
+// target removes every "<target>.tmp-<pid>" folder of the same user whose process is gone (or
+// whose process id now belongs to a process started after the folder was last changed); a
+// staging folder of a running process is never touched.
+
+#include <sys/types.h>
 
 #include <filesystem>
 #include <string>
@@ -16,9 +23,15 @@ namespace qs {
 
 class OutputFolder {
  public:
-  /// Checks the target up front and creates the staging folder. \throws IoError when the target
-  /// is an existing file, lies under a file, or its folder cannot be created or written.
+  /// Checks the target up front, removes staging folders that killed runs left for it, and
+  /// creates the staging folder. \throws IoError when the target is an existing file, lies
+  /// under a file, or its folder cannot be created or written.
   explicit OutputFolder(std::filesystem::path target);
+  /// A group of files written all-or-nothing into `folder`, beside files it already holds (a
+  /// mesh and the files that go with it). The staging folder is "<folder>/<name>.tmp-<pid>"
+  /// (`name`: the main file's name); `folder` is created when missing (and removed again on
+  /// failure); commit() renames each staged file into `folder`. \throws IoError as above.
+  OutputFolder(std::filesystem::path folder, const std::string& name);
   /// Removes the staging folder (and parents this object created) unless commit() was reached.
   ~OutputFolder();
   OutputFolder(const OutputFolder&) = delete;
@@ -32,8 +45,10 @@ class OutputFolder {
   void commit();
 
  private:
+  void prepare(const std::filesystem::path& folder_to_create);
   std::filesystem::path target_, staging_;
   std::vector<std::filesystem::path> created_parents_;  ///< deepest first
+  bool inside_ = false;                                 ///< staging inside the target folder
   bool committed_ = false;
 };
 
@@ -42,5 +57,16 @@ class OutputFolder {
 /// `option` names the option that gave the output ("-o", "--report", ...).
 void check_not_an_input(const std::filesystem::path& output, const std::vector<std::filesystem::path>& inputs,
                         const std::string& option);
+
+/// True when `pid` may still be writing a staging entry last modified at `modified`: the
+/// process exists (or cannot be signalled for lack of permission) and did not start after the
+/// entry was last changed (60 s of slack for clocks). Our own process id counts as running.
+bool staging_owner_running(pid_t pid, std::filesystem::file_time_type modified);
+
+/// Removes the staging entries that killed runs left for `target`: "<target>.tmp-<pid>" beside
+/// it, folders when `folders` (OutputFolder) else regular files (AtomicFile), owned by this
+/// user, whose owner is not running (staging_owner_running). Errors are ignored (an entry that
+/// cannot be removed stays). Returns how many were removed.
+int remove_stale_staging(const std::filesystem::path& target, bool folders);
 
 }  // namespace qs

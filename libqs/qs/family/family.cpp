@@ -429,6 +429,28 @@ Family generate_family(const FamilyOptions& options, const Context& context) {
   return family;
 }
 
+Family generate_family(const FamilyOptions& options, const Context& context,
+                       const std::function<void(FamilyShape&&)>& sink) {
+  check_options(options);
+  Family family;
+  family.options = options;
+  const Base base = make_base(options);
+  family.limbs = base.limbs;
+  for (const Limb& l : base.limbs_base) family.limb_names.push_back(l.name);
+  const int batch = std::max(1, std::min(thread_count(0, context), options.shapes));
+  std::vector<FamilyShape> shapes;
+  for (int first = 0; first < options.shapes; first += batch) {
+    const int count = std::min(batch, options.shapes - first);
+    shapes.assign(static_cast<std::size_t>(count), FamilyShape{});
+    parallel_for(count, context, [&](int k) {
+      shapes[k] = make_mesh(options, base, make_shape(options, base, first + k), first + k);
+    });
+    for (auto& shape : shapes) sink(std::move(shape));
+    context.report("family", static_cast<double>(first + count) / options.shapes);
+  }
+  return family;
+}
+
 std::string landmarks_json(const FamilyShape& shape) {
   auto num = [](double x) {
     char buf[40];

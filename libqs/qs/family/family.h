@@ -24,6 +24,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,13 @@ struct Family {
 /// the thread count. \throws InvalidInput for an option out of range (naming it), InternalError if
 /// a generated mesh fails its own checks (a bug). Progress stage: "family".
 Family generate_family(const FamilyOptions& options = {}, const Context& context = {});
+
+/// The same shapes, for families too large to hold at once: made in batches of the thread count,
+/// each handed to `sink` in index order (and dropped) before the next batch starts, so that at
+/// most one batch is in memory. Returns the family without its shapes. \throws as above, and
+/// whatever `sink` throws (the shapes after it are not made).
+Family generate_family(const FamilyOptions& options, const Context& context,
+                       const std::function<void(FamilyShape&&)>& sink);
 
 /// The smooth surface of shape `index` of the family at the unit parameter d (the map S_i above).
 /// \pre 0 <= index < options.shapes.
