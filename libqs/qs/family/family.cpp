@@ -416,16 +416,9 @@ Vec3 family_surface_point(const FamilyOptions& options, int index, const Vec3& d
 }
 
 Family generate_family(const FamilyOptions& options, const Context& context) {
-  check_options(options);
-  Family family;
-  family.options = options;
-  const Base base = make_base(options);
-  family.limbs = base.limbs;
-  for (const Limb& l : base.limbs_base) family.limb_names.push_back(l.name);
-  family.shapes.resize(options.shapes);
-  parallel_for(
-      options.shapes, context,
-      [&](int i) { family.shapes[i] = make_mesh(options, base, make_shape(options, base, i), i); }, "family");
+  std::vector<FamilyShape> shapes;
+  Family family = generate_family(options, context, [&](FamilyShape&& s) { shapes.push_back(std::move(s)); });
+  family.shapes = std::move(shapes);
   return family;
 }
 
