@@ -33,8 +33,10 @@ def tool_pairs(family, *args):
 
 def test_numbers_are_qs_metros(family):
     d = qs.Dissection.load(family["folder"])
-    mine = qs.correspondence_error(d, samples=SAMPLES)
+    stages = set()
+    mine = qs.correspondence_error(d, samples=SAMPLES, progress=lambda stage, f: stages.add(stage))
     assert mine == tool_pairs(family)
+    assert stages == {"correspondence"}
     pair = mine[0]
     assert 0 < pair["dissection"]["mean_percent"] <= pair["dissection"]["p95_percent"] <= pair["dissection"]["max_percent"]
     assert pair["distortion"]["dissection_mean"] >= 1 and pair["samples"] == SAMPLES
