@@ -196,10 +196,10 @@ def read_png_rgb8(path):
 
 @pytest.fixture(scope="module")
 def tool_bake(runs):
-    """qs-bake's folder for the tool's remesh (size 16, a small shading check, 16-bit PNGs too)."""
+    """qs-bake's folder for the tool's remesh (size 16, a small shading check, 16-bit PNGs and EXRs too)."""
     folder = runs["tool"] / "bake16"
     code, _, err = run_tool("qs-bake", runs["tool"] / "remesh-L4", "--size", "16", "--samples", "500", "--format",
-                            "png16", "-o", folder, "-q")
+                            "png16", "--format", "exr", "-o", folder, "-q")
     assert code == 0, err
     return folder
 
@@ -253,10 +253,10 @@ def test_merge_matches_qs_merge(runs, tmp_path):
 
 def test_bake_out_writes_what_qs_bake_writes(runs, tool_bake):
     tool, py = runs["tool"], runs["py"]
-    b = qs.bake(runs["r"], runs["d"], size=16, samples=500, formats=["png16"], out=py / "bake16")
+    b = qs.bake(runs["r"], runs["d"], size=16, samples=500, formats=["exr", "png16"], out=py / "bake16")
     names = same_files(tool / "bake16", py / "bake16")
-    assert names == ["bake.json", "koala_7k.glb", "koala_7k_normal.png", "koala_7k_normal16.png", "spot_2k.glb",
-                     "spot_2k_normal.png", "spot_2k_normal16.png"]
+    assert names == ["bake.json", "koala_7k.glb", "koala_7k_normal.exr", "koala_7k_normal.png", "koala_7k_normal16.png",
+                     "spot_2k.glb", "spot_2k_normal.exr", "spot_2k_normal.png", "spot_2k_normal16.png"]
     doc = json.load(open(py / "bake16" / "bake.json"))
     assert b["images"][0]["shading"] == {k: v for k, v in doc["meshes"][0]["shading"].items() if k != "seed"}
     assert np.array_equal(b["images"][1]["rgb8"], read_png_rgb8(py / "bake16" / "koala_7k_normal.png"))
