@@ -627,14 +627,14 @@ PYBIND11_MODULE(_qs, m) {
     so.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
     so.samples = samples;
     so.keep_atlases = true;
-    bool png16 = false, exr = false;  // each once, in qs-bake's order
+    bool png16 = false, exr = false;  // each once, in qs-bake's order (by name)
     for (const auto& f : formats) {
       if (f == "png16") png16 = true;
       else if (f == "exr") exr = true;
       else if (f != "png8") throw qs::UsageError("format '" + f + "': expected png8, png16 or exr");
     }
-    if (png16) so.extra.push_back(qs::bake::ImageFormat::Png16);
     if (exr) so.extra.push_back(qs::bake::ImageFormat::Exr);
+    if (png16) so.extra.push_back(qs::bake::ImageFormat::Png16);
     qs::bake::BakeSetInput input;
     input.set = &r->result.set;
     input.outputs = r->result.outputs;

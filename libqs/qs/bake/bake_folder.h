@@ -26,7 +26,7 @@ struct BakeSetOptions {
   int gutter = 4;              ///< \pre 0..1024
   NormalSpace space = NormalSpace::Tangent;
   GreenChannel green = GreenChannel::OpenGL;   ///< tangent space only
-  std::vector<ImageFormat> extra;              ///< png16 / exr, each once, in this order
+  std::vector<ImageFormat> extra;              ///< exr / png16, each once, in this order (qs-bake: by name)
   int samples = 100000;                        ///< shading check points per mesh; 0: none
   bool keep_atlases = false;                   ///< BakedSet::atlases filled (else empty)
 };
