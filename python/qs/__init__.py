@@ -255,7 +255,8 @@ class Remesh:
     dissection's order (read-only views). vertex_patch (n,) and vertex_uv (n, 2): where each
     vertex lies in the common structure. quads: (k, 4) int32 with quads=True, else None.
     outputs: the file names save() writes; report: qs-remesh's text report; meshes: per mesh
-    its remesh.json object (angles, vertex density, error with error=True).
+    its remesh.json object (angles, vertex density, error with error=True); folder: where it was
+    saved (qs.bake(..., out=DIR) needs it), else None.
     """
 
     def __init__(self, impl):
