@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "qs/bake/bake.h"
+#include "qs/bake/bake_folder.h"
 #include "qs/bake/export_glb.h"
 #include "qs/bake/image_io.h"
 #include "qs/core/atomic_file.h"
@@ -41,14 +42,6 @@ namespace {
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-void write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes) {
-  qs::AtomicFile file(path);
-  file.stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  file.commit();
-}
-
-// Throws InvalidInput unless the remesh positions are the chart's points at their (patch, u, v):
-// the remesh was made from this dissection.
 void check_positions(const qs::remesh::ChartSampler& sampler, const qs::remesh::SemiRegularConnectivity& c,
                      const std::vector<qs::Vec3>& positions, const std::string& file) {
   const std::vector<qs::Vec3> expected = qs::remesh::sample_positions(sampler, c);
@@ -117,18 +110,18 @@ int main(int argc, char** argv) {
   return qs::tools::run_tool(app, argc, argv, [&] {
     if (space == "object" && green == "directx")
       throw qs::UsageError("--green applies to tangent-space maps only; drop it with --space object");
-    qs::bake::BakeOptions opt;
-    opt.tile_size = size;
-    opt.gutter = gutter;
-    opt.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
-    opt.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
-    std::vector<qs::bake::ImageFormat> extra;
+    qs::bake::BakeSetOptions so;
+    so.size = size;
+    so.area_tiles = tiles == "area";
+    so.gutter = gutter;
+    so.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
+    so.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
+    so.samples = samples;
     for (const auto& f : std::set<std::string>(formats.begin(), formats.end())) {
-      if (f == "png16") extra.push_back(qs::bake::ImageFormat::Png16);
-      if (f == "exr") extra.push_back(qs::bake::ImageFormat::Exr);
+      if (f == "png16") so.extra.push_back(qs::bake::ImageFormat::Png16);
+      if (f == "exr") so.extra.push_back(qs::bake::ImageFormat::Exr);
     }
 
-    // Load and check everything before writing anything.
     const auto t0 = Clock::now();
     if (!fs::exists(folder)) throw qs::IoError(folder + ": no such folder (expected a qs-remesh output folder)");
     if (!fs::is_directory(folder)) throw qs::IoError(folder + ": not a folder (expected a qs-remesh output folder)");
@@ -159,19 +152,15 @@ int main(int argc, char** argv) {
     // One layout for the whole set (qs-morph blends the maps texel by texel): with --tiles area each
     // patch's tile side follows the square root of the surface it covers at its median face's
     // density (patch_texel_shares: its area share for an evenly mapped patch), the largest over the set.
-    std::vector<double> side_minus_one(static_cast<size_t>(c.num_patches), size - 1.0);
-    qs::bake::AtlasLayout layout;
-    if (tiles == "area") {
-      std::vector<const qs::dissect::Chart*> charts;
-      for (const auto& dm : ds.meshes) charts.push_back(&dm.dissection.chart);
-      opt.tile_sizes = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), size);
-      layout = qs::bake::make_atlas_layout(opt.tile_sizes, size, gutter);
-      for (int p = 0; p < c.num_patches; ++p) side_minus_one[static_cast<size_t>(p)] = layout.tile_side(p) - 1.0;
-    } else {
-      layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
-    }
-    // The atlas, checked before it is made: per texel the float normal and its coverage, the 8-bit
-    // copy, the encoded PNG (and 16-bit / EXR copies), about 48 bytes; one mesh at a time.
+    qs::bake::BakeSetInput input;
+    input.set = &rm.set;
+    input.outputs = rm.outputs;
+    input.stems = rm.stems;
+    input.dissection = &ds;
+    input.remesh_folder = folder;
+    input.dissection_folder = dfolder;
+    const qs::bake::BakePlan plan = qs::bake::plan_bake(input, so);
+    const qs::bake::AtlasLayout& layout = plan.layout;
     {
       const double texels = static_cast<double>(layout.width()) * layout.height();
       qs::tools::check_memory(texels * 48, max_memory,
@@ -182,13 +171,7 @@ int main(int argc, char** argv) {
     const double load_seconds = seconds_since(t0);
 
     if (outdir.empty()) outdir = (fs::path(folder) / ("bake-" + std::to_string(size))).string();
-    std::vector<fs::path> input_paths = {fs::path(folder) / "remesh.json", dfolder / "dissection.json"};
-    for (const auto& o : rm.outputs) input_paths.push_back(fs::path(folder) / o);
-    for (const auto& m : ds.meshes) input_paths.push_back(dfolder / m.chart_file);
-    for (const auto& stem : rm.stems)
-      for (const std::string suffix : {"_normal.png", "_normal16.png", "_normal.exr", ".glb"})
-        qs::check_not_an_input(fs::path(outdir) / (stem + suffix), input_paths, "-o");
-    qs::check_not_an_input(fs::path(outdir) / "bake.json", input_paths, "-o");
+    qs::bake::check_bake_outputs(outdir, input);
     qs::OutputFolder out_folder(outdir);
     const fs::path staging = out_folder.staging();
 
@@ -201,118 +184,34 @@ int main(int argc, char** argv) {
                 << (layout.grid ? " (" + std::to_string(layout.columns) + " x " + std::to_string(layout.rows) + " tiles)"
                                 : std::string(" (shelves)"))
                 << ", " << space << " space"
-                << (opt.space == qs::bake::NormalSpace::Tangent ? ", " + green + " green" : std::string()) << "\n"
+                << (so.space == qs::bake::NormalSpace::Tangent ? ", " + green + " green" : std::string()) << "\n"
                 << std::fixed << std::setprecision(3);
-    nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
     double bake_seconds = 0, write_seconds = 0, check_seconds = 0;
-    for (size_t i = 0; i < rm.outputs.size(); ++i) {
-      const std::string& stem = rm.stems[i];
-      auto t = Clock::now();
-      qs::bake::BakeOptions mesh_opt = opt;
-      mesh_opt.original_vertices = ds.meshes[i].input_vertices;  // the chart keeps the input's vertices first
-      qs::Context ctx;
-      ctx.threads = threads;  // progress on a terminal only
-      if (!quiet && ::isatty(2))
-        ctx.progress = [&](const std::string&, double f) {
-          std::cerr << "\r  " << stem << ": baking " << static_cast<int>(100 * f) << "%" << (f >= 1 ? "\r\033[K" : "")
-                    << std::flush;
-        };
-      const qs::bake::BakeResult r = qs::bake::bake_normal_map(*samplers[i], c, rm.set.positions[i], mesh_opt, ctx);
-      const double bs = seconds_since(t);
-      bake_seconds += bs;
-      t = Clock::now();
-      const qs::bake::Rgb8Image img8 = qs::bake::quantize8(r.atlas);
-      const std::vector<unsigned char> png8 = qs::bake::encode_png8(img8);
-      nlohmann::ordered_json files = {{"png8", stem + qs::bake::file_suffix(qs::bake::ImageFormat::Png8)}};
-      write_bytes(staging / files["png8"].get<std::string>(), png8);
-      for (auto f : extra) {
-        const std::string name = stem + qs::bake::file_suffix(f);
-        write_bytes(staging / name, qs::bake::encode_image(r.atlas, f));
-        files[qs::bake::to_string(f)] = name;
-      }
-      const qs::gltf::Mesh g = qs::bake::to_gltf_mesh(r, png8, stem);
-      qs::gltf::write_glb(staging / (stem + ".glb"), g);
-      write_seconds += seconds_since(t);
-      t = Clock::now();
-      nlohmann::ordered_json j = {{"remesh", rm.outputs[i]},
-                                  {"source", ds.meshes[i].file},
-                                  {"chart", ds.meshes[i].chart_file},
-                                  {"maps", files},
-                                  {"glb", stem + ".glb"},
-                                  {"glb_vertices", r.mesh.num_vertices()},
-                                  {"glb_faces", r.mesh.num_faces()},
-                                  {"glb_normal_texture", opt.space == qs::bake::NormalSpace::Tangent}};
-      // Texels per unit of surface area: (S_p-1)^2 per unit square of patch p, carried onto the
-      // surface by the chart's maps; area-weighted 5th-95th percentiles.
-      const qs::remesh::DensitySpread td = qs::remesh::chart_density(ds.meshes[i].dissection.chart, side_minus_one);
-      j["texel_density"] = {{"p5", td.p5}, {"p50", td.p50}, {"p95", td.p95}, {"spread", td.spread}};
+    qs::Context ctx;
+    ctx.threads = threads;  // progress on a terminal only
+    if (!quiet && ::isatty(2))
+      ctx.progress = [&](const std::string& stem, double f) {
+        std::cerr << "\r  " << stem << ": baking " << static_cast<int>(100 * f) << "%" << (f >= 1 ? "\r\033[K" : "")
+                  << std::flush;
+      };
+    std::vector<const qs::remesh::ChartSampler*> sampler_list;
+    for (const auto& s : samplers) sampler_list.push_back(s.get());
+    qs::bake::write_bake_folder(staging, outdir, input, sampler_list, plan, so, ctx,
+                                [&](size_t i, const qs::bake::BakedMeshInfo& info) {
+      bake_seconds += info.bake_seconds;
+      write_seconds += info.write_seconds;
+      check_seconds += info.check_seconds;
+      const qs::remesh::DensitySpread& td = info.texel_density;
       std::ostringstream line;
-      line << std::fixed << std::setprecision(3) << "  " << stem << ": bake " << bs << " s, GLB " << r.mesh.num_vertices()
-           << " vertices (" << c.num_vertices() << " before the per-patch split)";
+      line << std::fixed << std::setprecision(3) << "  " << rm.stems[i] << ": bake " << info.bake_seconds << " s, GLB "
+           << info.glb_vertices << " vertices (" << c.num_vertices() << " before the per-patch split)";
       line << std::setprecision(3) << std::defaultfloat << "; texels per unit area, 5th-95th percentile: " << td.p5
            << " .. " << td.p95 << " (spread " << td.spread << "x)" << std::fixed;
-      if (samples > 0) {
-        qs::bake::ShadingCheckOptions co;
-        co.samples = samples;
-        const qs::bake::ShadingCheck s = qs::bake::check_shading(*samplers[i], r, img8, co);
-        j["shading"] = {{"samples", s.samples},
-                        {"seed", co.seed},
-                        {"mean_deg_with_map", s.mean_with_map},
-                        {"p95_deg_with_map", s.p95_with_map},
-                        {"max_deg_with_map", s.max_with_map},
-                        {"mean_deg_without_map", s.mean_without_map},
-                        {"p95_deg_without_map", s.p95_without_map},
-                        {"max_deg_without_map", s.max_without_map}};
-        line << std::setprecision(2) << "; shaded vs original normal: mean " << s.mean_with_map << " deg with the map, "
-             << s.mean_without_map << " deg without";
-      }
-      check_seconds += seconds_since(t);
-      meshes.push_back(j);
+      if (info.shading)
+        line << std::setprecision(2) << "; shaded vs original normal: mean " << info.shading->mean_with_map
+             << " deg with the map, " << info.shading->mean_without_map << " deg without";
       if (!quiet) std::cout << line.str() << "\n" << std::flush;
-    }
-
-    nlohmann::ordered_json patches = nlohmann::ordered_json::array();
-    const auto& names = ds.meshes[0].dissection.chart.patches;
-    for (int p = 0; p < layout.num_patches; ++p)
-      patches.push_back({{"patch", p},
-                         {"name", names[p].name},
-                         {"x", layout.tile_x(p)},
-                         {"y", layout.tile_y(p)},
-                         {"width", layout.tile_side(p)},
-                         {"height", layout.tile_side(p)}});
-    nlohmann::ordered_json doc = {
-        {"format", "qs-bake"},
-        {"version", 1},
-        {"remesh", fs::relative(fs::absolute(folder), fs::absolute(outdir)).lexically_normal().generic_string()},
-        {"dissection", fs::relative(fs::absolute(dfolder), fs::absolute(outdir)).lexically_normal().generic_string()},
-        {"options",
-         {{"size", size},
-          {"gutter", gutter},
-          {"space", space},
-          {"green", opt.space == qs::bake::NormalSpace::Tangent ? green : std::string("none")},
-          {"formats", [&] {
-             nlohmann::ordered_json f = {"png8"};
-             for (auto e : extra) f.push_back(qs::bake::to_string(e));
-             return f;
-           }()},
-          {"tiles", tiles},
-          {"samples", samples},
-          {"original_normals", "angle-weighted at the input's vertices, interpolated along the input's edges and "
-                               "faces at vertices inserted by the cuts"}}},
-        {"atlas",
-         {{"layout", layout.grid ? "grid" : "shelves"},
-          {"columns", layout.columns},
-          {"rows", layout.rows},
-          {"tile_size", size},
-          {"gutter", gutter},
-          {"width", layout.width()},
-          {"height", layout.height()},
-          {"encoding", "x*0.5+0.5 per channel, linear"},
-          {"texel_centres", "texel (i,j) of a patch's tile, j from the top, is (u,v) = (i/(S-1), 1-j/(S-1)), S its width"},
-          {"texcoord", "s = (x + 0.5 + u*(S-1)) / width, t = (y + 0.5 + (1-v)*(S-1)) / height, S the tile's width"},
-          {"patches", patches}}},
-        {"meshes", meshes}};
-    qs::write_file_atomically(staging / "bake.json", qs::json_strict::dump(doc, 1) + "\n");
+    });
     out_folder.commit();
     if (!quiet)
       std::cout << "  wrote " << rm.outputs.size() << " maps + GLBs and bake.json to " << outdir << "\n  time: load "

@@ -29,6 +29,7 @@
 
 #include "qs/core/atomic_file.h"
 #include "qs/correspondence/correspondence.h"
+#include "qs/correspondence/dissection_measure.h"
 #include "qs/dissect/dissection_json.h"
 #include "qs/core/error.h"
 #include "qs/core/json_strict.h"
@@ -150,21 +151,6 @@ nlohmann::json json_report(const Input& a, const Input& b, const qs::metro::Metr
 
 // ---- --correspondence: a dissection measured against ground truth ----------------------------
 
-/// A mesh file named in dissection.json: as written (relative to the working folder), else
-/// relative to the dissection folder or its parent, else its file name in either.
-std::filesystem::path find_mesh(const std::string& file, const std::filesystem::path& folder) {
-  const auto found = qs::tools::dissected_mesh_candidates(file, folder);
-  if (!found.empty()) return found.front();
-  const bool lossy = file.find("\xEF\xBF\xBD") != std::string::npos;  // U+FFFD
-  throw qs::IoError(qs::json_strict::printable(file) + ": mesh of the dissection " +
-                    qs::json_strict::printable(folder.string()) +
-                    " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)" +
-                    (lossy ? "; its path was not UTF-8, which dissection.json (JSON) cannot hold, so it holds U+FFFD "
-                             "in place of those bytes: put the mesh in or beside the dissection folder, or give it a "
-                             "UTF-8 path and dissect it again"
-                           : ""));
-}
-
 /// The report file of -o, opened (under a temporary name) before any work so that an output that
 /// cannot be written is found first; committed last.
 void open_report(const std::optional<std::string>& output, std::optional<qs::AtomicFile>& file) {
@@ -225,21 +211,14 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                          " meshes (one per mesh in the dissection's order, '-' for a mesh without a map)");
   // Every input first (the dissection's files, the meshes and their maps), checked against the
   // outputs before anything is read further or written.
-  std::vector<fs::path> mesh_files, input_paths = {folder / "dissection.json"};
-  std::vector<std::optional<fs::path>> map_files;
+  const qs::correspondence::TruthFiles truth_files = qs::correspondence::find_truth_files(loaded, folder, maps);
+  const std::vector<fs::path>& mesh_files = truth_files.meshes;
+  const std::vector<std::optional<fs::path>>& map_files = truth_files.maps;
+  std::vector<fs::path> input_paths = {folder / "dissection.json"};
   for (int i = 0; i < n; ++i) {
     input_paths.push_back(folder / loaded.meshes[i].chart_file);
-    mesh_files.push_back(find_mesh(loaded.meshes[i].file, folder));
-    input_paths.push_back(mesh_files.back());
-    std::optional<fs::path> map;
-    if (!maps.empty()) {
-      if (maps[i] != "-") map = maps[i];
-    } else {
-      const fs::path beside = mesh_files.back().parent_path() / (mesh_files.back().stem().string() + ".map.json");
-      if (fs::exists(beside)) map = beside;
-    }
-    if (map) input_paths.push_back(*map);
-    map_files.push_back(map);
+    input_paths.push_back(mesh_files[i]);
+    if (map_files[i]) input_paths.push_back(*map_files[i]);
   }
   if (output) qs::check_not_an_input(*output, input_paths, "-o");
   // Error maps: "<A stem>_to_<B stem>.error.ply" (mesh indices in front when two stems are equal).
@@ -259,13 +238,12 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   }
   std::optional<qs::AtomicFile> report_file;
   open_report(output, report_file);
-  std::vector<qs::correspondence::TruthMesh> truth_meshes;
+  const qs::correspondence::GroundTruth truth = qs::correspondence::load_ground_truth(truth_files);
   std::vector<std::string> map_used;
   for (int i = 0; i < n; ++i) {
-    truth_meshes.push_back(qs::correspondence::load_truth_mesh(mesh_files[i], map_files[i]));
     map_used.push_back(map_files[i] ? map_files[i]->string() : "");
     // A "surface" map's reference mesh (relative to the map file's folder) is an input too.
-    const auto& map = truth_meshes.back().map;
+    const auto& map = truth.mesh(i).map;
     if (map && map->domain == qs::family::MapDomain::Surface) {
       fs::path ref(map->reference);
       if (ref.is_relative()) ref = map_files[i]->parent_path() / ref;
@@ -274,12 +252,6 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
         qs::check_not_an_input(fs::path(*error_map.folder) / (stems[0] + "_to_" + stems[b] + ".error.ply"), {ref},
                                "--error-map");
     }
-  }
-  const qs::correspondence::GroundTruth truth(std::move(truth_meshes));
-  std::vector<qs::correspondence::DissectedInput> inputs(n);
-  for (int i = 0; i < n; ++i) {
-    inputs[i].chart = &loaded.meshes[i].dissection.chart;
-    inputs[i].landmarks = qs::correspondence::dissection_landmarks(loaded.meshes[i].dissection);
   }
   qs::correspondence::MeasureOptions mo;
   if (samples > 0) mo.samples = samples;
@@ -301,8 +273,9 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
   for (int i = 0; i < n; ++i)
     text << "  mesh " << i << ": " << truth.mesh(i).name << " (ground truth: "
          << (map_used[i].empty() ? std::string("its own face list") : map_used[i]) << ")\n";
+  const std::vector<qs::correspondence::PairMeasure> measured = qs::correspondence::measure_dissection(truth, loaded, mo);
   for (int b = 1; b < n; ++b) {
-    const auto pm = qs::correspondence::measure_pair(truth, inputs, 0, b, mo);
+    const auto& pm = measured[b - 1];
     char share[64];
     std::snprintf(share, sizeof share, "%.1f%%", 100 * pm.same_patch_share);
     char corners[160];

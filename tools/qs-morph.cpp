@@ -66,13 +66,6 @@ std::string path_list_string(const nlohmann::ordered_json& names) {
 }
 
 // Creates `dir` (and its parents); a failure is an i/o error, not an internal one.
-void make_folder(const fs::path& dir) {
-  if (dir.empty()) return;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw qs::IoError(dir.string() + ": cannot create the folder (" + ec.message() + ")");
-}
-
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 }  // namespace
@@ -258,9 +251,7 @@ int main(int argc, char** argv) {
       go.path = stops;
       if (have_weights) go.weights = weights;
       go.name = "morph";
-      const qs::gltf::Mesh mesh = qs::morph::morph_glb_mesh(set, names, go, baked ? &*baked : nullptr);
-      make_folder(fs::path(glb).parent_path());
-      qs::gltf::write_glb(glb, mesh);
+      const qs::gltf::Mesh mesh = qs::morph::write_morph_glb(glb, set, names, go, baked ? &*baked : nullptr);
       nlohmann::ordered_json targets = nlohmann::ordered_json::array();
       for (const auto& t : mesh.targets) targets.push_back(t.name);
       nlohmann::ordered_json g = {{"file", glb}, {"base", names[go.base]}, {"targets", targets}, {"seconds_per_leg", 1.0}};

@@ -10,8 +10,12 @@ modes, standard deviations, the one face list).
     PYTHONPATH=build/python python3 examples/python/shape_model.py [-o OUT] [--level N] [MESH ...]
 
 Without meshes it takes the heads of ../shared/meshes (max_planck_11k, igea_17k,
-mannequin_head_23k), with automatic seeds (similar poses). Meshes with landmark files beside
-them (<stem>.landmarks.json) use those.
+mannequin_head_23k). Their files hold them in different poses, in which automatic seeds do not
+correspond (the first mode then mixes a face with the back of a head), so the example places the
+four seeds itself from each head's pose (POSES: where the face looks, which way is up): the nose
+tip, the crown, the back of the head and the bottom of the neck, a loop through the plane of
+symmetry. Meshes with landmark files beside them (<stem>.landmarks.json) use those; other meshes
+get automatic seeds, which correspond when the shapes share one pose.
 """
 
 import argparse
@@ -26,6 +30,23 @@ import qs
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "meshes"))
 HEADS = ["max_planck_11k.obj", "igea_17k.off", "mannequin_head_23k.off"]
+# The default heads' poses in their files: (the direction the face looks, up).
+POSES = {"max_planck_11k": ((0, 0, -1), (0, 1, 0)), "igea_17k": ((1, 0, 0), (0, 1, 0)),
+         "mannequin_head_23k": ((0, -1, 0), (0, 0, 1))}
+
+
+def head_seeds(mesh, forward, up):
+    """Four seeds in loop order through a head's plane of symmetry: the nose tip (furthest
+    forward), the crown (highest), the back of the head (furthest back, above the nose tip) and
+    the bottom of the neck (lowest), as vertex ids."""
+    v = np.asarray(mesh.vertices)
+    f, u = v @ np.asarray(forward, float), v @ np.asarray(up, float)
+    nose = int(np.argmax(f))
+    crown = int(np.argmax(u))
+    above = np.flatnonzero(u >= u[nose])
+    back = int(above[np.argmin(f[above])])
+    bottom = int(np.argmin(u))
+    return qs.Landmarks(seeds=[nose, crown, back, bottom], name="pose seeds of " + mesh.name)
 
 
 def write_obj(path, vertices, faces):
@@ -76,7 +97,13 @@ def main():
     landmarks = []
     for f, m in zip(files, meshes):
         lm = os.path.splitext(f)[0] + ".landmarks.json"
-        landmarks.append(qs.read_landmarks(lm, m) if os.path.exists(lm) else None)
+        stem = os.path.splitext(os.path.basename(f))[0]
+        if os.path.exists(lm):
+            landmarks.append(qs.read_landmarks(lm, m))
+        elif stem in POSES:
+            landmarks.append(head_seeds(m, *POSES[stem]))
+        else:
+            landmarks.append(None)
     if any(l is None for l in landmarks):
         landmarks = None  # every mesh or none
     d = qs.dissect(meshes, landmarks=landmarks,

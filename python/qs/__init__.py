@@ -16,7 +16,7 @@ Errors are exceptions of one hierarchy, with the tools' messages: qs.Error, and 
 qs.UsageError (exit code 1), qs.InvalidInput (a ValueError; 2), qs.IoError (an OSError; 3),
 qs.SolverError (a RuntimeError; 4), qs.InternalError (a RuntimeError; 70).
 
-Long calls (dissect, remesh, bake, merge, metro) release the GIL, stop on Ctrl-C (KeyboardInterrupt) and take
+Long calls (dissect, remesh, bake, merge, metro, correspondence_error) release the GIL, stop on Ctrl-C (KeyboardInterrupt) and take
 an optional progress callback progress(stage: str, fraction: float). Reference: docs/python.md.
 """
 
@@ -29,7 +29,8 @@ from ._qs import Error, UsageError, InvalidInput, IoError, SolverError, Internal
 __all__ = [
     "Error", "UsageError", "InvalidInput", "IoError", "SolverError", "InternalError",
     "Mesh", "read_mesh", "inspect", "Landmarks", "read_landmarks",
-    "dissect", "Dissection", "remesh", "Remesh", "bake", "morph", "merge", "metro", "DISSECT_DEFAULTS",
+    "dissect", "Dissection", "remesh", "Remesh", "bake", "morph", "merge", "metro", "correspondence_error",
+    "DISSECT_DEFAULTS",
 ]
 
 Mesh.__doc__ = """A triangle mesh: Mesh(vertices, faces, name="mesh").
@@ -254,7 +255,8 @@ class Remesh:
     dissection's order (read-only views). vertex_patch (n,) and vertex_uv (n, 2): where each
     vertex lies in the common structure. quads: (k, 4) int32 with quads=True, else None.
     outputs: the file names save() writes; report: qs-remesh's text report; meshes: per mesh
-    its remesh.json object (angles, vertex density, error with error=True).
+    its remesh.json object (angles, vertex density, error with error=True); folder: where it was
+    saved (qs.bake(..., out=DIR) needs it), else None.
     """
 
     def __init__(self, impl):
@@ -267,6 +269,7 @@ class Remesh:
     quads = property(lambda self: self._impl.quads)
     outputs = property(lambda self: self._impl.outputs)
     report = property(lambda self: self._impl.report)
+    folder = property(lambda self: self._impl.folder)
     meshes = property(lambda self: _json.loads(self._impl._meshes_json))
 
     def mesh(self, i):
@@ -319,9 +322,10 @@ def remesh(dissection, level=4, *, uniform=False, cells="aniso", adaptive=None, 
                               progress))
 
 
-def bake(remesh, dissection, *, size=256, tiles="area", space="tangent", green="opengl", gutter=4, threads=0,
-         progress=None):
-    """Normal-map atlases of the originals on their remeshes (qs-bake's maps, in memory).
+def bake(remesh, dissection, *, size=256, tiles="area", space="tangent", green="opengl", gutter=4, out=None,
+         formats=(), samples=100000, threads=0, progress=None):
+    """Normal-map atlases of the originals on their remeshes (qs-bake), in memory and, with
+    `out`, written as qs-bake writes them.
 
     remesh: a qs.Remesh; dissection: the qs.Dissection it was made from.
     size: S, texels per patch side (tiles="area": of a patch of average area; default 256).
@@ -329,20 +333,30 @@ def bake(remesh, dissection, *, size=256, tiles="area", space="tangent", green="
       set; shelf-packed) or "uniform" (every tile S x S in a grid).
     space: "tangent" or "object"; green: "opengl" (+Y up) or "directx" (tangent space only).
     gutter: texels around each tile (default 4).
+    out: None, or a folder to write qs-bake's files into, all or nothing: per mesh
+      <stem>_normal.png (and <stem>_normal16.png / <stem>_normal.exr with formats=("png16",
+      "exr")), <stem>.glb, and bake.json: the bytes qs-bake REMESH --size S ... -o OUT writes.
+      The remesh must have been saved (bake.json names its folder), else qs.UsageError.
+    formats, samples: with out: the extra map files and the shading check's points per mesh
+      (qs-bake's --format and --samples; default 100000, 0: none).
 
     Returns {"images": per mesh {"normals": (H, W, 3) float32 unit vectors, "rgb8": (H, W, 3)
-    uint8, the content of qs-bake's <stem>_normal.png}, "tiles": per patch (x, y, side),
-    "width", "height", "grid"}; one layout for the whole set. The GLBs and bake.json are
-    written by qs-bake on the saved remesh folder.
+    uint8, the content of qs-bake's <stem>_normal.png, and with out and samples > 0 "shading",
+    bake.json's shading check}, "tiles": per patch (x, y, side), "width", "height", "grid"}; one
+    layout for the whole set. Progress stages: "bake" (with out: the mesh's stem).
     """
     if not isinstance(remesh, Remesh) or not isinstance(dissection, Dissection):
         raise UsageError("bake: expected a qs.Remesh and the qs.Dissection it was made from")
-    return _qs._bake(remesh._impl, dissection._impl, int(size), tiles, space, green, int(gutter), int(threads),
+    if isinstance(formats, str):
+        formats = [formats]
+    return _qs._bake(remesh._impl, dissection._impl, int(size), tiles, space, green, int(gutter),
+                     [str(f) for f in formats], int(samples), None if out is None else _os.fspath(out), int(threads),
                      progress)
 
 
-def morph(shapes, *, frames=None, path=None, weights=None, align="none"):
-    """Frames of a morph between shapes with one connectivity (qs-morph's frames and blend).
+def morph(shapes, *, frames=None, path=None, weights=None, align="none", glb=None, bake=None):
+    """Frames of a morph between shapes with one connectivity (qs-morph's frames and blend), and
+    with `glb` its GLB as qs-morph --glb writes it.
 
     shapes: a qs.Remesh (its positions), a merge result (qs.merge) or a list of (n, 3) arrays.
     path: shape indices to pass through (default: every shape in order); frames: K frames
@@ -351,6 +365,12 @@ def morph(shapes, *, frames=None, path=None, weights=None, align="none"):
       >= 0, summing to 1).
     align: "none", "rigid" or "similarity": every shape placed on the path's first (the first
       shape with weights) by the least-squares fit over corresponding vertices, before blending.
+    glb: None or a file: writes the GLB of qs-morph REMESH --glb FILE [--path ...] [--weights ...]
+      [--align ...] [--bake DIR] (the same bytes): the path's first shape as the mesh, one morph
+      target per other shape, default weights from `weights`, an animation along the path (1 s
+      per leg). Needs shapes to be a qs.Remesh (the targets are named by its output stems).
+    bake: with glb, a qs-bake output folder (qs.bake(..., out=DIR)): the base shape's normal map,
+      atlas UVs and tangents go into the GLB.
 
     Returns a list of (n, 3) float64 arrays (one with weights); the faces are the remesh's.
     """
@@ -360,15 +380,25 @@ def morph(shapes, *, frames=None, path=None, weights=None, align="none"):
         positions = shapes["positions"]
     else:
         positions = list(shapes)
+    if glb is None and bake is not None:
+        raise UsageError("bake needs glb (the normal map goes into the GLB)")
+    if glb is not None and not isinstance(shapes, Remesh):
+        raise UsageError("glb needs a qs.Remesh (its faces and output names make the GLB)")
     n = len(positions)
     if weights is not None:
         if frames is not None or path is not None:
             raise UsageError("give weights or frames/path, not both")
-        return _qs._morph(positions, [], 0, [float(w) for w in weights], align)
-    stops = list(range(n)) if path is None else [int(p) for p in path]
-    if frames is None:
-        frames = 10 * (len(stops) - 1) + 1
-    return _qs._morph(positions, stops, int(frames), None, align)
+        weights = [float(w) for w in weights]
+        result = _qs._morph(positions, [], 0, weights, align)
+        stops = list(range(n))
+    else:
+        stops = list(range(n)) if path is None else [int(p) for p in path]
+        if frames is None:
+            frames = 10 * (len(stops) - 1) + 1
+        result = _qs._morph(positions, stops, int(frames), None, align)
+    if glb is not None:
+        _qs._morph_glb(shapes._impl, stops, weights, align, _os.fspath(glb), None if bake is None else _os.fspath(bake))
+    return result
 
 
 def merge(dissection, pair=(0, 1), *, sliver_degrees=1.0, fan=False, threads=0, progress=None):
@@ -405,3 +435,43 @@ def metro(a, b, *, samples=0, vertices=True, seed=1, threads=0, progress=None):
     if not isinstance(b, Mesh):
         b = read_mesh(b)
     return _qs._metro(a, b, int(samples), bool(vertices), int(seed), int(threads), progress)
+
+
+def correspondence_error(dissection, maps=None, *, samples=100000, seed=1, level=0, vertex_errors=False, threads=0,
+                         progress=None):
+    """How far a dissection's map is from the exact one (qs-metro --correspondence): the first
+    mesh A against every other mesh B, on meshes with ground truth (docs/correspondence.md).
+
+    dissection: a qs.Dissection. Its meshes are the files it names (looked up as written, then in
+      and beside its folder, as qs-metro does; an unsaved dissection: as written).
+    maps: None (<stem>.map.json beside each mesh when present) or one map file per mesh, in the
+      dissection's order, None for a mesh whose own face list is its domain.
+    samples: points sampled on A per pair, uniformly per unit area (default 100000).
+    seed: the sampling's seed (1). level: 0 maps by the charts; n >= 1 through B's uniform
+      level-n remesh. vertex_errors: also give the errors at each of A's vertices.
+
+    Returns a list, one dict per pair (A, B), with the keys and numbers of qs-metro
+    --correspondence --json's "pairs": "a", "b", "samples", "diagonal_of_b", "dissection" and
+    "baseline" (each mean_percent, median_percent, p95_percent, max_percent: % of B's bounding-box
+    diagonal), "same_patch_share", "corner_distance_mean_percent", "corner_distance_max_percent",
+    "distortion" (on, dissection_mean, dissection_median, dissection_folded_faces, truth_mean,
+    truth_median, truth_folded_faces), "baseline_landmarks", "truth_tolerance_percent",
+    "truth_tolerance_mean_percent"; with vertex_errors=True also "vertex_error",
+    "vertex_baseline_error" ((n,) float64, % of the diagonal), "vertex_patch" and
+    "vertex_exact_patch" ((n,) int32; -1 for an unused vertex).
+
+    Raises qs.IoError for a mesh or map file that cannot be found or read, qs.InvalidInput for a
+    map that does not fit its mesh, meshes without a common domain or fewer than 2 meshes,
+    qs.UsageError for bad options, KeyboardInterrupt on Ctrl-C.
+    """
+    if not isinstance(dissection, Dissection):
+        raise UsageError("correspondence_error: expected a qs.Dissection, got %s" % type(dissection).__name__)
+    if maps is None:
+        names = []
+    else:
+        names = ["-" if m is None else _os.fspath(m) for m in maps]
+        if len(names) != len(dissection):
+            raise UsageError("maps: %d given for %d meshes (one per mesh in the dissection's order, None for a mesh "
+                             "without a map)" % (len(names), len(dissection)))
+    return _qs._correspondence(dissection._impl, names, int(samples), int(seed), int(level), bool(vertex_errors),
+                               int(threads), progress)

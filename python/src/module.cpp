@@ -24,11 +24,15 @@
 #include "json_reports.h"
 #include "qs/core/error.h"
 #include "qs/core/json_strict.h"
+#include "qs/correspondence/dissection_measure.h"
 #include "qs/dissect/chart_io.h"
 #include "qs/bake/bake.h"
+#include "qs/bake/bake_folder.h"
+#include "qs/core/output_folder.h"
 #include "qs/merge/merge.h"
 #include "qs/metro/metro.h"
 #include "qs/morph/blend.h"
+#include "qs/morph/morph_glb.h"
 #include "qs/remesh/chart_sampler.h"
 #include "qs/remesh/quality.h"
 #include "qs/pipeline/pipeline.h"
@@ -285,6 +289,7 @@ struct Dissection {
 struct Remesh {
   qs::pipeline::RemeshResult result;
   std::optional<fs::path> dissection_folder;
+  std::optional<fs::path> folder;  // where it was saved
 };
 
 }  // namespace
@@ -543,11 +548,16 @@ PYBIND11_MODULE(_qs, m) {
         for (size_t i = 0; i < r.result.mesh_json.size(); ++i) s += (i ? "," : "") + r.result.mesh_json[i];
         return s + "]";
       })
-      .def("save", [](const Remesh& r, const std::string& folder) {
+      .def_property_readonly("folder", [](const Remesh& r) -> py::object {
+        if (!r.folder) return py::none();
+        return py::str(r.folder->string());
+      })
+      .def("save", [](Remesh& r, const std::string& folder) {
         if (!r.dissection_folder)
           throw qs::UsageError("save the dissection first (Dissection.save(folder)): remesh.json names the dissection "
                                "folder that qs-bake and qs-morph read the charts from");
         qs::pipeline::write_remesh(r.result, fs::path(folder));
+        r.folder = fs::path(folder);
       }, py::arg("folder"));
 
   m.def("_remesh", [](const std::shared_ptr<Dissection>& d, const std::string& mode, int level, const std::string& cells,
@@ -588,10 +598,12 @@ PYBIND11_MODULE(_qs, m) {
   // per mesh the baked unit normals and their 8-bit encoding (the PNG's content).
   m.def("_bake", [](const std::shared_ptr<Remesh>& r, const std::shared_ptr<Dissection>& d, int size,
                     const std::string& tiles, const std::string& space, const std::string& green, int gutter,
+                    const std::vector<std::string>& formats, int samples, const std::optional<std::string>& out,
                     int threads, const py::object& progress) {
     if (!r || !d) throw qs::UsageError("bake needs a qs.Remesh and the qs.Dissection it was made from");
     if (size < 2 || size > 16384) throw qs::UsageError("size " + std::to_string(size) + ": expected 2 to 16384");
     if (gutter < 0 || gutter > 1024) throw qs::UsageError("gutter " + std::to_string(gutter) + ": expected 0 to 1024");
+    if (samples < 0 || samples > 100000000) throw qs::UsageError("samples " + std::to_string(samples) + ": expected 0 to 100000000");
     if (tiles != "area" && tiles != "uniform") throw qs::UsageError("tiles '" + tiles + "': expected area or uniform");
     if (space != "tangent" && space != "object") throw qs::UsageError("space '" + space + "': expected tangent or object");
     if (green != "opengl" && green != "directx") throw qs::UsageError("green '" + green + "': expected opengl or directx");
@@ -607,32 +619,61 @@ PYBIND11_MODULE(_qs, m) {
         throw qs::InvalidInput("the dissection has " + std::to_string(dm.dissection.chart.patches.size()) +
                                " patches, the remesh " + std::to_string(c.num_patches) +
                                ": not the dissection it was made from");
-    qs::bake::BakeOptions opt;
-    opt.tile_size = size;
-    opt.gutter = gutter;
-    opt.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
-    opt.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
-    std::vector<const qs::dissect::Chart*> charts;
-    for (const auto& dm : meshes) charts.push_back(&dm.dissection.chart);
-    qs::bake::AtlasLayout layout;
-    if (tiles == "area") {
-      opt.tile_sizes = qs::bake::tile_sizes_by_area(qs::remesh::patch_texel_shares(charts), size);
-      layout = qs::bake::make_atlas_layout(opt.tile_sizes, size, gutter);
-    } else {
-      layout = qs::bake::make_atlas_layout(c.num_patches, size, gutter);
+    qs::bake::BakeSetOptions so;
+    so.size = size;
+    so.area_tiles = tiles == "area";
+    so.gutter = gutter;
+    so.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
+    so.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
+    so.samples = samples;
+    so.keep_atlases = true;
+    bool png16 = false, exr = false;  // each once, in qs-bake's order (by name)
+    for (const auto& f : formats) {
+      if (f == "png16") png16 = true;
+      else if (f == "exr") exr = true;
+      else if (f != "png8") throw qs::UsageError("format '" + f + "': expected png8, png16 or exr");
     }
-    std::vector<qs::bake::NormalAtlas> atlases = run_long(progress, threads, [&](const qs::Context& ctx) {
-      std::vector<qs::bake::NormalAtlas> out;
-      for (size_t i = 0; i < meshes.size(); ++i) {
-        const qs::remesh::ChartSampler sampler(meshes[i].dissection.chart, ctx);
-        qs::bake::BakeOptions mesh_opt = opt;
-        mesh_opt.original_vertices = meshes[i].input_vertices;
-        out.push_back(qs::bake::bake_normal_map(sampler, c, r->result.set.positions[i], mesh_opt, ctx).atlas);
+    if (exr) so.extra.push_back(qs::bake::ImageFormat::Exr);
+    if (png16) so.extra.push_back(qs::bake::ImageFormat::Png16);
+    qs::bake::BakeSetInput input;
+    input.set = &r->result.set;
+    input.outputs = r->result.outputs;
+    for (const auto& o : r->result.outputs) input.stems.push_back(fs::path(o).stem().string());
+    input.dissection = &d->loaded;
+    if (out) {
+      if (!r->folder)
+        throw qs::UsageError("save the remesh first (Remesh.save(folder)): bake.json names the remesh and dissection "
+                             "folders, as qs-bake writes it");
+      input.remesh_folder = *r->folder;
+      input.dissection_folder = *r->dissection_folder;
+    }
+    const qs::bake::BakePlan plan = qs::bake::plan_bake(input, so);
+    const qs::bake::AtlasLayout& layout = plan.layout;
+    std::optional<qs::OutputFolder> folder;
+    if (out) {
+      qs::bake::check_bake_outputs(fs::path(*out), input);
+      folder.emplace(*out);
+    }
+    const qs::bake::BakedSet baked = run_long(progress, threads, [&](const qs::Context& ctx) {
+      std::vector<std::unique_ptr<qs::remesh::ChartSampler>> samplers;
+      std::vector<const qs::remesh::ChartSampler*> list;
+      for (const auto& dm : meshes) {
+        samplers.push_back(std::make_unique<qs::remesh::ChartSampler>(dm.dissection.chart, ctx));
+        list.push_back(samplers.back().get());
       }
-      return out;
+      if (folder) return qs::bake::write_bake_folder(folder->staging(), fs::path(*out), input, list, plan, so, ctx);
+      qs::bake::BakedSet set;  // in memory: the same bake, no files, no shading check
+      for (size_t i = 0; i < meshes.size(); ++i) {
+        qs::bake::BakeOptions mesh_opt = plan.options;
+        mesh_opt.original_vertices = meshes[i].input_vertices;
+        set.atlases.push_back(qs::bake::bake_normal_map(*list[i], c, r->result.set.positions[i], mesh_opt, ctx).atlas);
+      }
+      return set;
     });
+    if (folder) folder->commit();
     py::list images;
-    for (const auto& a : atlases) {
+    for (size_t i = 0; i < baked.atlases.size(); ++i) {
+      const auto& a = baked.atlases[i];
       py::array_t<float> normals({static_cast<size_t>(a.height), static_cast<size_t>(a.width), size_t{3}});
       std::copy(a.texels.begin(), a.texels.end(), normals.mutable_data());
       const qs::bake::Rgb8Image img = qs::bake::quantize8(a);
@@ -641,18 +682,30 @@ PYBIND11_MODULE(_qs, m) {
       py::dict one;
       one["normals"] = normals;
       one["rgb8"] = rgb;
+      if (i < baked.meshes.size() && baked.meshes[i].shading) {
+        const auto& s = *baked.meshes[i].shading;
+        py::dict sh;
+        sh["samples"] = s.samples;
+        sh["mean_deg_with_map"] = s.mean_with_map;
+        sh["p95_deg_with_map"] = s.p95_with_map;
+        sh["max_deg_with_map"] = s.max_with_map;
+        sh["mean_deg_without_map"] = s.mean_without_map;
+        sh["p95_deg_without_map"] = s.p95_without_map;
+        sh["max_deg_without_map"] = s.max_without_map;
+        one["shading"] = sh;
+      }
       images.append(one);
     }
     py::list tiles_out;
     for (int p = 0; p < layout.num_patches; ++p)
       tiles_out.append(py::make_tuple(layout.tile_x(p), layout.tile_y(p), layout.tile_side(p)));
-    py::dict out;
-    out["images"] = images;
-    out["tiles"] = tiles_out;
-    out["width"] = layout.width();
-    out["height"] = layout.height();
-    out["grid"] = layout.grid;
-    return out;
+    py::dict result;
+    result["images"] = images;
+    result["tiles"] = tiles_out;
+    result["width"] = layout.width();
+    result["height"] = layout.height();
+    result["grid"] = layout.grid;
+    return result;
   });
 
   // Morph -----------------------------------------------------------------------------------
@@ -687,6 +740,49 @@ PYBIND11_MODULE(_qs, m) {
     for (const auto& f : qs::morph::path_frames(static_cast<int>(positions.size()), stops, frames))
       out.append(array(qs::morph::blend(positions, f.weights)));
     return out;
+  });
+
+  // qs-morph --glb: the GLB of a remeshed set's morph (base = the path's first shape), the shapes
+  // aligned as the frames are; with a bake folder its normal map, UVs and tangents.
+  m.def("_morph_glb", [](const std::shared_ptr<Remesh>& r, const std::vector<int>& stops,
+                         const std::optional<std::vector<double>>& weights, const std::string& align,
+                         const std::string& glb, const std::optional<std::string>& bake) {
+    if (!r) throw qs::UsageError("morph: glb needs a qs.Remesh");
+    qs::remesh::SemiRegularSet set = r->result.set;
+    const int n = static_cast<int>(set.positions.size());
+    if (n < 2) throw qs::InvalidInput("the remesh holds " + std::to_string(n) + " shape; a morph needs at least 2");
+    for (int s : stops)
+      if (s < 0 || s >= n) throw qs::InvalidInput("path: shape " + std::to_string(s) + " is not in [0, " + std::to_string(n) + ")");
+    if (stops.empty()) throw qs::InvalidInput("path: no shape");
+    if (weights) qs::morph::check_weights(*weights, n);
+    std::vector<std::string> names;
+    for (const auto& o : r->result.outputs) names.push_back(fs::path(o).stem().string());
+    const qs::morph::Align how = qs::morph::align_from_name(align);
+    for (int i = 0; i < n; ++i)
+      if (i != stops[0]) set.positions[i] = qs::morph::align_to(set.positions[i], set.positions[stops[0]], how);
+    std::vector<fs::path> inputs;
+    if (r->folder) {
+      inputs.push_back(*r->folder / "remesh.json");
+      for (const auto& o : r->result.outputs) inputs.push_back(*r->folder / o);
+    }
+    std::optional<qs::morph::BakedShape> baked;
+    if (bake) {
+      inputs.push_back(fs::path(*bake) / "bake.json");
+      for (const auto& s : names)
+        for (const std::string suffix : {".glb", "_normal.png"}) inputs.push_back(fs::path(*bake) / (s + suffix));
+    }
+    qs::check_not_an_input(glb, inputs, "glb");
+    if (bake)
+      baked = qs::morph::read_baked_shape(*bake, names[stops[0]], set.connectivity.faces, set.positions[stops[0]]);
+    qs::morph::MorphGlbOptions go;
+    go.base = stops[0];
+    go.path = stops;
+    if (weights) go.weights = *weights;
+    go.name = "morph";
+    const qs::gltf::Mesh mesh = qs::morph::write_morph_glb(glb, set, names, go, baked ? &*baked : nullptr);
+    std::vector<std::string> targets;
+    for (const auto& t : mesh.targets) targets.push_back(t.name);
+    return targets;
   });
 
   // Merge -----------------------------------------------------------------------------------
@@ -740,6 +836,82 @@ PYBIND11_MODULE(_qs, m) {
     stats["min_angle_uv"] = st.min_angle_uv;
     stats["min_angle"] = py::make_tuple(st.min_angle_a, st.min_angle_b);
     out["stats"] = stats;
+    return out;
+  });
+
+  // Correspondence --------------------------------------------------------------------------
+  // qs-metro --correspondence: the first mesh against every other, each pair as the tool's JSON
+  // object (the same keys and numbers), plus per-vertex errors on request.
+  m.def("_correspondence", [](const std::shared_ptr<Dissection>& d, const std::vector<std::string>& maps, long samples,
+                              uint64_t seed, int level, bool vertex_errors, int threads, const py::object& progress) {
+    if (!d) throw qs::UsageError("correspondence_error needs a qs.Dissection");
+    if (samples < 1) throw qs::UsageError("samples must be at least 1");
+    if (level < 0 || level > 12) throw qs::UsageError("level " + std::to_string(level) + ": expected 0 to 12");
+    const int n = static_cast<int>(d->loaded.meshes.size());
+    if (n < 2) throw qs::InvalidInput("the dissection holds 1 mesh; a correspondence needs 2 or more");
+    const fs::path folder = d->folder ? *d->folder : fs::path(".");
+    const qs::correspondence::TruthFiles files = qs::correspondence::find_truth_files(d->loaded, folder, maps);
+    qs::correspondence::MeasureOptions mo;
+    mo.samples = samples;
+    mo.seed = seed;
+    mo.level = level;
+    mo.threads = threads;
+    mo.vertex_errors = vertex_errors;
+    std::optional<qs::correspondence::GroundTruth> truth;
+    const std::vector<qs::correspondence::PairMeasure> pairs = run_long(progress, threads, [&](const qs::Context& ctx) {
+      truth.emplace(qs::correspondence::load_ground_truth(files));
+      return qs::correspondence::measure_dissection(*truth, d->loaded, mo, ctx);
+    });
+    auto stats = [](const qs::correspondence::ErrorStats& e) {
+      py::dict s;
+      s["mean_percent"] = e.mean;
+      s["median_percent"] = e.median;
+      s["p95_percent"] = e.p95;
+      s["max_percent"] = e.max;
+      return s;
+    };
+    auto doubles = [](const std::vector<double>& v) {
+      py::array_t<double> a(v.size());
+      std::copy(v.begin(), v.end(), a.mutable_data());
+      return a;
+    };
+    auto ints = [](const std::vector<int>& v) {
+      py::array_t<int> a(v.size());
+      std::copy(v.begin(), v.end(), a.mutable_data());
+      return a;
+    };
+    py::list out;
+    for (const auto& pm : pairs) {
+      py::dict p;
+      p["a"] = truth->mesh(pm.a).name;
+      p["b"] = truth->mesh(pm.b).name;
+      p["samples"] = pm.samples;
+      p["diagonal_of_b"] = pm.diagonal;
+      p["dissection"] = stats(pm.dissection);
+      p["same_patch_share"] = pm.same_patch_share;
+      p["corner_distance_mean_percent"] = pm.corner_mean;
+      p["corner_distance_max_percent"] = pm.corner_max;
+      py::dict dist;
+      dist["on"] = pm.distortion_on_b ? "b" : "a";
+      dist["dissection_mean"] = pm.distortion;
+      dist["dissection_median"] = pm.distortion_median;
+      dist["dissection_folded_faces"] = pm.distortion_folded;
+      dist["truth_mean"] = pm.truth_distortion;
+      dist["truth_median"] = pm.truth_distortion_median;
+      dist["truth_folded_faces"] = pm.truth_distortion_folded;
+      p["distortion"] = dist;
+      p["baseline"] = stats(pm.baseline);
+      p["baseline_landmarks"] = pm.baseline_landmarks;
+      p["truth_tolerance_percent"] = pm.truth_tolerance;
+      p["truth_tolerance_mean_percent"] = pm.truth_tolerance_mean;
+      if (vertex_errors) {
+        p["vertex_error"] = doubles(pm.vertex_error);
+        p["vertex_baseline_error"] = doubles(pm.vertex_baseline_error);
+        p["vertex_patch"] = ints(pm.vertex_patch);
+        p["vertex_exact_patch"] = ints(pm.vertex_exact_patch);
+      }
+      out.append(p);
+    }
     return out;
   });
 

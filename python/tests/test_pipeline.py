@@ -194,16 +194,23 @@ def read_png_rgb8(path):
     return out.reshape(height, width, 3).astype(np.uint8)
 
 
-def test_bake_matches_qs_bake_pngs(runs, tmp_path):
-    code, _, err = run_tool("qs-bake", runs["tool"] / "remesh-L4", "--size", "16", "--samples", "0",
-                            "-o", tmp_path / "bake", "-q")
+@pytest.fixture(scope="module")
+def tool_bake(runs):
+    """qs-bake's folder for the tool's remesh (size 16, a small shading check, 16-bit PNGs and EXRs too)."""
+    folder = runs["tool"] / "bake16"
+    code, _, err = run_tool("qs-bake", runs["tool"] / "remesh-L4", "--size", "16", "--samples", "500", "--format",
+                            "png16", "--format", "exr", "-o", folder, "-q")
     assert code == 0, err
+    return folder
+
+
+def test_bake_matches_qs_bake_pngs(runs, tool_bake):
     b = qs.bake(runs["r"], runs["d"], size=16)
-    bake_json = json.load(open(tmp_path / "bake" / "bake.json"))
+    bake_json = json.load(open(tool_bake / "bake.json"))
     assert (b["width"], b["height"]) == (bake_json["atlas"]["width"], bake_json["atlas"]["height"])
     assert [list(t) for t in b["tiles"]] == [[p["x"], p["y"], p["width"]] for p in bake_json["atlas"]["patches"]]
     for i, stem in enumerate(["spot_2k", "koala_7k"]):
-        png = read_png_rgb8(tmp_path / "bake" / (stem + "_normal.png"))
+        png = read_png_rgb8(tool_bake / (stem + "_normal.png"))
         assert np.array_equal(b["images"][i]["rgb8"], png), stem
         n = b["images"][i]["normals"]
         assert n.shape == png.shape and n.dtype == np.float32
@@ -242,3 +249,40 @@ def test_merge_matches_qs_merge(runs, tmp_path):
     assert np.array_equal(ends[0], m["positions"][0]) and np.array_equal(ends[1], m["positions"][1])
     with pytest.raises(qs.InvalidInput, match="twice"):
         qs.merge(runs["d"], pair=(1, 1))
+
+
+def test_bake_out_writes_what_qs_bake_writes(runs, tool_bake):
+    tool, py = runs["tool"], runs["py"]
+    b = qs.bake(runs["r"], runs["d"], size=16, samples=500, formats=["exr", "png16"], out=py / "bake16")
+    names = same_files(tool / "bake16", py / "bake16")
+    assert names == ["bake.json", "koala_7k.glb", "koala_7k_normal.exr", "koala_7k_normal.png", "koala_7k_normal16.png",
+                     "spot_2k.glb", "spot_2k_normal.exr", "spot_2k_normal.png", "spot_2k_normal16.png"]
+    doc = json.load(open(py / "bake16" / "bake.json"))
+    assert b["images"][0]["shading"] == {k: v for k, v in doc["meshes"][0]["shading"].items() if k != "seed"}
+    assert np.array_equal(b["images"][1]["rgb8"], read_png_rgb8(py / "bake16" / "koala_7k_normal.png"))
+    with pytest.raises(qs.UsageError, match="save the remesh first"):
+        qs.bake(runs["r_unsaved"], runs["d"], size=16, out=py / "nowhere")
+    assert not (py / "nowhere").exists()
+    with pytest.raises(qs.UsageError, match="format"):
+        qs.bake(runs["r"], runs["d"], size=16, formats=["tiff"])
+
+
+def test_morph_glb_is_what_qs_morph_writes(runs, tool_bake):
+    tool, py = runs["tool"], runs["py"]
+    code, _, err = run_tool("qs-morph", tool / "remesh-L4", "--glb", tool / "m.glb", "--align", "similarity", "-q")
+    assert code == 0, err
+    frames = qs.morph(runs["r"], frames=3, align="similarity", glb=py / "m.glb")
+    assert len(frames) == 3
+    assert open(tool / "m.glb", "rb").read() == open(py / "m.glb", "rb").read()
+    # With default weights, and with a bake's normal map.
+    code, _, err = run_tool("qs-morph", tool / "remesh-L4", "--glb", tool / "w.glb", "--weights", "0.25,0.75",
+                            "--bake", tool_bake, "-o", tool / "morph-w", "-q")
+    assert code == 0, err
+    qs.morph(runs["r"], weights=[0.25, 0.75], glb=py / "sub" / "w.glb", bake=tool_bake)
+    assert open(tool / "w.glb", "rb").read() == open(py / "sub" / "w.glb", "rb").read()
+    with pytest.raises(qs.UsageError, match="glb needs a qs.Remesh"):
+        qs.morph(list(runs["r"].positions), glb=py / "x.glb")
+    with pytest.raises(qs.UsageError, match="bake needs glb"):
+        qs.morph(runs["r"], bake=tool_bake)
+    with pytest.raises(qs.UsageError):  # the GLB would replace an input
+        qs.morph(runs["r"], glb=py / "remesh-L4" / "spot_2k.obj")

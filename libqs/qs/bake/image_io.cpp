@@ -53,6 +53,9 @@ std::vector<unsigned char> encode(const std::string& ext, int width, int height,
   };
   OIIO::ImageSpec spec(width, height, 3, type);
   if (!compression.empty()) spec.attribute("compression", compression);
+  // OpenImageIO stamps an EXR with the time of writing (capDate) unless given one: an empty one
+  // keeps the file the same from run to run.
+  if (ext == "exr") spec.attribute("DateTime", "");
   {
     auto probe = OIIO::ImageOutput::create(name);
     if (!probe) return fail("OpenImageIO has no " + ext + " writer: " + OIIO::geterror());

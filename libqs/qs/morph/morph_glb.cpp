@@ -190,4 +190,17 @@ gltf::Mesh morph_glb_mesh(const remesh::SemiRegularSet& set, const std::vector<s
   return m;
 }
 
+gltf::Mesh write_morph_glb(const fs::path& path, const remesh::SemiRegularSet& set, const std::vector<std::string>& names,
+                           const MorphGlbOptions& options, const BakedShape* baked) {
+  gltf::Mesh mesh = morph_glb_mesh(set, names, options, baked);
+  const fs::path dir = path.parent_path();
+  if (!dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw IoError(dir.string() + ": cannot create the folder (" + ec.message() + ")");
+  }
+  gltf::write_glb(path, mesh);
+  return mesh;
+}
+
 }  // namespace qs::morph

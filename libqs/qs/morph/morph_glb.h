@@ -61,4 +61,11 @@ struct MorphGlbOptions {
 gltf::Mesh morph_glb_mesh(const remesh::SemiRegularSet& set, const std::vector<std::string>& names,
                           const MorphGlbOptions& options, const BakedShape* baked = nullptr);
 
+/// qs-morph --glb: morph_glb_mesh written as a GLB at `path`, its folder created when missing.
+/// Returns the mesh written. \throws as morph_glb_mesh; IoError when the folder or file cannot be
+/// written.
+gltf::Mesh write_morph_glb(const std::filesystem::path& path, const remesh::SemiRegularSet& set,
+                           const std::vector<std::string>& names, const MorphGlbOptions& options,
+                           const BakedShape* baked = nullptr);
+
 }  // namespace qs::morph
