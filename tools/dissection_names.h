@@ -1,6 +1,6 @@
 #pragma once
-// Reading a qs-dissect folder from the tools that take one (qs-merge, qs-metro --correspondence):
-// where its meshes may be, and a clear message for a folder whose file names JSON could not hold.
+// Reading a qs-dissect folder from the tools that take one (qs-merge, qs-metro --correspondence),
+// with a clear message for a folder whose file names JSON could not hold.
 
 #include <exception>
 #include <filesystem>
@@ -13,21 +13,6 @@
 #include "qs/dissect/dissection_json.h"
 
 namespace qs::tools {
-
-/// The places a dissected mesh named `file` in dissection.json may be, as qs-metro looks for it:
-/// as written (relative to the working folder), relative to the dissection folder or its parent,
-/// or its file name in either. Only the ones that exist, in that order.
-inline std::vector<std::filesystem::path> dissected_mesh_candidates(const std::string& file,
-                                                                    const std::filesystem::path& folder) {
-  namespace fs = std::filesystem;
-  std::vector<fs::path> out;
-  const fs::path name = fs::path(file).filename();
-  std::error_code ec;
-  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file, folder / name,
-                            folder.parent_path() / name})
-    if (!p.empty() && fs::exists(p, ec)) out.push_back(p);
-  return out;
-}
 
 /// qs::dissect::read_dissection, except that a chart that is missing because its name was not
 /// UTF-8 when qs-dissect wrote it (dissection.json holds U+FFFD in place of those bytes, and no

@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
       std::vector<fs::path> inputs = {fs::path(folder) / "dissection.json"};
       for (const auto& dm : in.meshes) {
         inputs.push_back(fs::path(folder) / dm.chart_file);
-        for (const fs::path& p : qs::tools::dissected_mesh_candidates(dm.file, folder)) inputs.push_back(p);
+        for (const fs::path& p : qs::dissect::dissected_mesh_candidates(dm.file, folder)) inputs.push_back(p);
       }
       for (const std::string& name : {out_a, out_b, std::string("remesh.json")})
         qs::check_not_an_input(fs::path(outdir) / name, inputs, "-o");

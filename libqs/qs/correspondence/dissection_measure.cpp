@@ -8,11 +8,8 @@ namespace qs::correspondence {
 namespace fs = std::filesystem;
 
 fs::path find_dissected_mesh(const std::string& file, const fs::path& folder) {
-  const fs::path name = fs::path(file).filename();
-  std::error_code ec;
-  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file, folder / name,
-                            folder.parent_path() / name})
-    if (!p.empty() && fs::exists(p, ec)) return p;
+  const std::vector<fs::path> found = dissect::dissected_mesh_candidates(file, folder);
+  if (!found.empty()) return found.front();
   const bool lossy = file.find("\xEF\xBF\xBD") != std::string::npos;  // U+FFFD
   throw IoError(json_strict::printable(file) + ": mesh of the dissection " + json_strict::printable(folder.string()) +
                 " not found (looked as written, in the folder and beside it; run from where qs-dissect ran)" +

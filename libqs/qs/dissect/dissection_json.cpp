@@ -333,4 +333,16 @@ LoadedDissection read_dissection(const std::filesystem::path& folder) {
   return out;
 }
 
+std::vector<std::filesystem::path> dissected_mesh_candidates(const std::string& file,
+                                                             const std::filesystem::path& folder) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> out;
+  const fs::path name = fs::path(file).filename();
+  std::error_code ec;
+  for (const fs::path& p : {fs::path(file), folder / file, folder.parent_path() / file, folder / name,
+                            folder.parent_path() / name})
+    if (!p.empty() && fs::exists(p, ec)) out.push_back(p);
+  return out;
+}
+
 }  // namespace qs::dissect

@@ -52,4 +52,10 @@ struct LoadedDissection {
 /// inconsistent folder (naming the file and the field).
 LoadedDissection read_dissection(const std::filesystem::path& folder);
 
+/// The places where the mesh that dissection.json names `file` may be: as written (relative to
+/// the working folder), relative to the dissection `folder` or its parent, or its file name in
+/// either. Only those that exist, in that order.
+std::vector<std::filesystem::path> dissected_mesh_candidates(const std::string& file,
+                                                             const std::filesystem::path& folder);
+
 }  // namespace qs::dissect
