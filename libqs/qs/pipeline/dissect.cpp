@@ -21,13 +21,32 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Chart file names: <stem>.chart.ply, with -2, -3 ... for repeated stems. A stem that is not
-// UTF-8 text has its odd bytes written \xNN, so that dissection.json (JSON, UTF-8) names the file.
+// A mesh stem as a chart file name that dissection.json (JSON: UTF-8) can hold and its reader
+// accepts: a stem that is not clean UTF-8 text, or holds a backslash, has those bytes (and '%')
+// written %XX.
+std::string chart_stem_of(const std::string& stem) {
+  if (json_strict::is_clean_text(stem) && stem.find('\\') == std::string::npos) return stem;
+  std::string out;
+  for (const char ch : stem) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c >= 0x7f || c == '\\' || c == '%') {
+      static const char* const kHex = "0123456789ABCDEF";
+      out += '%';
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
+// Chart file names: <stem>.chart.ply, with -2, -3 ... for repeated stems.
 std::vector<std::string> chart_names(const std::vector<Input>& inputs) {
   std::vector<std::string> names;
   std::map<std::string, int> seen;
   for (const auto& in : inputs) {
-    const std::string stem = json_strict::printable(fs::path(in.file).stem().string(), std::string::npos);
+    const std::string stem = chart_stem_of(fs::path(in.file).stem().string());
     const int n = ++seen[stem];
     names.push_back(stem + (n > 1 ? "-" + std::to_string(n) : "") + ".chart.ply");
   }
