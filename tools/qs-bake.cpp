@@ -108,19 +108,8 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
   return qs::tools::run_tool(app, argc, argv, [&] {
-    if (space == "object" && green == "directx")
-      throw qs::UsageError("--green applies to tangent-space maps only; drop it with --space object");
-    qs::bake::BakeSetOptions so;
-    so.size = size;
-    so.area_tiles = tiles == "area";
-    so.gutter = gutter;
-    so.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
-    so.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
-    so.samples = samples;
-    for (const auto& f : std::set<std::string>(formats.begin(), formats.end())) {
-      if (f == "png16") so.extra.push_back(qs::bake::ImageFormat::Png16);
-      if (f == "exr") so.extra.push_back(qs::bake::ImageFormat::Exr);
-    }
+    const qs::bake::BakeSetOptions so =
+        qs::bake::bake_set_options(size, tiles, gutter, space, green, samples, formats);
 
     const auto t0 = Clock::now();
     if (!fs::exists(folder)) throw qs::IoError(folder + ": no such folder (expected a qs-remesh output folder)");

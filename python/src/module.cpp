@@ -607,8 +607,6 @@ PYBIND11_MODULE(_qs, m) {
     if (tiles != "area" && tiles != "uniform") throw qs::UsageError("tiles '" + tiles + "': expected area or uniform");
     if (space != "tangent" && space != "object") throw qs::UsageError("space '" + space + "': expected tangent or object");
     if (green != "opengl" && green != "directx") throw qs::UsageError("green '" + green + "': expected opengl or directx");
-    if (space == "object" && green == "directx")
-      throw qs::UsageError("--green applies to tangent-space maps only; drop it with --space object");
     const auto& c = r->result.set.connectivity;
     const auto& meshes = d->loaded.meshes;
     if (meshes.size() != r->result.set.positions.size())
@@ -619,22 +617,8 @@ PYBIND11_MODULE(_qs, m) {
         throw qs::InvalidInput("the dissection has " + std::to_string(dm.dissection.chart.patches.size()) +
                                " patches, the remesh " + std::to_string(c.num_patches) +
                                ": not the dissection it was made from");
-    qs::bake::BakeSetOptions so;
-    so.size = size;
-    so.area_tiles = tiles == "area";
-    so.gutter = gutter;
-    so.space = space == "tangent" ? qs::bake::NormalSpace::Tangent : qs::bake::NormalSpace::Object;
-    so.green = green == "opengl" ? qs::bake::GreenChannel::OpenGL : qs::bake::GreenChannel::DirectX;
-    so.samples = samples;
+    qs::bake::BakeSetOptions so = qs::bake::bake_set_options(size, tiles, gutter, space, green, samples, formats);
     so.keep_atlases = true;
-    bool png16 = false, exr = false;  // each once, in qs-bake's order (by name)
-    for (const auto& f : formats) {
-      if (f == "png16") png16 = true;
-      else if (f == "exr") exr = true;
-      else if (f != "png8") throw qs::UsageError("format '" + f + "': expected png8, png16 or exr");
-    }
-    if (exr) so.extra.push_back(qs::bake::ImageFormat::Exr);
-    if (png16) so.extra.push_back(qs::bake::ImageFormat::Png16);
     qs::bake::BakeSetInput input;
     input.set = &r->result.set;
     input.outputs = r->result.outputs;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "qs/bake/export_glb.h"
 #include "qs/core/atomic_file.h"
@@ -11,6 +12,29 @@
 #include "qs/gltf/glb.h"
 
 namespace qs::bake {
+
+BakeSetOptions bake_set_options(int size, const std::string& tiles, int gutter, const std::string& space,
+                                const std::string& green, int samples, const std::vector<std::string>& formats) {
+  if (tiles != "area" && tiles != "uniform") throw UsageError("tiles '" + tiles + "': expected area or uniform");
+  if (space != "tangent" && space != "object") throw UsageError("space '" + space + "': expected tangent or object");
+  if (green != "opengl" && green != "directx") throw UsageError("green '" + green + "': expected opengl or directx");
+  if (space == "object" && green == "directx")
+    throw UsageError("--green applies to tangent-space maps only; drop it with --space object");
+  BakeSetOptions so;
+  so.size = size;
+  so.area_tiles = tiles == "area";
+  so.gutter = gutter;
+  so.space = space == "tangent" ? NormalSpace::Tangent : NormalSpace::Object;
+  so.green = green == "opengl" ? GreenChannel::OpenGL : GreenChannel::DirectX;
+  so.samples = samples;
+  // Each extra format once, by name (exr before png16), as bake.json lists them.
+  for (const auto& f : std::set<std::string>(formats.begin(), formats.end())) {
+    if (f == "exr") so.extra.push_back(ImageFormat::Exr);
+    else if (f == "png16") so.extra.push_back(ImageFormat::Png16);
+    else if (f != "png8") throw UsageError("format '" + f + "': expected png8, png16 or exr");
+  }
+  return so;
+}
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;

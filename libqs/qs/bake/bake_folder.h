@@ -31,6 +31,12 @@ struct BakeSetOptions {
   bool keep_atlases = false;                   ///< BakedSet::atlases filled (else empty)
 };
 
+/// BakeSetOptions from qs-bake's option words: `tiles` area|uniform, `space` tangent|object,
+/// `green` opengl|directx, `formats` any of png8 (always written), png16, exr.
+/// \throws UsageError for an unknown word or `green` directx with `space` object.
+BakeSetOptions bake_set_options(int size, const std::string& tiles, int gutter, const std::string& space,
+                                const std::string& green, int samples, const std::vector<std::string>& formats);
+
 /// A remeshed set and the dissection it was made from, as qs-bake reads them.
 struct BakeSetInput {
   const remesh::SemiRegularSet* set = nullptr;
