@@ -93,7 +93,8 @@ int main(int argc, char** argv) {
                    ->check(CLI::Range(0.0, 1.0));
   app.add_option("--same-pose", same_pose,
                  "Meshes in one pose (registered scans, re-tessellations of one surface): yes, no, or auto "
-                 "(yes when the surfaces lie within 1% of the diagonal of each other after the landmarks' similarity)")
+                 "(yes when the surfaces lie within 1% of the diagonal of each other after the landmarks' "
+                 "similarity, 99% of them within 2%)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "yes", "no"}));
   app.add_flag("--no-refine-maps", no_refine,

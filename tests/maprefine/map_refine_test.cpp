@@ -734,7 +734,9 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   std::vector<qs::dissect::MeshToDissect> in = {cr::dissect_input(same.shapes[0]), cr::dissect_input(same.shapes[1])};
   const auto d_same = qs::dissect::pose_distance(in);
   ASSERT_TRUE(d_same.has_value());
-  EXPECT_LT(*d_same, qs::dissect::kSamePoseDetect);
+  EXPECT_LT(d_same->mean, qs::dissect::kSamePoseDetect);
+  EXPECT_LT(d_same->p99, qs::dissect::kSamePoseTail * qs::dissect::kSamePoseDetect);
+  EXPECT_GE(d_same->p99, d_same->mean);
 
   qs::TriMesh moved = same.shapes[0].mesh;
   const Eigen::Matrix3d rot = Eigen::AngleAxisd(0.7, qs::Vec3(1, 2, 3).normalized()).toRotationMatrix();
@@ -743,7 +745,20 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   copy.mesh = &moved;
   const auto d_copy = qs::dissect::pose_distance({in[0], copy});
   ASSERT_TRUE(d_copy.has_value());
-  EXPECT_LT(*d_copy, 1e-9);
+  EXPECT_LT(d_copy->p99, 1e-9);
+
+  // A part moved (a limb in another pose): close on average, far at the part; not one pose.
+  qs::TriMesh limb = same.shapes[1].mesh;
+  const auto box = qs::bounding_box(limb.positions);
+  const double cut = box.max.x() - 0.05 * (box.max.x() - box.min.x());
+  for (auto& x : limb.positions)
+    if (x.x() > cut) x += 0.08 * box.diagonal() * qs::Vec3(0, 1, 0);
+  auto posed = in[1];
+  posed.mesh = &limb;
+  const auto d_limb = qs::dissect::pose_distance({in[0], posed});
+  ASSERT_TRUE(d_limb.has_value());
+  EXPECT_LT(d_limb->mean, qs::dissect::kSamePoseDetect) << d_limb->mean;
+  EXPECT_GT(d_limb->p99, qs::dissect::kSamePoseTail * qs::dissect::kSamePoseDetect) << d_limb->p99;
 
   qs::family::FamilyOptions fo;
   fo.shapes = 3;
@@ -754,21 +769,27 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   for (const auto& sh : fam.shapes) fin.push_back(cr::dissect_input(sh));
   const auto d_fam = qs::dissect::pose_distance(fin);
   ASSERT_TRUE(d_fam.has_value());
-  EXPECT_GT(*d_fam, qs::dissect::kSamePoseDetect);
+  EXPECT_GT(d_fam->mean, qs::dissect::kSamePoseDetect);
 
   // dissect_set turns same_pose on by itself only for the first set, and says so.
   qs::dissect::DissectOptions o;
   o.same_pose_detect = qs::dissect::kSamePoseDetect;
   const auto found = qs::dissect::dissect_set(in, o);
   EXPECT_TRUE(found.same_pose_detected);
-  EXPECT_EQ(found.pose_distance, *d_same);
+  EXPECT_EQ(found.pose_distance, d_same->mean);
+  EXPECT_EQ(found.pose_distance_p99, d_same->p99);
   EXPECT_GT(found.same_pose_splits, 0);
+  qs::dissect::DissectOptions shallow = o;
+  shallow.max_depth = 0;
+  const auto limb_set = qs::dissect::dissect_set({in[0], posed}, shallow);
+  EXPECT_FALSE(limb_set.same_pose_detected);
+  EXPECT_EQ(limb_set.pose_distance_p99, d_limb->p99);
   const auto not_found = qs::dissect::dissect_set(fin, o);
   EXPECT_FALSE(not_found.same_pose_detected);
   EXPECT_EQ(not_found.same_pose_splits, 0);
   // On by default (qs-dissect's detection), off with 0; one mesh given twice is not posed (its
   // map is the identity).
-  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, *d_same);
+  EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, d_same->mean);
   qs::dissect::DissectOptions off;
   off.same_pose_detect = 0;
   EXPECT_EQ(qs::dissect::dissect_set(in, off).pose_distance, -1);

@@ -81,19 +81,41 @@ std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect
 }
 
 // The area-weighted mean distance from `mesh`'s vertices to `to`.
-double mean_distance(const TriMesh& mesh, const metro::SurfaceDistance& to) {
+// The distances from mesh's vertices to `to`, each with its vertex's area (a third of its faces').
+std::vector<std::pair<double, double>> weighted_distances(const TriMesh& mesh, const metro::SurfaceDistance& to) {
   std::vector<double> area(mesh.positions.size(), 0.0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const double third = face_area(mesh, f) / 3;
     for (int v : mesh.faces[f]) area[v] += third;
   }
-  double sum = 0, total = 0;
-  for (size_t v = 0; v < mesh.positions.size(); ++v) {
-    if (area[v] <= 0) continue;
-    sum += area[v] * to.distance(mesh.positions[v]);
-    total += area[v];
+  std::vector<std::pair<double, double>> out;
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    if (area[v] > 0) out.emplace_back(to.distance(mesh.positions[v]), area[v]);
+  return out;
+}
+
+// The mean and the 99% quantile of two directions' weighted distances, each direction weighing half.
+PoseDistance distance_stats(std::vector<std::pair<double, double>> ab, std::vector<std::pair<double, double>> ba) {
+  auto total = [](const std::vector<std::pair<double, double>>& v) {
+    double t = 0;
+    for (const auto& dw : v) t += dw.second;
+    return t;
+  };
+  const double ta = total(ab), tb = total(ba);
+  if (!(ta > 0) || !(tb > 0)) return {};
+  for (auto& dw : ab) dw.second /= 2 * ta;
+  for (auto& dw : ba) dw.second /= 2 * tb;
+  ab.insert(ab.end(), ba.begin(), ba.end());
+  std::sort(ab.begin(), ab.end());
+  PoseDistance out;
+  for (const auto& [d, w] : ab) out.mean += w * d;
+  double below = 0;
+  for (const auto& [d, w] : ab) {
+    out.p99 = d;
+    below += w;
+    if (below >= 0.99) break;
   }
-  return total > 0 ? sum / total : 0;
+  return out;
 }
 
 // dissect_set after its checks and the pose detection: the dissection and its safety nets. A
@@ -198,36 +220,38 @@ DissectionSet dissect_with_nets(const std::vector<MeshToDissect>& meshes, const 
 DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,
                                    const Context& context) {
   // Same pose found by measurement (DissectOptions::same_pose_detect).
-  double measured = -1;
+  std::optional<PoseDistance> measured;
   bool detected = false;
   if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
-    if (const auto d = pose_distance(meshes)) {
-      measured = *d;
+    measured = pose_distance(meshes);
+    if (measured) {
       // One mesh given several times maps by the identity already; nothing to pose.
       bool identical = true;
       for (size_t i = 1; i < meshes.size() && identical; ++i)
         identical = meshes[i].mesh->positions == meshes[0].mesh->positions &&
                     meshes[i].mesh->faces == meshes[0].mesh->faces &&
                     landmark_positions(meshes[i]) == landmark_positions(meshes[0]);
-      detected = *d <= options.same_pose_detect && !identical;
+      detected = measured->mean <= options.same_pose_detect &&
+                 measured->p99 <= kSamePoseTail * options.same_pose_detect && !identical;
     }
   }
   DissectOptions used = options;
   used.same_pose = options.same_pose || detected;
   DissectionSet out = dissect_with_nets(meshes, used, context);
-  out.pose_distance = measured;
+  out.pose_distance = measured ? measured->mean : -1;
+  out.pose_distance_p99 = measured ? measured->p99 : -1;
   out.same_pose_detected = detected;
   return out;
 }
 
 }  // namespace
 
-std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes) {
+std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& meshes) {
   if (meshes.size() < 2) return std::nullopt;
   const auto first = landmark_positions(meshes[0]);
   if (first.empty()) return std::nullopt;
   const metro::SurfaceDistance to_first(*meshes[0].mesh, "the first mesh");
-  double worst = 0;
+  PoseDistance worst;
   for (size_t i = 1; i < meshes.size(); ++i) {
     const auto mine = landmark_positions(meshes[i]);
     if (mine.empty()) return std::nullopt;
@@ -242,11 +266,14 @@ std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes) {
     TriMesh moved = *meshes[i].mesh;
     for (auto& x : moved.positions) x = (pose * x.homogeneous()).head<3>();
     const metro::SurfaceDistance to_moved(moved, "a moved mesh");
-    const double d = 0.5 * (mean_distance(moved, to_first) + mean_distance(*meshes[0].mesh, to_moved));
-    worst = std::max(worst, d);
+    const PoseDistance d =
+        distance_stats(weighted_distances(moved, to_first), weighted_distances(*meshes[0].mesh, to_moved));
+    worst.mean = std::max(worst.mean, d.mean);
+    worst.p99 = std::max(worst.p99, d.p99);
   }
   const double diag = bounding_box(meshes[0].mesh->positions).diagonal();
-  return diag > 0 ? worst / diag : 0.0;
+  if (!(diag > 0)) return PoseDistance{};
+  return PoseDistance{worst.mean / diag, worst.p99 / diag};
 }
 
 DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const DissectOptions& options,

@@ -38,6 +38,9 @@ using NodeMapPuller =
 /// re-tessellation lie 0.1% apart, two registered bodies 0.2-0.3%, two shapes of a generated
 /// family 1.4-2.9%; docs/algorithms.md, "Same pose").
 inline constexpr double kSamePoseDetect = 0.01;
+/// One pose also needs 99% of the area within this multiple of same_pose_detect: a shape whose
+/// limbs moved (a pose change) lies close on average but far at the limbs (docs/algorithms.md).
+inline constexpr double kSamePoseTail = 2.0;
 
 /// The options of a dissection. The defaults are qs-dissect's except for the two hooks, which
 /// qs::pipeline::dissect sets (they are empty here: the dissect module does not depend on
@@ -116,8 +119,9 @@ struct DissectOptions {
   /// polished by it. Empty: repaired maps stay as repaired, a node still folded keeps its own.
   NodeMapPuller same_pose_untangle;
   /// Turn same_pose on when every mesh, moved onto the first by the landmarks' similarity, lies at
-  /// a mean distance of at most this fraction of the first mesh's diagonal from it
-  /// (pose_distance; needs seeds in every mesh; one mesh given twice is not posed). 0: off. \pre >= 0
+  /// a mean distance of at most this fraction of the first mesh's diagonal from it, and 99% of
+  /// its area within kSamePoseTail times that (pose_distance; needs seeds in every mesh; one mesh
+  /// given twice is not posed). 0: off. \pre >= 0
   double same_pose_detect = kSamePoseDetect;
   /// Meshes in other poses: every mesh's seed loop but the first's is routed to follow the
   /// first's in geodesic coordinates of the landmarks (trace_intrinsic_loop), which a change of
@@ -279,6 +283,7 @@ struct DissectionSet {
   /// DissectOptions::same_pose_detect: the set's pose_distance (-1: not measured) and whether it
   /// turned same_pose on.
   double pose_distance = -1;
+  double pose_distance_p99 = -1;  ///< the 99% quantile (-1: not measured)
   bool same_pose_detected = false;
   /// The seeds' cyclic order used (seed k of the result is seed seed_order[k] as given): the
   /// set's shortest loop (shortest_seed_order), and the three orders' loop lengths (0 when the
@@ -294,11 +299,16 @@ struct DissectionSet {
 
 /// How far a set is from one pose: for every mesh but the first, the least-squares similarity
 /// (Umeyama) of its landmarks (the 4 seeds, then the features both have) onto the first mesh's
-/// moves it onto the first, and the symmetric mean distance between the two surfaces is taken
-/// (from each one's vertices to the other, weighted by vertex area); the largest over the meshes,
-/// as a fraction of the first mesh's bounding-box diagonal. nullopt when a mesh has no seeds or
-/// the set has fewer than 2 meshes. \throws InvalidInput for a landmark outside its mesh.
-std::optional<double> pose_distance(const std::vector<MeshToDissect>& meshes);
+/// moves it onto the first, and the distances between the two surfaces are taken (from each one's
+/// vertices to the other, weighted by vertex area): their mean and the distance within which 99%
+/// of the area lies; the largest of each over the meshes, as fractions of the first mesh's
+/// bounding-box diagonal. nullopt when a mesh has no seeds or the set has fewer than 2 meshes.
+/// \throws InvalidInput for a landmark outside its mesh.
+struct PoseDistance {
+  double mean = 0;
+  double p99 = 0;
+};
+std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& meshes);
 
 /// "geodesic+cotan", "edge+mean-value", ...: the seed curves and patch weights of a dissection.
 std::string maps_name(bool geodesic_seed_curves, bool intrinsic_cotan);

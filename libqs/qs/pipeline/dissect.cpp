@@ -279,11 +279,12 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << sets.tree.size() << " tree nodes, " << sets.warp_events << " warp flip events, max stretch "
          << std::setprecision(4) << sets.max_stretch << "\n";
   if (sets.pose_distance >= 0) {
-    const double limit = opt.same_pose_detect;
-    const bool near = sets.pose_distance <= limit;
+    const double limit = opt.same_pose_detect, tail = dissect::kSamePoseTail * limit;
+    const bool near = sets.pose_distance <= limit && sets.pose_distance_p99 <= tail;
     text << "pose: the surfaces lie " << std::setprecision(3) << 100 * sets.pose_distance
-         << "% of the diagonal apart after the landmarks' similarity (mean), " << (near ? "at most " : "over ")
-         << 100 * limit << "%: "
+         << "% of the diagonal apart after the landmarks' similarity (mean; 99% of the area within "
+         << 100 * sets.pose_distance_p99 << "%; one pose: at most " << 100 * limit << "% and " << 100 * tail
+         << "%): "
          << (sets.same_pose_detected ? "one pose (as --same-pose)"
              : near                  ? "one mesh given again (its map is the identity)"
                                      : "not one pose")
