@@ -476,6 +476,7 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
   close(lock_fd);
   std::lock_guard lock(mutex_);
   state_.status = ok ? "done" : cancelled_ && stop_requested_ ? "cancelled" : "failed";
+  if (ok) state_.progress = 1;
   state_.error = error;
   state_.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_started_).count();
   state_.eta_s = ok ? 0 : -1;

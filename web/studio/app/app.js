@@ -1001,16 +1001,32 @@ window.__studio = {
     const s = p.clone().project(vw.camera), r = vw.renderer.domElement.getBoundingClientRect();
     return { x: r.left + (s.x + 1) / 2 * r.width, y: r.top + (1 - s.y) / 2 * r.height };
   },
-  // Where a landmark is on the screen and whether its label is shown, seen from `dir`.
-  labelFrom(mesh, name, dir) {
+  // Whether landmark `name`'s label is shown when the camera looks at vertex v along its normal
+  // (sign 1: from outside) or against it (sign -1: from the other side of the shape).
+  labelShown(mesh, name, v, sign) {
     const ed = editors.find((e) => e.name === mesh);
-    ed.viewer.frame(ed.geometry.boundingBox, new THREE.Vector3(...dir));
+    const p = new THREE.Vector3().fromBufferAttribute(ed.geometry.attributes.position, v);
+    const n = new THREE.Vector3().fromBufferAttribute(ed.geometry.attributes.normal, v).normalize();
+    const vw = ed.viewer;
+    vw.controls.target.copy(p);
+    vw.camera.position.copy(p).addScaledVector(n, sign * vw.radius * 2.5);
+    vw.controls.update();
+    vw.dirty = false;
+    vw.renderer.render(vw.scene, vw.camera);
     ed.hideCoveredLabels();
-    return !ed.markers.get(name).userData.label.classList.contains('covered');
+    vw.labels.render(vw.scene, vw.camera);
+    const tag = ed.markers.get(name).userData.label;
+    return !tag.classList.contains('covered') && getComputedStyle(tag).visibility !== 'hidden';
   },
   frameFront(mesh, dir) {
     const ed = editors.find((e) => e.name === mesh);
     ed.viewer.frame(ed.geometry.boundingBox, new THREE.Vector3(...dir));
+  },
+  resultCameras() { return resultViewers.map((v) => v.camera.position.clone().sub(v.controls.target).normalize().toArray()); },
+  turnResult(i, dir) {
+    const v = resultViewers[i], d = v.camera.position.distanceTo(v.controls.target);
+    v.camera.position.copy(v.controls.target).addScaledVector(new THREE.Vector3(...dir).normalize(), d);
+    v.controls.update();
   },
   cameraOf(i) { const v = editors[i].viewer; return v.camera.position.clone().sub(v.controls.target).normalize().toArray(); },
 };
