@@ -411,7 +411,7 @@ try {
     const tres = await fetch(new URL(tarHref, urlB));
     const tbuf = Buffer.from(await tres.arrayBuffer());
     const members = tarNames(tbuf);
-    check(tres.status === 200 && members.length === links.length && members.includes('run-1/morph/morph.glb') && members.includes('run-1/run.json'),
+    check(tres.status === 200 && members.length === links.length && members.includes('run-1/morph.glb') && members.includes('run-1/run.json'),
       `the run's files as one tar (${tarHref}): ${members.length} files, ${tbuf.length} bytes, ${tres.headers.get('content-disposition')}`);
     // finding: no Cancel
     const beforeCancel = snapshot(b);
