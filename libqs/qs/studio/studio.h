@@ -65,8 +65,8 @@ struct Request {
   std::string body;
   /// An upload streamed to disk by the server (a file from Studio::new_upload_file()) instead of
   /// `body`; handle() moves it into place when it is accepted, its UploadFile removes it otherwise.
-  std::filesystem::path body_file;
-  std::string body_file_name;  ///< the file name a multipart form gave for it (used when ?name= is absent)
+  std::filesystem::path body_file{};
+  std::string body_file_name{};  ///< the file name a multipart form gave for it (used when ?name= is absent)
 };
 
 /// A refusal with its HTTP status (4xx: the request; 5xx: the server's own state).
