@@ -136,7 +136,7 @@ function patchColour(p, c) { return c.setHSL((p * 0.618033988749895) % 1, 0.62, 
 function linkViews(getViews, isOn) {
   let busy = false;
   return (from) => {
-    if (busy || !isOn() || !from.box) return;
+    if (busy || !isOn() || !from.box || from.linkable === false) return;
     busy = true;
     const c = from.box.getCenter(new THREE.Vector3()), r = from.radius || 1;
     const off = from.camera.position.clone().sub(from.controls.target).divideScalar(r);
@@ -212,6 +212,7 @@ class Editor {
     this.panel.dataset.mesh = name;
     $('editors').append(this.panel);
     this.viewer = new Viewer(view);
+    this.viewer.linkable = false;  // its own framing while it opens is not passed on
     this.viewer.controls.addEventListener('change', () => linkEditors(this.viewer));
     this.viewer.beforeRender = () => this.hideCoveredLabels();
     this.shading.onchange = () => { this.material.flatShading = this.shading.value === 'flat'; this.material.needsUpdate = true; this.viewer.redraw(); };
@@ -590,6 +591,7 @@ async function openEditor(name, inspectOnly = false) {
   editors.push(ed);
   activeEditor = ed;
   await ed.load().catch((e) => ed.say(`cannot open ${name}: ${e.message}`, true));
+  ed.viewer.linkable = true;
   ed.ready = true;
   saveSettings();
 }
@@ -757,7 +759,7 @@ function updateRunReadiness() {
   const seeds = (m) => (m.landmarks && !m.landmarks.error ? m.landmarks.seeds || 0 : 0);
   const feats = (m) => (m.landmarks && !m.landmarks.error ? m.landmarks.feature_names || [] : []);
   const names = [...(meshes.some((m) => seeds(m) === 4) ? SEEDS : []), ...[...new Set(meshes.flatMap(feats))].sort()];
-  if (!names.length) { t.append(el('caption', { className: 'hint', textContent: 'no landmarks: seeds chosen automatically on each mesh' })); return; }
+  if (!names.length) { t.append(el('tr', {}, el('td', { className: 'hint', textContent: 'no landmarks: seeds chosen automatically on each mesh' }))); return; }
   t.append(el('tr', {}, el('th', { textContent: 'landmark' }), ...meshes.map((m) => el('th', { textContent: m.name.replace(/\.[^.]+$/, '') }))));
   for (const n of names) {
     t.append(el('tr', {}, el('td', { textContent: n }), ...meshes.map((m) => {
@@ -861,6 +863,7 @@ $('delete-run').onclick = async () => {
 };
 
 let resultViewers = [];
+let colourByStretch = false;
 const linkResults = linkViews(() => resultViewers, () => $('link-results').checked);
 function currentRun() { return runList.find((r) => r.name === $('runs').value); }
 async function showRun() {
@@ -903,16 +906,49 @@ async function showRun() {
       const ext = mode === 'patches' ? '.chart.ply' : '.obj';
       const wire = mode === 'remesh' ? el('input', { type: 'checkbox', checked: true, id: 'result-wire' }) : null;
       if (wire) $('result-controls').append(el('label', {}, wire, ' wireframe'));
+      // patches: coloured by patch or by each patch's stretch (dissection.json); hovering names one
+      let report = null;
+      const byStretch = mode === 'patches' ? el('input', { type: 'checkbox', id: 'result-stretch', checked: colourByStretch }) : null;
+      if (byStretch) {
+        const dj = files.find((f) => f.endsWith('/dissection/dissection.json'));
+        if (dj) report = await api(`/files/${dj}`);
+        const tau = report && report.options ? report.options.tau : 3;
+        $('result-controls').append(el('label', { title: 'each patch coloured by its L2 stretch (1: no distortion)' }, byStretch, ' colour by stretch'),
+          el('span', { className: 'hint stretch-legend', textContent: ` green 1 · yellow tau ${tau} · red ${3 * tau} and over` }));
+        byStretch.onchange = () => { colourByStretch = byStretch.checked; showRun(); };
+      }
       const views = stems.map((stem) => {
         const path = files.find((f) => f.endsWith(dir + stem + ext));
         return path ? [stem, path, addView(`${stem}: ${mode === 'patches' ? 'common patches' : `level-${run.run.level} remesh`}`)] : null;
       }).filter(Boolean);
       await Promise.all(views.map(async ([, path, v]) => {
         const data = await api(`/api/mesh?path=${encodeURIComponent(path)}`);
-        const g = mode === 'patches' ? geometryOf(data, (f, c) => patchColour(data.patch[f], c)) : geometryOf(data);
+        const info = report && (report.meshes || []).find((m) => path.endsWith('/' + m.chart));
+        const tau = report && report.options ? report.options.tau : 3;
+        const stretchColour = (st, c) => {  // 1 -> green, tau -> yellow, 3 tau and over -> red (log scale)
+          const t = Math.min(1, Math.max(0, Math.log(Math.max(st, 1)) / Math.log(3 * tau)));
+          return c.setHSL((1 - t) * 0.33, 0.8, 0.5);
+        };
+        const colour = mode !== 'patches' ? null : colourByStretch && info
+          ? (f, c) => stretchColour(info.patches[data.patch[f]].stretch, c) : (f, c) => patchColour(data.patch[f], c);
+        const g = colour ? geometryOf(data, colour) : geometryOf(data);
         const mat = new THREE.MeshStandardMaterial({ color: mode === 'patches' ? 0xffffff : 0xd0d0d0, vertexColors: mode === 'patches', roughness: 0.85, flatShading: mode === 'patches', polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 });
-        v.scene.add(new THREE.Mesh(g, mat));
-        if (mode === 'patches') v.panel.querySelector('.bar').append(el('span', { className: 'hint', textContent: `${data.patches} patches, ${data.faces.length / 3} faces` }));
+        const surface = new THREE.Mesh(g, mat);
+        v.scene.add(surface);
+        if (mode === 'patches') {
+          v.panel.querySelector('.bar').append(el('span', { className: 'hint', textContent: `${data.patches} patches, ${data.faces.length / 3} faces` }));
+          const hover = el('span', { className: 'hover-patch' });
+          v.panel.querySelector('.bar').append(hover);
+          const canvas = v.renderer.domElement, ray = new THREE.Raycaster();
+          canvas.addEventListener('pointermove', (ev) => {
+            const r = canvas.getBoundingClientRect();
+            ray.setFromCamera(new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1), v.camera);
+            const hit = ray.intersectObject(surface, false)[0];
+            const p = hit ? data.patch[hit.faceIndex] : -1;
+            const pi = info && p >= 0 ? info.patches[p] : null;
+            hover.textContent = p < 0 ? '' : `patch ${pi ? pi.name : p}` + (pi ? `: stretch ${pi.stretch.toFixed(2)}, ${pi.faces} faces${pi.stop_reason ? `, left over tau (${pi.stop_reason})` : ''}` : '');
+          });
+        }
         else {
           const lines = new THREE.LineSegments(new THREE.WireframeGeometry(g), new THREE.LineBasicMaterial({ color: 0x1a3d6b }));
           v.scene.add(lines);

@@ -367,7 +367,17 @@ try {
     };
     let v = await views('patches');
     check(v.ready === '1' && v.panels === 3, `patches: ${v.panels} views (${await page.$$eval('#result-views .bar .hint', (h) => h.map((x) => x.textContent).join('; '))})`);
+    await page.click('#result-stretch');
+    await page.waitForFunction(() => document.body.dataset.resultsReady === '1' && document.getElementById('result-stretch').checked, { timeout: 60000 });
+    const cv = await (await page.$('#result-views .panel canvas')).boundingBox();
+    await page.mouse.move(cv.x + cv.width / 2, cv.y + cv.height / 2);
+    await page.mouse.move(cv.x + cv.width / 2 + 2, cv.y + cv.height / 2 + 1);
+    const hover = await page.$eval('#result-views .panel .hover-patch', (h) => h.textContent);
+    check(/^patch [\d.]+: stretch \d/.test(hover) && /red 9 and over/.test(await page.$eval('#result-controls', (c) => c.textContent)),
+      `patches coloured by stretch; hovering names the patch: "${hover}"`);
     await shot(page, 'studio_patches.png', 'main');
+    await page.click('#result-stretch');
+    await page.waitForFunction(() => document.body.dataset.resultsReady === '1' && !document.getElementById('result-stretch').checked, { timeout: 60000 });
     v = await views('remesh');
     check(v.ready === '1' && v.panels === 3, `remesh wireframes: ${v.panels} views`);
     await page.click('#result-controls button[data-view="top"]');
@@ -500,6 +510,7 @@ try {
     const rj = JSON.parse(fs.readFileSync(path.join(c, 'runs/run-1/run.json'), 'utf8'));
     check(rj.verdict === 'done with warnings' && rj.warnings.length === warnings.length && await page.$eval('#result-verdict', (x) => x.textContent) === 'done with warnings',
       'the verdict and its reasons are kept in run.json and shown with the results');
+    await shot(page, 'studio_verdict.png', 'aside');
   }
   for (const l of logs) console.log(`     ${l}`);
   check(!logs.some((l) => l.startsWith('[pageerror]')), 'no script errors in the page');
