@@ -64,6 +64,7 @@ class Viewer {
         this.renderer.render(this.scene, this.camera);
         if (this.beforeRender) this.beforeRender();
         this.labels.render(this.scene, this.camera);
+        if (this.afterLabels) this.afterLabels();
       }
     };
     loop();
@@ -215,6 +216,7 @@ class Editor {
     this.viewer.linkable = false;  // its own framing while it opens is not passed on
     this.viewer.controls.addEventListener('change', () => linkEditors(this.viewer));
     this.viewer.beforeRender = () => this.hideCoveredLabels();
+    this.viewer.afterLabels = () => this.spreadLabels();
     this.shading.onchange = () => { this.material.flatShading = this.shading.value === 'flat'; this.material.needsUpdate = true; this.viewer.redraw(); };
     this.wire.onchange = () => { this.wireLines.visible = this.wire.checked; this.viewer.redraw(); };
     this.saveBtn.onclick = () => this.save();
@@ -441,6 +443,21 @@ class Editor {
       const hit = ray.intersectObject(this.mesh, false)[0];
       const covered = !!hit && hit.distance < d - 1.5 * this.markerRadius;
       m.userData.label.classList.toggle('covered', covered);
+    }
+  }
+  // Labels that would overlap on the screen are moved down, one under the other.
+  spreadLabels() {
+    const shown = [...this.markers.values()].map((m) => m.userData.label)
+      .filter((t) => !t.classList.contains('covered') && t.style.display !== 'none');
+    for (const t of shown) t.style.marginTop = '0px';
+    const boxes = shown.map((t) => ({ t, r: t.getBoundingClientRect() })).sort((a, b) => a.r.top - b.r.top || a.r.left - b.r.left);
+    const placed = [];
+    for (const b of boxes) {
+      let top = b.r.top;
+      for (const p of placed)
+        if (b.r.left < p.right && p.left < b.r.right && top < p.bottom && p.top < top + b.r.height) top = p.bottom + 1;
+      if (top !== b.r.top) b.t.style.marginTop = `${top - b.r.top}px`;
+      placed.push({ left: b.r.left, right: b.r.right, top, bottom: top + b.r.height });
     }
   }
   // Redraws markers and the list; with `loop`, asks the server for the seed loop preview.
@@ -1057,6 +1074,15 @@ window.__studio = {
   frameFront(mesh, dir) {
     const ed = editors.find((e) => e.name === mesh);
     ed.viewer.frame(ed.geometry.boundingBox, new THREE.Vector3(...dir));
+  },
+  // Draws editor i at once (as the next frame would), labels included.
+  renderNow(i) {
+    const ed = editors[i], vw = ed.viewer;
+    vw.dirty = false;
+    vw.renderer.render(vw.scene, vw.camera);
+    ed.hideCoveredLabels();
+    vw.labels.render(vw.scene, vw.camera);
+    ed.spreadLabels();
   },
   resultCameras() { return resultViewers.map((v) => v.camera.position.clone().sub(v.controls.target).normalize().toArray()); },
   turnResult(i, dir) {

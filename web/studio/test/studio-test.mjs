@@ -258,6 +258,16 @@ try {
     await page.evaluate(() => window.__studio.frameFront('spot_2k.obj', [0.55, -0.75, 0.6]));
     await sleep(300);
     await shot(page, 'studio_landmarks.png');
+    // seen from far away the labels would pile up: none overlaps another
+    await page.evaluate(() => { const v = window.__studio.editors[0].viewer; v.camera.position.sub(v.controls.target).multiplyScalar(4).add(v.controls.target); v.controls.update(); window.__studio.renderNow(0); });
+    const overlaps = await page.evaluate((e) => {
+      const r = [...document.querySelectorAll(`${e} .label3d`)].filter((t) => getComputedStyle(t).visibility !== 'hidden' && t.style.display !== 'none').map((t) => t.getBoundingClientRect());
+      let n = 0;
+      for (let i = 0; i < r.length; i++) for (let k = i + 1; k < r.length; k++)
+        if (r[i].left < r[k].right && r[k].left < r[i].right && r[i].top < r[k].bottom && r[k].top < r[i].bottom) n++;
+      return [r.length, n];
+    }, E);
+    check(overlaps[0] >= 3 && overlaps[1] === 0, `from far away ${overlaps[0]} labels shown, ${overlaps[1]} overlapping`);
     await page.click(`${E} button.save`);
     await page.waitForFunction(() => /saved|not saved/.test(document.querySelector('.editor .status').textContent), { timeout: 10000 });
     const saved = path.join(a, 'spot_2k.landmarks.json');
