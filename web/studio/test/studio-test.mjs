@@ -352,10 +352,12 @@ try {
     await page.click('#run-btn');
     await page.waitForFunction(() => document.body.dataset.run === 'running' || document.body.dataset.run === 'done', { timeout: 10000 });
     const phases = new Set();
+    let etaText = '';
     const shownValues = [];
     while (await page.evaluate(() => document.body.dataset.run) === 'running' && Date.now() - t0 < 180000) {
       const s = await page.evaluate(() => [document.getElementById('phase').textContent, +document.getElementById('progress').value]);
       phases.add(s[0].replace(/:.*$/, ''));
+      if (/about \d+ s left/.test(s[0])) etaText = s[0];
       shownValues.push(s[1]);
       await sleep(150);
     }
@@ -367,6 +369,7 @@ try {
     check(seen.length >= 3 && isMonotone(seen) && isMonotone(shownValues) && seen[seen.length - 1] > seen[0] && await page.$eval('#progress', (p) => p.value) === 1,
       `progress values seen by the page never decrease: ${seen.map((x) => x.toFixed(2)).join(' ')}; the bar ${shownValues.length} readings`);
     check([...phases].some((x) => /^dissect/.test(x)), `the stage is named while it runs: ${[...phases].slice(0, 6).join(' | ')}`);
+    check(etaText !== '', `with an estimate of the time left: "${etaText}"`);
     const verdictGood = await page.$eval('#verdict', (v) => v.textContent);
     check(verdictGood === 'done' && await page.$$eval('#warnings li', (l) => l.length) === 0, `the examples' run is judged "${verdictGood}" (no warnings)`);
     const views = async (mode) => {
