@@ -217,6 +217,8 @@ class Editor {
     this.viewer.controls.addEventListener('change', () => linkEditors(this.viewer));
     this.viewer.beforeRender = () => this.hideCoveredLabels();
     this.viewer.afterLabels = () => this.spreadLabels();
+    this.viewer.controls.addEventListener('start', () => { this.turning = true; });
+    this.viewer.controls.addEventListener('end', () => { this.turning = false; this.viewer.redraw(); });
     this.shading.onchange = () => { this.material.flatShading = this.shading.value === 'flat'; this.material.needsUpdate = true; this.viewer.redraw(); };
     this.wire.onchange = () => { this.wireLines.visible = this.wire.checked; this.viewer.redraw(); };
     this.saveBtn.onclick = () => this.save();
@@ -434,7 +436,9 @@ class Editor {
   }
   // Labels of markers the surface hides (seen through the mesh) are hidden too.
   hideCoveredLabels() {
-    if (!this.mesh) return;
+    // Ray casts cost a pass over every triangle per marker: while the view turns they wait (the
+    // labels keep their state) and run once it stops.
+    if (!this.mesh || this.turning) return;
     const cam = this.viewer.camera.position, ray = new THREE.Raycaster();
     for (const m of this.markers.values()) {
       const to = m.position.clone().sub(cam), d = to.length();

@@ -380,6 +380,7 @@ try {
     };
     let v = await views('patches');
     check(v.ready === '1' && v.panels === 3, `patches: ${v.panels} views (${await page.$$eval('#result-views .bar .hint', (h) => h.map((x) => x.textContent).join('; '))})`);
+    await shot(page, 'studio_patches.png', 'main');
     await page.click('#result-stretch');
     await page.waitForFunction(() => document.body.dataset.resultsReady === '1' && document.getElementById('result-stretch').checked, { timeout: 60000 });
     const cv = await (await page.$('#result-views .panel canvas')).boundingBox();
@@ -388,7 +389,7 @@ try {
     const hover = await page.$eval('#result-views .panel .hover-patch', (h) => h.textContent);
     check(/^patch [\d.]+: stretch \d/.test(hover) && /red 9 and over/.test(await page.$eval('#result-controls', (c) => c.textContent)),
       `patches coloured by stretch; hovering names the patch: "${hover}"`);
-    await shot(page, 'studio_patches.png', 'main');
+    await shot(page, 'studio_stretch.png', 'main');
     await page.click('#result-stretch');
     await page.waitForFunction(() => document.body.dataset.resultsReady === '1' && !document.getElementById('result-stretch').checked, { timeout: 60000 });
     v = await views('remesh');
