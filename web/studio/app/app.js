@@ -915,11 +915,18 @@ async function showRun() {
     v.panel = panel;
     const d = v.dispose.bind(v);
     v.dispose = () => { d(); panel.remove(); };
+    v.linkable = false;  // its own first framing is not passed on
     v.controls.addEventListener('change', () => linkResults(v));
     resultViewers.push(v);
     return v;
   };
-  const frame = (v, box) => { v.box = box; v.frame(box, new THREE.Vector3(0.5, 0.3, 1)); };
+  // Seen in profile: across the longer horizontal side of the box (a quadruped from its side).
+  const frame = (v, box) => {
+    const size = box.getSize(new THREE.Vector3());
+    v.box = box;
+    v.frame(box, size.x >= size.z ? new THREE.Vector3(0.3, 0.3, 1) : new THREE.Vector3(1, 0.3, 0.3));
+    v.linkable = true;
+  };
   $('result-controls').append(...viewButtons(() => resultViewers));
   try {
     if (mode === 'patches' || mode === 'remesh') {
@@ -1007,7 +1014,7 @@ async function showRun() {
         // framed on the base shape's own positions, with room for the targets (placed on it by a similarity)
         gltf.scene.updateMatrixWorld(true);
         const box = new THREE.Box3().setFromBufferAttribute(mesh.geometry.attributes.position).applyMatrix4(mesh.matrixWorld);
-        frame(v, box.expandByScalar(box.getSize(new THREE.Vector3()).length() * 0.12));
+        frame(v, box.expandByScalar(box.getSize(new THREE.Vector3()).length() * 0.04));
         const names = (mesh.geometry.userData.targetNames || mesh.userData.targetNames || (gltf.parser.json.meshes[0].extras || {}).targetNames || []);
         const sliders = mesh.morphTargetInfluences.map((_, i) => {
           const s = el('input', { type: 'range', min: 0, max: 1, step: 0.01, value: 0, className: 'morph-slider' });

@@ -394,6 +394,7 @@ try {
     await page.waitForFunction(() => document.body.dataset.resultsReady === '1' && !document.getElementById('result-stretch').checked, { timeout: 60000 });
     v = await views('remesh');
     check(v.ready === '1' && v.panels === 3, `remesh wireframes: ${v.panels} views`);
+    await shot(page, 'studio_remesh.png', 'main');
     await page.click('#result-controls button[data-view="top"]');
     const tops = await page.evaluate(() => window.__studio.resultCameras());
     check(tops.length === 3 && tops.every((d) => d[1] > 0.99), `"top" turns every result view (${tops.map((d) => d.map((x) => x.toFixed(2)).join(',')).join(' / ')})`);
@@ -401,7 +402,6 @@ try {
     const turned = await page.evaluate(() => window.__studio.resultCameras());
     check(turned.every((d) => Math.abs(d[0] - turned[0][0]) < 1e-6 && Math.abs(d[1] - turned[0][1]) < 1e-6 && turned[0][0] > 0.9),
       `turning one result view turns the others (${turned.map((d) => d.map((x) => x.toFixed(2)).join(',')).join(' / ')})`);
-    await shot(page, 'studio_remesh.png', 'main');
     v = await views('bake');
     check(v.ready === '1' && v.panels === 3 && /the remesh with its baked normal map/.test(await page.$eval('#result-views .bar', (x) => x.textContent)), `normal-map views: ${v.panels}`);
     await shot(page, 'studio_bake.png', 'main');
