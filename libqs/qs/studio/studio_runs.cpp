@@ -114,6 +114,9 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& cwd,
   return 70;
 }
 
+/// The phase name of qs-bake's stage once meshes are being baked (counted from its per-mesh lines).
+constexpr const char* kMeshesBaked = "meshes baked";
+
 /// Every entry name in FOLDER/runs (none when it does not exist).
 std::vector<std::string> run_folder_names(const fs::path& root) {
   std::vector<std::string> names;
@@ -335,6 +338,7 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
     const RunStage& st = state_.stages[i];
     double within = 0;
     if (st.status == "done") within = 1;
+    else if (st.phase == kMeshesBaked) within = st.fraction;  // a count, not a phase
     else if (st.phases > 0) within = 1 - std::pow(0.7, st.phases - 1) * (1 - 0.3 * st.fraction);
     state_.progress = std::clamp(std::max(state_.progress, base + st.weight * within), 0.0, 1.0);
   };
@@ -376,6 +380,20 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
           const std::string line = stage_out.substr(scanned, nl - scanned);
           size_t k = line.empty() ? 0 : line.size() - 1;
           while (k > 0 && (std::isdigit(static_cast<unsigned char>(line[k - 1])) || line[k - 1] == '.')) --k;
+          if (stages[i].name == "bake") {
+            // qs-bake prints no percentages but a line per mesh as it is baked ("  spot_2k: bake 0.05 s"):
+            // the share of meshes done (the maps are written after the last).
+            for (const auto& m : req.meshes)
+              if (line.rfind("  " + fs::path(m).stem().string() + ": bake ", 0) == 0) {
+                std::lock_guard lock(mutex_);
+                RunStage& st = state_.stages[i];
+                st.phases = 1;
+                st.phase = kMeshesBaked;
+                st.fraction = std::min(1.0, st.fraction + 1.0 / static_cast<double>(req.meshes.size() + 1));
+                advance(i);
+                break;
+              }
+          }
           if (line.rfind(prefix, 0) != 0 || line.back() != '%' || k == line.size() - 1) {
             append(line + "\n");
             continue;
