@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -429,6 +430,162 @@ TEST(StudioRun, StoppingTheStudioStopsItsTool) {
   EXPECT_EQ(studio.run_state().status, "failed");
   EXPECT_NE(studio.run_state().error.find("stopped"), std::string::npos) << studio.run_state().error;
   EXPECT_TRUE(entries(f.root / "runs").empty()) << "staging left behind";
+}
+
+TEST(StudioRun, CancelStopsTheToolAndWhatItStartedWithin2sLeavingNothing) {
+  Folder f;
+  // a tool that starts a helper of its own, writes into the run's folder, then waits
+  f.fake_tools("sleep 30 & echo $! > '" + (f.tmp / "child").string() + "'; mkdir dissection; echo x > dissection/half; echo $$ > '" +
+               (f.tmp / "pid").string() + "'; wait");
+  Studio studio(f.options(false));
+  const Request start = post("/api/run", {}, R"({"meshes": ["sphere.obj"]})");
+  EXPECT_EQ(studio.handle(post("/api/run/cancel", {}, "")).status, 409);  // nothing to cancel
+  ASSERT_EQ(studio.handle(start).status, 202);
+  ASSERT_TRUE(wait_until([&] { return fs::exists(f.tmp / "pid") && fs::file_size(f.tmp / "pid") > 0; }, 5s));
+  pid_t tool = 0, child = 0;
+  std::ifstream(f.tmp / "pid") >> tool;
+  std::ifstream(f.tmp / "child") >> child;
+  ASSERT_GT(tool, 0);
+  ASSERT_GT(child, 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Response r = studio.handle(post("/api/run/cancel", {}, ""));
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);
+  ASSERT_EQ(r.status, 200) << r.body;
+  const json s = json::parse(r.body);
+  EXPECT_EQ(s["status"], "cancelled");
+  EXPECT_NE(s["error"].get<std::string>().find("cancelled"), std::string::npos) << r.body;
+  EXPECT_TRUE(wait_until([&] { return process_gone(tool) && process_gone(child); }, 1s)) << "the tool or its helper outlived the cancel";
+  if (!process_gone(child)) kill(child, SIGKILL);
+  EXPECT_TRUE(entries(f.root / "runs").empty()) << "staging left behind";
+  EXPECT_FALSE(fs::exists(f.root / "runs" / "run-1"));
+}
+
+TEST(StudioRun, OverallProgressNeverDecreasesAndNamesThePhase) {
+  Folder f;
+  // per-phase fractions that go back and forth, as qs-dissect's do
+  f.fake_tools("for p in 'seed loops 25' 'seed loops 100' 'quinary subdivision 1' 'quinary subdivision 19' 'leaf repairs 0' "
+               "'quinary subdivision 13' 'refine maps 0' 'refine maps 25'; do echo \"qs-dissect: $p%\" >&2; sleep 0.05; done",
+               "sleep 0.1");
+  Studio studio(f.options(false));
+  ASSERT_EQ(studio.handle(post("/api/run", {}, R"({"meshes": ["sphere.obj"]})")).status, 202);
+  std::vector<double> seen;
+  std::set<std::string> phases;
+  for (;;) {
+    const json s = json::parse(studio.handle(get("/api/run")).body);
+    seen.push_back(s["progress"].get<double>());
+    phases.insert(s["phase"].get<std::string>());
+    if (s["status"] != "running") {
+      EXPECT_EQ(s["status"], "done") << s["error"];
+      EXPECT_EQ(s["eta_s"].get<double>(), 0);
+      break;
+    }
+    std::this_thread::sleep_for(10ms);
+  }
+  studio.wait_for_run();
+  ASSERT_GE(seen.size(), 5u);
+  for (size_t i = 1; i < seen.size(); ++i) EXPECT_GE(seen[i], seen[i - 1]) << "at " << i;
+  EXPECT_EQ(seen.back(), 1.0);
+  EXPECT_TRUE(phases.count("dissect: quinary subdivision")) << "phases seen: " << phases.size();
+}
+
+TEST(StudioRun, RunsAreDeletedAndArchivedOnlyByTheirOwnNames) {
+  Folder f;
+  f.fake_tools("mkdir dissection && echo report > dissection/dissection.json", "mkdir -p out && echo x > out/$$.txt");
+  Studio studio(f.options(false));
+  ASSERT_EQ(studio.handle(post("/api/run", {}, R"({"meshes": ["sphere.obj"]})")).status, 202);
+  studio.wait_for_run();
+  ASSERT_EQ(studio.run_state().status, "done") << studio.run_state().error;
+  ASSERT_TRUE(fs::exists(f.root / "runs" / "run-1" / "run.json"));
+  // names that are not run-N, or lead elsewhere, are refused and nothing is removed
+  fs::create_directories(f.tmp / "victim");
+  std::ofstream(f.tmp / "victim" / "keep.txt") << "keep";
+  fs::create_directory_symlink(f.tmp / "victim", f.root / "runs" / "run-7");
+  for (const char* bad : {"../victim", "run-1/..", "runs", "", "run-1/dissection", "run-7"}) {
+    const Response r = studio.handle(Request{"DELETE", "/api/runs", {{"name", bad}}, ""});
+    EXPECT_GE(r.status, 400) << bad;
+    EXPECT_LT(r.status, 500) << bad << ": " << r.body;
+    const Response a = studio.handle(get("/api/run-archive", {{"name", bad}}));
+    EXPECT_GE(a.status, 400) << bad;
+    EXPECT_TRUE(a.archive.empty()) << bad;
+  }
+  EXPECT_TRUE(fs::exists(f.tmp / "victim" / "keep.txt"));
+  for (const char* bad : {"../meshes/sphere.obj", "/etc/passwd.obj", "sub/sphere.obj", "nothere.obj", "notes.txt"}) {
+    const Response r = studio.handle(Request{"DELETE", "/api/meshes", {{"name", bad}}, ""});
+    EXPECT_GE(r.status, 400) << bad;
+    EXPECT_LT(r.status, 500) << bad << ": " << r.body;
+  }
+  EXPECT_TRUE(fs::exists(f.root / "sphere.obj"));
+  // the run as a tar: every file under run-1/, readable by tar
+  const Response a = studio.handle(get("/api/run-archive", {{"name", "run-1"}}));
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_EQ(a.download_name, "run-1.tar");
+  const TarLayout tar(a.archive);
+  std::string bytes(tar.size(), '\0');
+  for (size_t at = 0; at < bytes.size();) {
+    const size_t n = tar.read(at, bytes.data() + at, 1000);  // in pieces, as the server sends it
+    ASSERT_GT(n, 0u) << at;
+    at += n;
+  }
+  EXPECT_EQ(tar.read(bytes.size(), bytes.data(), 1), 0u);
+  std::ofstream(f.tmp / "run.tar", std::ios::binary) << bytes;
+  const std::string list = f.tmp / "list.txt";
+  ASSERT_EQ(std::system(("tar -tf '" + (f.tmp / "run.tar").string() + "' > '" + list + "'").c_str()), 0);
+  std::ifstream in(list);
+  std::set<std::string> names;
+  for (std::string line; std::getline(in, line);) names.insert(line);
+  EXPECT_TRUE(names.count("run-1/run.json") && names.count("run-1/dissection/dissection.json")) << bytes.size();
+  // a name over 100 bytes (GNU long name) comes back whole
+  const std::string long_name = "run-1/" + std::string(150, 'n') + ".txt";
+  const TarLayout long_tar({{long_name, f.root / "sphere.obj"}});
+  std::string lb(long_tar.size(), '\0');
+  for (size_t at = 0; at < lb.size();) {
+    const size_t n = long_tar.read(at, lb.data() + at, lb.size() - at);
+    ASSERT_GT(n, 0u) << at;
+    at += n;
+  }
+  std::ofstream(f.tmp / "long.tar", std::ios::binary) << lb;
+  ASSERT_EQ(std::system(("tar -xOf '" + (f.tmp / "long.tar").string() + "' '" + long_name + "' | cmp -s - '" +
+                         (f.root / "sphere.obj").string() + "'").c_str()),
+            0);
+  // deleted by its name
+  const Response d = studio.handle(Request{"DELETE", "/api/runs", {{"name", "run-1"}}, ""});
+  EXPECT_EQ(d.status, 200) << d.body;
+  EXPECT_FALSE(fs::exists(f.root / "runs" / "run-1"));
+  EXPECT_TRUE(fs::exists(f.tmp / "victim" / "keep.txt"));
+  const Response m = studio.handle(Request{"DELETE", "/api/meshes", {{"name", "sphere.obj"}}, ""});
+  EXPECT_EQ(m.status, 200) << m.body;
+  EXPECT_FALSE(fs::exists(f.root / "sphere.obj"));
+}
+
+TEST(StudioRun, ResultsAreJudgedFromTheToolsReports) {
+  Folder f;
+  const fs::path run = f.tmp / "run";
+  fs::create_directories(run / "dissection");
+  fs::create_directories(run / "remesh-L3");
+  fs::create_directories(run / "bake");
+  // nothing known to be wrong: no warnings
+  EXPECT_TRUE(judge_run(run, "remesh-L3", "").empty());
+  std::ofstream(run / "dissection" / "dissection.json") << R"({"options": {"tau": 3}, "base_domain": {"patches": )"
+      << json(std::vector<std::string>(130, "p")).dump()
+      << R"(}, "meshes": [{"file": "a.obj", "max_stretch": 12.5, "patches_over_tau": 2,
+           "patches": [{"faces": 80, "stretch": 1.2, "flipped_faces": 0}, {"faces": 20, "stretch": 12.5, "flipped_faces": 3, "stop_reason": "max_depth"}]},
+          {"file": "b.obj", "max_stretch": 2.0, "patches_over_tau": 0, "patches": [{"faces": 100, "stretch": 2.0, "flipped_faces": 0}]}]})";
+  std::ofstream(run / "remesh-L3" / "remesh.json")
+      << R"({"meshes": [{"output": "a.obj", "angles": {"min_deg": 0.01, "under_5_deg": 0.05}}, {"output": "b.obj", "angles": {"min_deg": 20, "under_5_deg": 0}}]})";
+  std::ofstream(run / "bake" / "bake.json")
+      << R"({"meshes": [{"glb": "a.glb", "shading": {"mean_deg_with_map": 15.2}}, {"glb": "b.glb", "shading": {"mean_deg_with_map": 0.3}}]})";
+  const auto w = judge_run(run, "remesh-L3", "$ qs-dissect a b\nqs-dissect: warning: no seeds given; automatic seeds\nnot a warning\n");
+  std::string all;
+  for (const auto& x : w) all += x + "\n";
+  EXPECT_EQ(w.size(), 6u) << all;
+  for (const char* part : {"qs-dissect: no seeds given", "a: 2 patches left over the stretch limit tau 3, holding 20% of the triangles, largest stretch 12.5",
+                           "a: 3 folded triangles", "130 patches", "a: thin triangles in the remesh (smallest angle 0.01 deg",
+                           "a: the normal map misses the original's shading by 15.2 deg"})
+    EXPECT_NE(all.find(part), std::string::npos) << part << " in\n" << all;
+  EXPECT_EQ(all.find("b:"), std::string::npos) << all;
+  // unreadable reports are not faults of the result
+  std::ofstream(run / "bake" / "bake.json") << "{not json";
+  EXPECT_EQ(judge_run(run, "remesh-L3", "").size(), 4u);
 }
 
 TEST(StudioRun, AKilledStudioLeavesNoToolAndItsStagingIsCleanedNextTime) {

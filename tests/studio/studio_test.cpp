@@ -205,7 +205,10 @@ TEST(Studio, HostileRequestsGet4xxAndChangeNothing) {
       {post("/api/run", {}, R"({"meshes": []})"), 400, "non-empty"},
       {post("/api/run", {}, std::string(2u << 20, ' ')), 413, "at most"},
       {post("/api/seed-loop", {{"name", "sphere.obj"}}, "nope"), 400, "not valid JSON"},
-      {Request{"DELETE", "/api/meshes", {}, ""}, 405, "not allowed"},
+      {Request{"PUT", "/api/meshes", {}, ""}, 405, "not allowed"},
+      {Request{"DELETE", "/api/meshes", {}, ""}, 400, "missing query parameter"},
+      {Request{"DELETE", "/api/runs", {{"name", "../meshes"}}, ""}, 400, "not a run name"},
+      {Request{"DELETE", "/api/meshes", {{"name", "../outside/secret.obj"}}, ""}, 403, ".."},
       {Request{"PUT", "/files/sphere.obj", {}, "x"}, 405, "not allowed"},
       {get("/api/nope"), 404, "no such API"},
   };

@@ -96,6 +96,26 @@ void reply(const Response& res, httplib::Response& out) {
   out.status = res.status;
   out.set_header("Cache-Control", "no-store");
   out.set_header("X-Content-Type-Options", "nosniff");
+  if (!res.archive.empty()) {
+    // A tar of the listed files, laid out up front and sent in pieces straight from the disk.
+    std::shared_ptr<const TarLayout> tar;
+    try {
+      tar = std::make_shared<const TarLayout>(res.archive);
+    } catch (const Error& e) {
+      out.status = 404;
+      out.set_content(error_body(e.what()), "application/json");
+      return;
+    }
+    out.set_header("Content-Disposition",
+                   "attachment; filename=\"" + json_strict::printable(res.download_name, 200) + "\"");
+    out.set_content_provider(tar->size(), "application/x-tar", [tar](size_t offset, size_t length, httplib::DataSink& sink) {
+      char buf[1 << 16];
+      const size_t n = tar->read(offset, buf, std::min(length, sizeof buf));
+      if (n == 0) return false;  // a file shrank meanwhile: the connection is closed
+      return sink.write(buf, n);
+    });
+    return;
+  }
   if (res.file.empty()) {
     out.set_content(res.body, res.content_type);
     return;

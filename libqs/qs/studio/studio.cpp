@@ -336,9 +336,13 @@ Response Studio::route(const Request& r, const CheckedRequest& c) {
     case Route::SaveLandmarks: return save_landmarks(c.name, r);
     case Route::SeedLoop: return seed_loop(c.name, r);
     case Route::Upload: return upload(c.name, r);
+    case Route::DeleteMesh: return delete_mesh(c.name);
     case Route::RunState: return json_response(state_json(run_state()));
     case Route::StartRun: return start_run(c.run);
+    case Route::CancelRun: return cancel_run();
     case Route::Runs: return runs();
+    case Route::DeleteRun: return delete_run(c.name);
+    case Route::RunArchive: return run_archive(c.name);
     case Route::File: return folder_file(c.name, c.download);
     case Route::Page: return static_file(c.name);
   }
@@ -444,6 +448,9 @@ Response Studio::list_meshes() {
           const auto l = landmarks::read_landmarks(*beside, m->valid);
           lm["seeds"] = l.seeds.size();
           lm["features"] = l.features.size();
+          json names = json::array();
+          for (const auto& f : l.features) names.push_back(f.name);
+          lm["feature_names"] = names;
         } catch (const Error& e) {
           lm["error"] = e.what();
         }
@@ -574,6 +581,22 @@ Response Studio::upload(const std::string& name, const Request& r) {
     throw IoError("cannot move the upload into place as " + quote(name) + ": " + std::strerror(errno));
   }
   return json_response(json{{"file", name}, {"bytes", bytes}}, 201);
+}
+
+Response Studio::delete_mesh(const std::string& name) {
+  {
+    std::lock_guard lock(mutex_);
+    if (state_.status == "running" && std::find(state_.meshes.begin(), state_.meshes.end(), name) != state_.meshes.end())
+      throw HttpError(409, quote(name) + " is used by the run in progress; cancel it or wait until it ends");
+  }
+  // The name itself is removed (a link is removed, never what it points to); its landmark files stay.
+  const fs::path file = root_ / name;
+  (void)existing(root_, name);
+  std::lock_guard lock(write_mutex_);
+  std::error_code ec;
+  if (!fs::remove(file, ec) || ec)
+    throw IoError("cannot remove " + quote(name) + (ec ? ": " + ec.message() : std::string()));
+  return json_response(json{{"removed", name}});
 }
 
 }  // namespace qs::studio

@@ -128,9 +128,22 @@ CheckedRequest check_request(const Request& r, const StudioOptions& opt) {
   auto no_body = [&] {
     if (has_body) throw HttpError(413, "a " + printable(r.method, 20) + " request to " + printable(p, 100) + " takes no body");
   };
+  // A run folder's name as the page sends it: run-<digits>, nothing else.
+  auto run_name = [&] {
+    c.name = param(r, "name");
+    if (run_number(c.name).empty())
+      throw HttpError(400, quote(c.name) + " is not a run name; expected run-N (a folder of runs/)");
+  };
   if (p == "/api/meshes") {
-    only("GET"), no_body();
-    c.route = Route::Meshes;
+    if (r.method == "DELETE") {
+      no_body();
+      c.route = Route::DeleteMesh;
+      c.name = param(r, "name");
+      check_mesh_name(c.name);
+    } else {
+      only("GET"), no_body();
+      c.route = Route::Meshes;
+    }
   } else if (p == "/api/mesh") {
     only("GET"), no_body();
     c.route = Route::Mesh;
@@ -167,9 +180,22 @@ CheckedRequest check_request(const Request& r, const StudioOptions& opt) {
       c.route = Route::StartRun;
       c.run = parse_run_request(r.body, opt.max_meshes_per_run);
     }
+  } else if (p == "/api/run/cancel") {
+    only("POST"), no_body();
+    c.route = Route::CancelRun;
   } else if (p == "/api/runs") {
+    if (r.method == "DELETE") {
+      no_body();
+      c.route = Route::DeleteRun;
+      run_name();
+    } else {
+      only("GET"), no_body();
+      c.route = Route::Runs;
+    }
+  } else if (p == "/api/run-archive") {
     only("GET"), no_body();
-    c.route = Route::Runs;
+    c.route = Route::RunArchive;
+    run_name();
   } else if (p.rfind("/files/", 0) == 0) {
     only("GET"), no_body();
     c.route = Route::File;

@@ -13,6 +13,9 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
+#include <cmath>
+#include <map>
+#include <thread>
 #include <sstream>
 
 #include "qs/core/atomic_file.h"
@@ -29,7 +32,8 @@ namespace {
 
 /// Runs argv[0] (a full path) in `cwd`, calling `out` with every chunk of its stdout and stderr.
 /// `started` gets the child's pid once it runs, `ended` is called once it has exited and before its
-/// pid is released (so that nobody signals a recycled pid). The child gets SIGTERM when the thread that started
+/// pid is released (so that nobody signals a recycled pid). The child leads a process group of
+/// its own (signalled as -pid). The child gets SIGTERM when the thread that started
 /// it ends (PR_SET_PDEATHSIG), so a killed studio leaves no tool running, and starts with no
 /// signal blocked (the server blocks SIGINT/SIGTERM for its own threads).
 /// Returns the exit status (128 + signal when killed). \throws IoError when it cannot start.
@@ -52,6 +56,7 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& cwd,
     // Only async-signal-safe calls from here to exec.
     prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (getppid() != parent) _exit(127);  // the studio died before prctl
+    setpgid(0, 0);  // a process group of its own: a cancel stops the tool and anything it started
     sigset_t none;
     sigemptyset(&none);
     sigprocmask(SIG_SETMASK, &none, nullptr);
@@ -72,6 +77,7 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& cwd,
   }
   close(fds[1]);
   close(err_pipe[1]);
+  if (pid > 0) setpgid(pid, pid);  // also here, so that the group exists whoever runs first
   if (pid < 0) {
     const int e = errno;
     close(fds[0]), close(err_pipe[0]);
@@ -107,6 +113,9 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& cwd,
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return 70;
 }
+
+/// The phase name of qs-bake's stage once meshes are being baked (counted from its per-mesh lines).
+constexpr const char* kMeshesBaked = "meshes baked";
 
 /// Every entry name in FOLDER/runs (none when it does not exist).
 std::vector<std::string> run_folder_names(const fs::path& root) {
@@ -163,9 +172,14 @@ json detail::state_json(const RunState& s) {
     json args = json::array();
     for (const auto& a : st.args) args.push_back(a);
     stages.push_back({{"name", st.name}, {"tool", st.tool}, {"args", args}, {"status", st.status},
-                      {"exit_code", st.exit_code}, {"fraction", st.fraction}});
+                      {"exit_code", st.exit_code}, {"fraction", st.fraction}, {"phase", st.phase}});
   }
+  std::string phase;  // what is going on, in words: "dissect: quinary subdivision"
+  for (const auto& st : s.stages)
+    if (st.status == "running") phase = st.name + (st.phase.empty() ? "" : ": " + st.phase);
   return json{{"name", s.name}, {"status", s.status}, {"meshes", s.meshes}, {"stages", stages},
+              {"progress", s.progress}, {"phase", phase}, {"elapsed_s", s.elapsed_s},
+              {"eta_s", s.eta_s}, {"verdict", s.verdict}, {"warnings", s.warnings},
               {"log", s.log}, {"error", s.error}};
 }
 
@@ -198,30 +212,47 @@ void Studio::wait_for_run() {
   if (t.joinable()) t.join();
 }
 
-void Studio::stop_run() {
+void Studio::stop_run(bool cancel) {
   {
     std::lock_guard lock(mutex_);
     if (state_.status == "running") {
+      if (!stop_requested_) stop_sent_ = std::chrono::steady_clock::now();
       stop_requested_ = true;
-      if (child_ > 0) kill(child_, SIGTERM);
+      cancelled_ = cancelled_ || cancel;
+      if (child_ > 0) kill(-child_, SIGTERM);
     }
   }
-  // The tools clean up after SIGTERM; one that does not end within 2 s is killed.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  // The tools end at SIGTERM (the run's staging folder is removed whatever they leave); a group
+  // still there after 1 s is killed.
   for (;;) {
     {
       std::lock_guard lock(mutex_);
       if (state_.status != "running") break;
-      if (std::chrono::steady_clock::now() > deadline && child_ > 0) kill(child_, SIGKILL);
+      if (std::chrono::steady_clock::now() > stop_sent_ + std::chrono::seconds(1) && child_ > 0) kill(-child_, SIGKILL);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   wait_for_run();
 }
 
+Response Studio::cancel_run() {
+  {
+    std::lock_guard lock(mutex_);
+    if (state_.status != "running") throw HttpError(409, "no run is going; there is nothing to cancel");
+  }
+  stop_run(true);
+  return json_response(state_json(run_state()));
+}
+
 RunState Studio::run_state() const {
   std::lock_guard lock(mutex_);
-  return state_;
+  RunState s = state_;
+  if (s.status == "running") {
+    s.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_started_).count();
+    // The time left at the pace so far, once there is a pace to go by.
+    if (s.progress >= 0.02 && s.elapsed_s >= 0.5) s.eta_s = s.elapsed_s * (1 - s.progress) / s.progress;
+  }
+  return s;
 }
 
 Response Studio::start_run(RunRequest req) {
@@ -251,6 +282,8 @@ Response Studio::start_run(RunRequest req) {
   state_.status = "running";
   state_.meshes = req.meshes;
   stop_requested_ = false;
+  cancelled_ = false;
+  run_started_ = std::chrono::steady_clock::now();
   const std::string name = state_.name;
   worker_ = std::thread(&Studio::run_thread, this, std::move(req), name, fd);
   return json_response(json{{"name", name}, {"status", "running"}}, 202);
@@ -290,6 +323,26 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
     }
   }
   {
+    // Shares of the overall progress, from the time each stage takes on the examples.
+    const std::map<std::string, double> share = {{"dissect", 0.5}, {"remesh", 0.1}, {"bake", 0.25}, {"morph", 0.15}};
+    double total = 0;
+    for (const auto& st : stages) total += share.at(st.name);
+    for (auto& st : stages) st.weight = share.at(st.name) / total;
+  }
+  // The overall progress: done stages count their weight, the running one its weight times an
+  // estimate that only grows: each new phase of its tool takes a part of what is left (a tool
+  // does not say how many phases it has). Never lowered.
+  auto advance = [&](size_t i) {
+    double base = 0;
+    for (size_t k = 0; k < i; ++k) base += state_.stages[k].weight;
+    const RunStage& st = state_.stages[i];
+    double within = 0;
+    if (st.status == "done") within = 1;
+    else if (st.phase == kMeshesBaked) within = st.fraction;  // a count, not a phase
+    else if (st.phases > 0) within = 1 - std::pow(0.7, st.phases - 1) * (1 - 0.3 * st.fraction);
+    state_.progress = std::clamp(std::max(state_.progress, base + st.weight * within), 0.0, 1.0);
+  };
+  {
     std::lock_guard lock(mutex_);
     state_.stages = stages;
   }
@@ -327,14 +380,34 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
           const std::string line = stage_out.substr(scanned, nl - scanned);
           size_t k = line.empty() ? 0 : line.size() - 1;
           while (k > 0 && (std::isdigit(static_cast<unsigned char>(line[k - 1])) || line[k - 1] == '.')) --k;
+          if (stages[i].name == "bake") {
+            // qs-bake prints no percentages but a line per mesh as it is baked ("  spot_2k: bake 0.05 s"):
+            // the share of meshes done (the maps are written after the last).
+            for (const auto& m : req.meshes)
+              if (line.rfind("  " + fs::path(m).stem().string() + ": bake ", 0) == 0) {
+                std::lock_guard lock(mutex_);
+                RunStage& st = state_.stages[i];
+                st.phases = 1;
+                st.phase = kMeshesBaked;
+                st.fraction = std::min(1.0, st.fraction + 1.0 / static_cast<double>(req.meshes.size() + 1));
+                advance(i);
+                break;
+              }
+          }
           if (line.rfind(prefix, 0) != 0 || line.back() != '%' || k == line.size() - 1) {
             append(line + "\n");
             continue;
           }
           try {
             const double f = std::stod(line.substr(k, line.size() - 1 - k)) / 100;
+            std::string phase = line.substr(prefix.size(), k - prefix.size());
+            while (!phase.empty() && phase.back() == ' ') phase.pop_back();
             std::lock_guard lock(mutex_);
-            state_.stages[i].fraction = std::clamp(f, 0.0, 1.0);
+            RunStage& st = state_.stages[i];
+            if (st.phases == 0 || phase != st.phase) ++st.phases;
+            st.phase = phase;
+            st.fraction = std::clamp(f, 0.0, 1.0);
+            advance(i);
           } catch (const std::exception&) {
             append(line + "\n");
           }
@@ -342,7 +415,7 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       }, [&](pid_t pid) {
         std::lock_guard lock(mutex_);
         child_ = pid;
-        if (stop_requested_) kill(pid, SIGTERM);
+        if (stop_requested_) kill(-pid, SIGTERM);
       }, [&] {
         std::lock_guard lock(mutex_);
         child_ = 0;
@@ -351,7 +424,11 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       std::lock_guard lock(mutex_);
       state_.stages[i].exit_code = code;
       state_.stages[i].status = code == 0 ? "done" : "failed";
-      if (code == 0) state_.stages[i].fraction = 1;
+      if (code == 0) {
+        state_.stages[i].fraction = 1;
+        state_.stages[i].phase.clear();
+        advance(i);
+      }
       if (code != 0) {
         ok = false;
         // The tool's own error lines ("qs-dissect: invalid input error: ..."), else its last output.
@@ -368,8 +445,16 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       }
     }
     if (ok) {
+      std::string log;
+      {
+        std::lock_guard lock(mutex_);
+        log = state_.log;
+      }
+      const std::vector<std::string> warnings = judge_run(staging, level_dir, log);
+      const std::string verdict = warnings.empty() ? "done" : "done with warnings";
       json j = {{"format", "qs-studio-run"}, {"version", 1}, {"name", name}, {"meshes", req.meshes},
-                {"level", req.level}, {"bake_size", req.bake_size}, {"max_area", req.max_area}};
+                {"level", req.level}, {"bake_size", req.bake_size}, {"max_area", req.max_area},
+                {"verdict", verdict}, {"warnings", warnings}};
       json st = json::array();
       for (const auto& s : stages) st.push_back({{"tool", s.tool}, {"args", s.args}});
       j["stages"] = st;
@@ -386,6 +471,8 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
       }
       std::lock_guard lock(mutex_);
       state_.name = final_name;
+      state_.verdict = verdict;
+      state_.warnings = warnings;
     }
   } catch (const std::exception& e) {
     ok = false;
@@ -393,7 +480,9 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
   }
   {
     std::lock_guard lock(mutex_);
-    if (!ok && stop_requested_) error = "stopped: the studio was shut down during the run (nothing was kept)";
+    if (!ok && stop_requested_)
+      error = cancelled_ ? "cancelled: the run was stopped from the page (nothing was kept)"
+                         : "stopped: the studio was shut down during the run (nothing was kept)";
   }
   if (!ok) {
     // A failed run leaves the folder as it was.
@@ -404,8 +493,11 @@ void Studio::run_thread(RunRequest req, std::string name, int lock_fd) {
   flock(lock_fd, LOCK_UN);
   close(lock_fd);
   std::lock_guard lock(mutex_);
-  state_.status = ok ? "done" : "failed";
+  state_.status = ok ? "done" : cancelled_ && stop_requested_ ? "cancelled" : "failed";
+  if (ok) state_.progress = 1;
   state_.error = error;
+  state_.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_started_).count();
+  state_.eta_s = ok ? 0 : -1;
 }
 
 Response Studio::runs() {
@@ -435,5 +527,138 @@ Response Studio::runs() {
   return json_response(json{{"runs", list}});
 }
 
+namespace {
+
+/// A tool's JSON report in a run, or null when it is missing or unreadable (judged as "not known").
+nlohmann::json read_report(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return nullptr;
+  try {
+    return nlohmann::json::parse(json_strict::read_text_file(file, "report"));
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
+double number_at(const nlohmann::json& j, const char* key, double otherwise) {
+  return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : otherwise;
+}
+
+std::string text_at(const nlohmann::json& j, const char* key) {
+  return j.is_object() && j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
+}
+
+std::string figure(double x, int digits = 3) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << x;
+  return s.str();
+}
+
+}  // namespace
+
+std::vector<std::string> judge_run(const fs::path& run_dir, const std::string& remesh_dir, const std::string& log) {
+  std::vector<std::string> out;
+  auto add = [&](const std::string& w) {
+    if (std::find(out.begin(), out.end(), w) == out.end()) out.push_back(w);
+  };
+  // The tools' own warnings ("qs-dissect: warning: no seeds given; ...").
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    const size_t at = line.find(": warning: ");
+    if (line.rfind("qs-", 0) == 0 && at != std::string::npos && at < 16)
+      add(line.substr(0, at) + ": " + line.substr(at + 11));
+  }
+  const nlohmann::json d = read_report(run_dir / "dissection" / "dissection.json");
+  if (d.is_object() && d.contains("meshes") && d["meshes"].is_array()) {
+    const double tau = d.contains("options") ? number_at(d["options"], "tau", 3) : 3;
+    for (const auto& m : d["meshes"]) {
+      const std::string stem = fs::path(text_at(m, "file")).stem().string();
+      const int over = static_cast<int>(number_at(m, "patches_over_tau", 0));
+      const double stretch = number_at(m, "max_stretch", 0);
+      double faces = 0, over_faces = 0;
+      long folds = 0;
+      if (m.contains("patches") && m["patches"].is_array())
+        for (const auto& p : m["patches"]) {
+          faces += number_at(p, "faces", 0);
+          if (p.is_object() && p.contains("stop_reason")) over_faces += number_at(p, "faces", 0);
+          folds += static_cast<long>(number_at(p, "flipped_faces", 0));
+        }
+      // A few small patches a little over tau are usual; a large share, or a stretch far over
+      // tau, shows in the textures and remesh cells.
+      const double share = faces > 0 ? over_faces / faces : 0;
+      if (stretch > 3 * tau || share > 0.12)
+        add(stem + ": " + std::to_string(over) + " patches left over the stretch limit tau " + figure(tau) + ", " +
+            "holding " + figure(100 * share, 2) + "% of the triangles, largest stretch " + figure(stretch, 4) +
+            ": textures and remesh cells are distorted there");
+      if (folds > 0)
+        add(stem + ": " + std::to_string(folds) + " folded triangles in the patch maps (the remesh crumples there)");
+    }
+    // Many patches: the dissection kept splitting to fit shapes that do not correspond well.
+    const size_t patches = d.contains("base_domain") && d["base_domain"].is_object() &&
+                                   d["base_domain"].contains("patches") && d["base_domain"]["patches"].is_array()
+                               ? d["base_domain"]["patches"].size()
+                               : 0;
+    if (patches > 120)
+      add(std::to_string(patches) + " patches (more than 120): the shapes were hard to map onto each other; "
+          "seeds at corresponding places usually need far fewer");
+  }
+  const nlohmann::json r = read_report(run_dir / remesh_dir / "remesh.json");
+  if (r.is_object() && r.contains("meshes") && r["meshes"].is_array())
+    for (const auto& m : r["meshes"]) {
+      const std::string stem = fs::path(text_at(m, "output")).stem().string();
+      if (!m.contains("angles")) continue;
+      const double min_deg = number_at(m["angles"], "min_deg", 90), under5 = number_at(m["angles"], "under_5_deg", 0);
+      if (min_deg < 0.25 || under5 > 0.02)
+        add(stem + ": thin triangles in the remesh (smallest angle " + figure(min_deg, 2) + " deg, " +
+            figure(100 * under5, 2) + "% under 5 deg)");
+    }
+  const nlohmann::json b = read_report(run_dir / "bake" / "bake.json");
+  if (b.is_object() && b.contains("meshes") && b["meshes"].is_array())
+    for (const auto& m : b["meshes"]) {
+      if (!m.contains("shading")) continue;
+      const std::string stem = fs::path(text_at(m, "glb")).stem().string();
+      const double with = number_at(m["shading"], "mean_deg_with_map", 0);
+      if (with > 5)
+        add(stem + ": the normal map misses the original's shading by " + figure(with, 3) +
+            " deg on average (more than 5)");
+    }
+  return out;
+}
+
+/// runs/<name> as a plain folder of the studio's folder (never through a link); 404 when missing.
+static fs::path run_folder(const fs::path& root, const std::string& name) {
+  std::error_code ec;
+  const fs::path runs = root / "runs", dir = runs / name;
+  const auto rs = fs::symlink_status(runs, ec);
+  const auto ds = fs::symlink_status(dir, ec);
+  if (!fs::is_directory(rs) || fs::is_symlink(rs) || !fs::is_directory(ds) || fs::is_symlink(ds))
+    throw HttpError(404, "there is no run " + quote(name) + " in runs/");
+  return dir;
+}
+
+Response Studio::delete_run(const std::string& name) {
+  const fs::path dir = run_folder(root_, name);
+  // The run lock: no run of this or another studio moves a run into place meanwhile.
+  const int fd = try_lock_folder(root_);
+  if (fd < 0) throw HttpError(409, "a run is going in this folder; delete runs once it has ended");
+  std::error_code ec;
+  fs::remove_all(dir, ec);  // removes links inside, never what they point to
+  flock(fd, LOCK_UN);
+  close(fd);
+  if (ec) throw IoError("cannot remove runs/" + name + ": " + ec.message());
+  return json_response(json{{"removed", name}});
+}
+
+Response Studio::run_archive(const std::string& name) {
+  const fs::path dir = run_folder(root_, name);
+  Response res;
+  for (const auto& f : list_files(root_, dir))
+    res.archive.emplace_back(f["path"].get<std::string>().substr(5), root_ / f["path"].get<std::string>());  // "runs/" off
+  if (res.archive.empty()) throw HttpError(404, "run " + quote(name) + " holds no files");
+  res.download_name = name + ".tar";
+  res.content_type = "application/x-tar";
+  return res;
+}
 
 }  // namespace qs::studio
