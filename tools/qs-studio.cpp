@@ -45,7 +45,10 @@ int main(int argc, char** argv) {
                "Writes only inside FOLDER: <stem>.landmarks.json, uploaded meshes, runs/run-N/.\n"
                "Exit codes: 0 stopped, 1 usage, 2 invalid input, 3 i/o, 70 internal.",
                "qs-studio"};
+  // The page: installed beside the tools (share/qs/studio), else the source tree's.
   std::string folder = ".", host = "127.0.0.1", web_dir = QS_STUDIO_WEB_DIR, tools_dir;
+  if (const fs::path installed = own_folder(argv[0]) / "../share/qs/studio"; fs::exists(installed / "index.html"))
+    web_dir = fs::weakly_canonical(installed).string();
   int port = 8420;
   bool quiet = false;
   app.add_option("folder", folder, "The folder of meshes (.obj .off .ply .stl) to work on")->capture_default_str();
