@@ -157,8 +157,10 @@ void build_correspondence(PreparedMorph& m, const TriMesh& source, const MorphOp
   for (const auto& lm : o.landmarks)
     forced.push_back({nearest_node(m.source_skeleton, m.source_to_morph.apply(lm.source)),
                       nearest_node(m.target_skeleton, m.target_to_morph.apply(lm.target)), true, lm.name});
+  MatchOptions match;
+  match.voting = o.voting;
   m.matching = match_skeletons(m.source_skeleton, m.source_branches, m.target_skeleton, m.target_branches, forced,
-                               diagonal);
+                               diagonal, match);
   std::vector<AnchorPair> anchors = sample_anchors(m.source_skeleton, m.source_branches, m.target_skeleton,
                                                    m.target_branches, m.matching, o.anchors_per_branch);
   // The coarse grid: about emd_voxels interior voxels for the larger shape.

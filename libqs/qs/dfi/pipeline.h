@@ -85,6 +85,8 @@ struct MorphOptions {
   int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
   double position_weight = 0.1;  ///< weight of the voxel distance (per bounding-box diagonal) added to
                                  ///< the harmonic-vector distance in the transport cost (breaks ties)
+  /// Feature nodes matched by the electors' votes (matching.h); false: nearest-first alone.
+  bool voting = true;
   /// Named landmarks forcing skeleton matches: the skeleton nodes nearest to these points (source
   /// coordinates, target coordinates) are matched first.
   struct Landmark {
