@@ -6,10 +6,11 @@
 // machine). Per frame: t, components, genus, volume over the linear interpolation of the inputs'
 // volumes (morph space), the step from the frame before (Hausdorff distance, in voxels) and the
 // time. Per pair: frames in one component, the volume ratios' range, steps largest / median, the
-// ends against the inputs (Hausdorff in voxels), whether 1 and 2 threads give the same bytes.
+// ends against the inputs (Hausdorff in voxels), the most inside samples the topology control left
+// out of a frame (per mille: a part cut off or a handle closed), whether 1 and 2 threads give the same bytes.
 //
 // Usage: qs-bench-dfi [--grid N] [--frames K] [--no-steps] [--retime] [--refine-ends R] [--free-volume]
-//                     [--no-topology] [--no-voting] [--bone-segments N] [--methods warp,global,blend] [pair ...]
+//                     [--no-topology] [--no-voting] [--arap] [--bone-segments N] [--methods warp,global,blend] [pair ...]
 // (pairs: cat-koala, horse-camel, cow-pig, sphere-torus, horse-knot, spot-eight, femur-elephant,
 // eight-double-torus, knot-double-torus; default all)
 #include <algorithm>
@@ -56,7 +57,7 @@ TriMesh load(const std::string& name) {
 
 int main(int argc, char** argv) {
   int grid = 150, frames = 11, refine_ends = 1, bone_segments = 8;
-  bool steps = true, retime = false, free_volume = false, no_topology = false, no_voting = false;
+  bool steps = true, retime = false, free_volume = false, no_topology = false, no_voting = false, arap = false;
   std::string methods = "warp";
   std::vector<std::string> wanted;
   for (int i = 1; i < argc; ++i) {
@@ -67,6 +68,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--free-volume")) free_volume = true;
     else if (!std::strcmp(argv[i], "--no-topology")) no_topology = true;
     else if (!std::strcmp(argv[i], "--no-voting")) no_voting = true;
+    else if (!std::strcmp(argv[i], "--arap")) arap = true;
     else if (!std::strcmp(argv[i], "--refine-ends") && i + 1 < argc) refine_ends = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--bone-segments") && i + 1 < argc) bone_segments = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
@@ -104,6 +106,7 @@ int main(int argc, char** argv) {
     opt.part_transport = method == "warp";
     opt.bone_segments = bone_segments;
     opt.voting = !no_voting;
+    opt.interpolation = arap ? dfi::Interpolation::Arap : dfi::Interpolation::Parts;
     // The plain blend is the paper's baseline: its zero level, whatever volume it encloses.
     opt.volume = method == "blend" || free_volume ? dfi::FrameVolume::Free : dfi::FrameVolume::Linear;
     // Topology control (topology.h) for the warps unless --no-topology (it acts only where both
@@ -127,18 +130,22 @@ int main(int argc, char** argv) {
     const double voxel = m.source_sdf.spacing;  // morph space
     const dfi::MeshStats in0 = dfi::mesh_stats(a), in1 = dfi::mesh_stats(b);
     const bool ends_one = in0.components == 1 && in1.components == 1;
-    double total = 0, worst = 0, end_vox = 0, vmin = 1e300, vmax = 0;
+    double total = 0, worst = 0, end_vox = 0, vmin = 1e300, vmax = 0, worst_dropped = 0;
     int one_component = 0;
     std::vector<double> step;
     TriMesh previous;
-    const std::string label = method + (m.warp ? (m.bones.empty() ? "/linear" : "/parts") : "");
+    const std::string label = method + (m.warp ? (!m.arap.empty() ? "/arap" : m.bones.empty() ? "/linear" : "/parts") : "");
     std::printf("%-18s %-14s correspondence %.2f s%s, %zu node and %zu branch matches (%d voted), input genus %d -> %d\n",
                 p.name.c_str(), label.c_str(), fields_s, retime ? (", retime " + std::to_string(retime_s) + " s").c_str() : "",
                 m.matching.nodes.size(), m.matching.branches.size(),
                 static_cast<int>(std::count_if(m.matching.nodes.begin(), m.matching.nodes.end(),
                                                [](const dfi::NodePair& n) { return n.votes > 0; })),
                 in0.genus, in1.genus);
-    std::printf("%-18s %6s %5s %5s %9s %8s %8s %8s\n", "  frame", "t", "comp", "genus", "vol/lin", "step vox", "time s", "iso vox");
+    if (!m.arap.empty())
+      std::printf("%-18s %-14s arap: %zu centres, thin-plate smoothing %g, smallest Jacobian determinant %.3f\n", p.name.c_str(),
+                  label.c_str(), m.arap.source.size(), m.arap_lambda, m.arap_min_det);
+    std::printf("%-18s %6s %5s %5s %9s %8s %8s %8s %9s\n", "  frame", "t", "comp", "genus", "vol/lin", "step vox", "time s", "iso vox",
+                "drop o/oo");
     for (int f = 0; f < frames; ++f) {
       const double t = times[f];
       t0 = Clock::now();
@@ -174,8 +181,11 @@ int main(int argc, char** argv) {
         const double e = metro::metro(mesh, f == 0 ? a : b).max;
         end_vox = std::max(end_vox, e / (m.spacing() / (f == 0 ? 1.0 : m.target_to_source.scale)));
       }
-      std::printf("%-18s %6.3f %5d %5d %9.3f %8.2f %8.2f %8.2f\n", ("  " + std::to_string(f)).c_str(), t, st.components,
-                  st.genus, ratio, d, s, info.iso_shift / voxel);
+      // Inside samples the topology control left out (a part cut off, a handle closed), per mille.
+      const double dropped = info.ball.inside ? 1000.0 * info.ball.removed / info.ball.inside : 0.0;
+      worst_dropped = std::max(worst_dropped, dropped);
+      std::printf("%-18s %6.3f %5d %5d %9.3f %8.2f %8.2f %8.2f %9.1f\n", ("  " + std::to_string(f)).c_str(), t, st.components,
+                  st.genus, ratio, d, s, info.iso_shift / voxel, dropped);
       std::fflush(stdout);
       if (steps) previous = std::move(morph_space);
     }
@@ -196,17 +206,17 @@ int main(int argc, char** argv) {
     const bool same = dfi::signed_distance(a, m.source_sdf, one).values == dfi::signed_distance(a, m.source_sdf, two).values &&
                       dfi::blend_field(m, 0.5, 1).values == dfi::blend_field(m, 0.5, 2).values;
     char line[512];
-    std::snprintf(line, sizeof line, "%-18s %-14s %7.2f %7.2f %7.2f %6d/%-2d%s %6.3f %6.3f %22s %8.2f %7s", p.name.c_str(),
+    std::snprintf(line, sizeof line, "%-18s %-14s %7.2f %7.2f %7.2f %6d/%-2d%s %6.3f %6.3f %22s %8.2f %7.1f %7s", p.name.c_str(),
                   label.c_str(), fields_s, total / frames, worst, one_component, frames, ends_one ? " " : "*", vmin, vmax,
-                  smooth.c_str(), end_vox, same ? "same" : "DIFFER");
+                  smooth.c_str(), end_vox, worst_dropped, same ? "same" : "DIFFER");
     summary.push_back(line);
     std::printf("%s\n", line);
     std::fflush(stdout);
     }
   }
   std::printf("\nsummary (grid %d, %d frames; * : an input has several components)\n", grid, frames);
-  std::printf("%-18s %-14s %7s %7s %7s %9s %6s %6s %22s %8s %7s\n", "pair", "method", "corr s", "frame s", "max fr",
-              "1 comp", "vol lo", "vol hi", "steps max/median vox", "ends vox", "threads");
+  std::printf("%-18s %-14s %7s %7s %7s %9s %6s %6s %22s %8s %7s %7s\n", "pair", "method", "corr s", "frame s", "max fr",
+              "1 comp", "vol lo", "vol hi", "steps max/median vox", "ends vox", "drop o/oo", "threads");
   for (const std::string& l : summary) std::printf("%s\n", l.c_str());
   return 0;
 }

@@ -166,7 +166,7 @@ int main(int argc, char** argv) {
                "Exit codes: 0 done, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal error.",
                "qs-dfi"};
   std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even", volume = "linear",
-              matching = "voting";
+              matching = "voting", interpolation = "parts";
   std::optional<std::string> glb;
   int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 3;
   double fps = 12;
@@ -190,6 +190,10 @@ int main(int argc, char** argv) {
   app.add_option("--matching", matching, "Skeleton feature nodes matched by voting (default: centricity, path "
                                          "length, topology, spatial configuration and position) or nearest (nearest-first)")
       ->check(CLI::IsMember({"voting", "nearest"}));
+  app.add_option("--interpolation", interpolation, "In-between positions of the correspondence: parts (default: the "
+                                                   "rotation-aware part warp along matched branches) or arap (as-rigid-as-possible "
+                                                   "centres and thin-plate RBF backward warps with a global affine part)")
+      ->check(CLI::IsMember({"parts", "arap"}));
   app.add_flag("--no-centring", no_centring, "Skeleton nodes where mean curvature flow left them (default: moved to "
                                              "the centre of their cross-section before the matching)");
   app.add_flag("--no-topology-control", no_topology, "Frames as blended; default: when both inputs are genus 0, "
@@ -287,6 +291,7 @@ int main(int argc, char** argv) {
     opt.warp = !no_warp;
     opt.centre_skeletons = !no_centring;
     opt.voting = matching == "voting";
+    opt.interpolation = interpolation == "arap" ? qs::dfi::Interpolation::Arap : qs::dfi::Interpolation::Parts;
     opt.volume = volume == "free" ? qs::dfi::FrameVolume::Free : qs::dfi::FrameVolume::Linear;
     opt.bone_segments = bone_segments;
     opt.topology_control = !no_topology;
@@ -469,7 +474,10 @@ int main(int argc, char** argv) {
                                   {"parts", morph.parts},
                                   {"cost", morph.transport_cost},
                                   {"harmonic_agreement", morph.harmonic_agreement},
-                                  {"warp", morph.bones.empty() ? "linear" : "parts"},
+                                  {"warp", !morph.arap.empty() ? "arap" : morph.bones.empty() ? "linear" : "parts"},
+                                  {"arap_centres", morph.arap.source.size()},
+                                  {"arap_smoothing", morph.arap_lambda},
+                                  {"arap_min_det", morph.arap_min_det},
                                   {"bones", morph.bones.size()},
                                   {"bones_min_det", morph.bone_min_det},
                                   {"centring", {{"source_moved", morph.source_centring.moved},

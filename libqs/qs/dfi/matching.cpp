@@ -239,6 +239,25 @@ SkeletonMatching match_skeletons(const Skeleton& s0, const std::vector<Branch>& 
     taken.push_back({c.a, c.b});
     m.nodes.push_back({i, j, false, "", c.votes});
   }
+  // The fallback: feature nodes the votes left unmatched, nearest-first in the aligned space.
+  if (options.voting) {
+    std::vector<std::tuple<double, int, int>> rest;
+    for (const int i : f0.nodes) {
+      if (match0[i] >= 0) continue;
+      for (const int j : f1.nodes) {
+        if (match1[j] >= 0 || (d0[i] == 1) != (d1[j] == 1)) continue;
+        const double d = (s0.nodes[i] - s1.nodes[j]).norm() / diagonal;
+        if (d <= options.max_distance) rest.emplace_back(d, i, j);
+      }
+    }
+    std::sort(rest.begin(), rest.end());
+    for (const auto& [d, i, j] : rest) {
+      if (match0[i] >= 0 || match1[j] >= 0) continue;
+      match0[i] = j;
+      match1[j] = i;
+      m.nodes.push_back({i, j, false, "", 0.0});
+    }
+  }
   // The paper's cases 1-3: a branch with a terminal end goes with the target branch that holds the
   // terminal's match (a terminal lies on exactly one branch), whatever its other end.
   std::vector<char> used0(b0.size(), 0), used1(b1.size(), 0);

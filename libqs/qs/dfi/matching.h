@@ -18,8 +18,9 @@
 // of mutually consistent candidates (an elector) votes for its three pairs with the product of
 // their scores, each exp(-(euclidean / euclid_scale)^2 - (centricity difference / 0.1)^2). The
 // pairs are then taken by decreasing vote (ties: nearest first), each only if it is consistent
-// with every pair already taken; candidates without a vote follow nearest-first under the same
-// check, and with voting off the rule is nearest-first alone (the fallback).
+// with every pair already taken. The fallback, nearest-first in the aligned space (a terminal to a
+// terminal, a junction to a junction, at most max_distance apart), then matches the feature nodes
+// the votes left, and is the whole rule with voting off.
 // Forced pairs (named landmarks on both shapes) are matched first, whatever their kind, and the
 // automatic pairs must be consistent with them too.
 // Branches (the paper's figure 5): a branch with a terminal end is matched to the target branch

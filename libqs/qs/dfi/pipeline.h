@@ -25,6 +25,7 @@
 
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
+#include "qs/dfi/arap.h"
 #include "qs/dfi/bones.h"
 #include "qs/dfi/centre.h"
 #include "qs/dfi/grid.h"
@@ -55,6 +56,13 @@ enum class FrameVolume {
           ///< fields with the same estimator (volume_below); the ends are never shifted
 };
 
+/// How the in-between positions of the correspondence are interpolated (with the warp).
+enum class Interpolation {
+  Arap,  ///< the paper's: as-rigid-as-possible positions of corresponding centres and thin-plate
+         ///< RBF backward warps with a global affine part (arap.h)
+  Parts  ///< the rotation-aware part warp along matched branches (bones.h), else the linear warp
+};
+
 struct MorphOptions {
   int grid = 150;          ///< cells along the longest side of the common bounding box
   int pad = 3;             ///< empty cells around it
@@ -69,6 +77,8 @@ struct MorphOptions {
   /// displacement (warp.h), which is also what runs when no branch is matched or the part warp
   /// folds (a Jacobian determinant <= 0 at s = 0.5 or 1, after its smoothing).
   int bone_segments = 8;
+  Interpolation interpolation = Interpolation::Parts;
+  int arap_centres = 200;        ///< centre pairs of the ARAP interpolation (Interpolation::Arap)
   /// Skeleton nodes moved to the centre of their cross-section in the distance fields before the
   /// matching (centre.h); false: where mean curvature flow left them.
   bool centre_skeletons = true;
@@ -141,6 +151,10 @@ struct PreparedMorph {
   double bone_min_det = 1;             ///< smallest Jacobian determinant of the part warps (both ways,
                                        ///< s = 0.5 and 1); <= 0: they fold, bones is left empty and the
                                        ///< linear warp runs
+  // The ARAP interpolation (Interpolation::Arap): used instead of both warps above when not empty.
+  ArapInterpolation arap;
+  double arap_lambda = 0;              ///< the thin-plate smoothing that keeps every frame's warps unfolded
+  double arap_min_det = 1;             ///< smallest Jacobian determinant of the backward warps checked
   /// The grid spacing in the source's units.
   double spacing() const { return source_sdf.spacing / source_to_morph.scale; }
 };
