@@ -7,7 +7,9 @@
 // volumes (morph space), the step from the frame before (Hausdorff distance, in voxels) and the
 // time. Per pair: frames in one component, the volume ratios' range, steps largest / median, the
 // ends against the inputs (Hausdorff in voxels), the most inside samples the topology control left
-// out of a frame (per mille: a part cut off or a handle closed), whether 1 and 2 threads give the same bytes.
+// out of a frame (per mille: a part cut off or a handle closed), the most processor time of a
+// frame between the ends (all threads: on 2 threads half of it is an idle 2-core machine's wall
+// clock), whether 1 and 2 threads give the same bytes.
 //
 // Usage: qs-bench-dfi [--grid N] [--frames K] [--no-steps] [--retime] [--refine-ends R] [--free-volume]
 //                     [--no-topology] [--no-voting] [--arap] [--bone-segments N] [--methods warp,global,blend] [pair ...]
@@ -15,6 +17,7 @@
 // eight-double-torus, knot-double-torus; default all)
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -37,6 +40,9 @@ using namespace qs;
 namespace {
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+// Processor time of the process (all threads), seconds: on a loaded machine the wall clock grows,
+// this does not; over 2 threads, half of it is the wall clock of an idle 2-core machine.
+double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
 struct Pair {
   std::string name, a, b;  // mesh files under ../shared/meshes, or "sphere" / "torus"
@@ -130,7 +136,7 @@ int main(int argc, char** argv) {
     const double voxel = m.source_sdf.spacing;  // morph space
     const dfi::MeshStats in0 = dfi::mesh_stats(a), in1 = dfi::mesh_stats(b);
     const bool ends_one = in0.components == 1 && in1.components == 1;
-    double total = 0, worst = 0, end_vox = 0, vmin = 1e300, vmax = 0, worst_dropped = 0;
+    double total = 0, worst = 0, end_vox = 0, vmin = 1e300, vmax = 0, worst_dropped = 0, worst_cpu = 0;
     int one_component = 0;
     std::vector<double> step;
     TriMesh previous;
@@ -144,11 +150,12 @@ int main(int argc, char** argv) {
     if (!m.arap.empty())
       std::printf("%-18s %-14s arap: %zu centres, thin-plate smoothing %g, smallest Jacobian determinant %.3f\n", p.name.c_str(),
                   label.c_str(), m.arap.source.size(), m.arap_lambda, m.arap_min_det);
-    std::printf("%-18s %6s %5s %5s %9s %8s %8s %8s %9s\n", "  frame", "t", "comp", "genus", "vol/lin", "step vox", "time s", "iso vox",
-                "drop o/oo");
+    std::printf("%-18s %6s %5s %5s %9s %8s %8s %8s %9s %7s\n", "  frame", "t", "comp", "genus", "vol/lin", "step vox", "time s", "iso vox",
+                "drop o/oo", "cpu s");
     for (int f = 0; f < frames; ++f) {
       const double t = times[f];
       t0 = Clock::now();
+      const double c0 = cpu_now();
       const bool end = f == 0 || f == frames - 1;
       TriMesh morph_space, mesh;  // mesh: what qs-dfi writes, the frame at its placement
       dfi::BlendInfo info;
@@ -163,8 +170,9 @@ int main(int argc, char** argv) {
         const dfi::Similarity back = m.source_to_morph.inverse();
         for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, back.apply(q));
       }
-      const double s = since(t0);
+      const double s = since(t0), cpu = cpu_now() - c0;
       total += s;
+      if (!end) worst_cpu = std::max(worst_cpu, cpu);
       worst = std::max(worst, s);
       const dfi::MeshStats st = dfi::mesh_stats(morph_space);
       one_component += st.components == 1;
@@ -184,8 +192,8 @@ int main(int argc, char** argv) {
       // Inside samples the topology control left out (a part cut off, a handle closed), per mille.
       const double dropped = info.ball.inside ? 1000.0 * info.ball.removed / info.ball.inside : 0.0;
       worst_dropped = std::max(worst_dropped, dropped);
-      std::printf("%-18s %6.3f %5d %5d %9.3f %8.2f %8.2f %8.2f %9.1f\n", ("  " + std::to_string(f)).c_str(), t, st.components,
-                  st.genus, ratio, d, s, info.iso_shift / voxel, dropped);
+      std::printf("%-18s %6.3f %5d %5d %9.3f %8.2f %8.2f %8.2f %9.1f %7.2f\n", ("  " + std::to_string(f)).c_str(), t, st.components,
+                  st.genus, ratio, d, s, info.iso_shift / voxel, dropped, cpu);
       std::fflush(stdout);
       if (steps) previous = std::move(morph_space);
     }
@@ -206,17 +214,17 @@ int main(int argc, char** argv) {
     const bool same = dfi::signed_distance(a, m.source_sdf, one).values == dfi::signed_distance(a, m.source_sdf, two).values &&
                       dfi::blend_field(m, 0.5, 1).values == dfi::blend_field(m, 0.5, 2).values;
     char line[512];
-    std::snprintf(line, sizeof line, "%-18s %-14s %7.2f %7.2f %7.2f %6d/%-2d%s %6.3f %6.3f %22s %8.2f %7.1f %7s", p.name.c_str(),
+    std::snprintf(line, sizeof line, "%-18s %-14s %7.2f %7.2f %7.2f %6d/%-2d%s %6.3f %6.3f %22s %8.2f %7.1f %7.2f %7s", p.name.c_str(),
                   label.c_str(), fields_s, total / frames, worst, one_component, frames, ends_one ? " " : "*", vmin, vmax,
-                  smooth.c_str(), end_vox, worst_dropped, same ? "same" : "DIFFER");
+                  smooth.c_str(), end_vox, worst_dropped, worst_cpu, same ? "same" : "DIFFER");
     summary.push_back(line);
     std::printf("%s\n", line);
     std::fflush(stdout);
     }
   }
   std::printf("\nsummary (grid %d, %d frames; * : an input has several components)\n", grid, frames);
-  std::printf("%-18s %-14s %7s %7s %7s %9s %6s %6s %22s %8s %7s %7s\n", "pair", "method", "corr s", "frame s", "max fr",
-              "1 comp", "vol lo", "vol hi", "steps max/median vox", "ends vox", "drop o/oo", "threads");
+  std::printf("%-18s %-14s %7s %7s %7s %9s %6s %6s %22s %8s %7s %7s %7s\n", "pair", "method", "corr s", "frame s", "max fr",
+              "1 comp", "vol lo", "vol hi", "steps max/median vox", "ends vox", "drop", "cpu fr", "threads");
   for (const std::string& l : summary) std::printf("%s\n", l.c_str());
   return 0;
 }
