@@ -493,8 +493,10 @@ int main(int argc, char** argv) {
         << " nodes, " << morph.matching.nodes.size() << " node and " << morph.matching.branches.size()
         << " branch matches, " << morph.anchors.size() << " anchors, " << morph.parts << " part(s), "
         << morph.source_voxels << " / " << morph.target_voxels << " voxels, fold check min det "
-        << (morph.bones.empty() ? std::min(morph.source_folds.min_det, morph.target_folds.min_det) : morph.bone_min_det)
-        << (morph.bones.empty() ? ", linear warp" : ", part warp with " + std::to_string(morph.bones.size()) + " bones");
+        << (!morph.arap.empty() ? morph.arap_min_det
+            : morph.bones.empty() ? std::min(morph.source_folds.min_det, morph.target_folds.min_det) : morph.bone_min_det)
+        << (!morph.arap.empty() ? ", ARAP warp with " + std::to_string(morph.arap.source.size()) + " centres"
+            : morph.bones.empty() ? ", linear warp" : ", part warp with " + std::to_string(morph.bones.size()) + " bones");
       say(m.str());
     }
     // dfi.json staged, then the GLB (written under a temporary name and renamed), then the folder

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "qs/dfi/arap.h"
+#include "qs/dfi/pipeline.h"
+#include "qs/shapes/shapes.h"
 
 using namespace qs;
 using namespace qs::dfi;
@@ -61,4 +63,28 @@ TEST(Arap, ThinPlateHasAnExactAffinePart) {
   for (size_t i = 0; i < x.size(); ++i) EXPECT_LT((g(x[i]) - bent[i]).norm(), 1e-8);
   EXPECT_EQ(farthest_points(x, 5).size(), 5u);
   EXPECT_EQ(farthest_points(x, 5)[0], 0);
+}
+
+// The ARAP warp in the pipeline: an ellipsoid to the same ellipsoid moved along x. The middle
+// frame is the ellipsoid half-way (one piece, its volume, its centre), the ends are the inputs'.
+TEST(Arap, MiddleFrameOfAMovedShapeIsTheShapeHalfWay) {
+  const TriMesh a = shapes::ellipsoid(1.0, 0.5, 0.4, 2);
+  TriMesh b = a;
+  for (Vec3& p : b.positions) p += Vec3(1.0, 0, 0);
+  MorphOptions opt;
+  opt.grid = 28;
+  opt.emd_voxels = 200;
+  opt.arap_centres = 60;
+  opt.interpolation = Interpolation::Arap;
+  const PreparedMorph m = prepare_morph(a, b, opt);
+  ASSERT_FALSE(m.arap.empty());
+  EXPECT_GT(m.arap_min_det, 0);
+  EXPECT_EQ(blend_field(m, 0).values, m.source_sdf.values);
+  EXPECT_EQ(blend_field(m, 1).values, m.target_sdf.values);
+  const MeshStats mid = mesh_stats(frame_mesh(m, blend_field(m, 0.5), 0.5));
+  EXPECT_EQ(mid.components, 1);
+  const double volume = 4.0 / 3.0 * M_PI * 1.0 * 0.5 * 0.4;
+  EXPECT_NEAR(mid.volume, volume, 0.08 * volume);
+  const Box3 box = bounding_box(frame_mesh(m, blend_field(m, 0.5), 0.5).positions);
+  EXPECT_NEAR(0.5 * (box.min.x() + box.max.x()), 0.5, 2 * m.spacing());
 }
