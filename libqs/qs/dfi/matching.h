@@ -9,18 +9,17 @@
 // skeleton to every point of it, over the skeleton's largest) differ by at most
 // max_centricity_difference and whose positions, once the skeletons' centroids are made to
 // coincide (the paper: same orientation, aligned by a translation), lie at most max_distance
-// apart. Two candidates are consistent when they share no node and, between their nodes on
-// either side, the geodesic path lengths agree (difference <= max_path_difference times the longer,
-// or 0.05 of the diagonal), the
-// numbers of junctions on those paths differ by at most one (topology), and the directions from
-// one node to the other agree (angle <= max_angle_degrees where both are longer than 0.05 of the
-// diagonal; spatial configuration). Every triple
-// of mutually consistent candidates (an elector) votes for its three pairs with the product of
-// their scores, each exp(-(euclidean / euclid_scale)^2 - (centricity difference / 0.1)^2). The
-// pairs are then taken by decreasing vote (ties: nearest first), each only if it is consistent
-// with every pair already taken. The fallback, nearest-first in the aligned space (a terminal to a
-// terminal, a junction to a junction, at most max_distance apart), then matches the feature nodes
-// the votes left, and is the whole rule with voting off.
+// apart. Two candidates are consistent when they share no node and, between their nodes on either
+// side, the geodesic path lengths agree (difference at most max_path_difference times the longer,
+// or 0.05 of the diagonal), the numbers of junctions on those paths differ by at most one
+// (topology), and the directions from one node to the other agree (angle at most
+// max_angle_degrees where both are longer than 0.05 of the diagonal; spatial configuration).
+// Every triple of mutually consistent candidates (an elector) votes for its three pairs with the
+// product of their scores, each exp(-(euclidean / euclid_scale)^2 - (centricity difference /
+// 0.1)^2). The pairs are then taken by decreasing vote (ties: nearest first), each only if it is
+// consistent with every pair already taken. The fallback, nearest-first in the aligned space (a
+// terminal to a terminal, a junction to a junction, at most max_distance apart), then matches the
+// feature nodes the votes left, and is the whole rule with voting off.
 // Forced pairs (named landmarks on both shapes) are matched first, whatever their kind, and the
 // automatic pairs must be consistent with them too.
 // Branches (the paper's figure 5): a branch with a terminal end is matched to the target branch

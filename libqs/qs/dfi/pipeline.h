@@ -16,7 +16,8 @@
 // skeletons of both shapes, branch matching, anchors along matched branches, harmonic fields on
 // the interior voxels of a coarse grid, the transport per matched part (or globally, the
 // ablation), and from it a displacement field per shape, checked for folds; where branches are
-// matched, the rotation-aware part warp of bones.h replaces that displacement. Frame t then
+// matched, the rotation-aware part warp of bones.h replaces that displacement (with
+// Interpolation::Arap, the as-rigid-as-possible centres and thin-plate warps of arap.h). Frame t then
 // blends the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
 
 #include <array>
