@@ -107,3 +107,18 @@ TEST(Matching, CentricityIsHighestAtTheExtremities) {
   EXPECT_LT(c[a.node.at("front")], c[a.node.at("tail")]);
   EXPECT_DOUBLE_EQ(*std::max_element(c.begin(), c.end()), 1.0);
 }
+
+// The same along the spine: the target moved forward by more than half the spine, so that
+// nearest-first pairs the source's back junction with the target's front one; the votes keep
+// front with front and back with back.
+TEST(Matching, VotingKeepsFrontAndBackWhereNearestFirstSwapsThem) {
+  const Animal a = animal(1.0, Vec3::Zero());
+  const Animal b = animal(1.1, Vec3(0.6, 0, 0));
+  const auto b0 = skeleton_branches(a.s), b1 = skeleton_branches(b.s);
+  MatchOptions nearest;
+  nearest.voting = false;
+  const auto swapped = roles_matched(a, b, match_skeletons(a.s, b0, b.s, b1, {}, 2.2, nearest));
+  EXPECT_EQ(swapped.at("back"), "front");
+  const auto roles = roles_matched(a, b, match_skeletons(a.s, b0, b.s, b1, {}, 2.2));
+  for (const auto& [role, matched] : roles) EXPECT_EQ(matched, role) << role;
+}
