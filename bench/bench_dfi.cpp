@@ -1,16 +1,23 @@
-// qs-dfi benchmark: for each pair of ../shared/meshes and each method (the
-// skeleton-guided warp with per-part transport, the same with one global transport, the plain
-// blend; "/parts" or "/linear" says which warp ran), the correspondence (distance fields,
-// skeletons, matching, harmonic fields, transport, warp) and every frame at a 150^3 grid (targets: correspondence < 60 s, < 10 s per frame on a
-// 2-core machine), endpoints against the inputs (Hausdorff in voxels), the
-// topology of every frame, the middle frame's volume against the endpoints' mean (in morph space),
-// the smoothness of the sequence (largest / median Hausdorff distance between consecutive frames),
-// and whether 1 and 2 threads give the same bytes.
+// qs-dfi benchmark: for each pair of ../shared/meshes (the genus-0 animal pairs, and pairs of
+// every genus up to 2) and each method (the skeleton-guided warp with per-part transport, the same
+// with one global transport, the plain blend; "/parts" or "/linear" says which warp ran), the
+// correspondence (distance fields, skeletons, matching, harmonic fields, transport, warp) and
+// every frame at a 150^3 grid (targets: correspondence < 60 s, <= 2 s per frame on a 2-core
+// machine). Per frame: t, components, genus, volume over the linear interpolation of the inputs'
+// volumes (morph space), the step from the frame before (Hausdorff distance, in voxels) and the
+// time. Per pair: frames in one component, the volume ratios' range, steps largest / median, the
+// ends against the inputs (Hausdorff in voxels), the most inside samples the topology control left
+// out of a frame (per mille: a part cut off or a handle closed), the most processor time of a
+// frame between the ends (all threads: on 2 threads half of it is an idle 2-core machine's wall
+// clock), whether 1 and 2 threads give the same bytes.
 //
-// Usage: qs-bench-dfi [--grid N] [--frames K] [--smoothness] [--retime] [--refine-ends R] [--free-volume] [--no-topology] [--methods warp,global,blend] [pair ...]   (pairs: sphere-torus,
-// horse-knot, spot-eight, femur-elephant, horse-camel, cat-koala; default all)
+// Usage: qs-bench-dfi [--grid N] [--frames K] [--no-steps] [--retime] [--refine-ends R] [--free-volume]
+//                     [--no-topology] [--no-voting] [--arap] [--bone-segments N] [--methods warp,global,blend] [pair ...]
+// (pairs: cat-koala, horse-camel, cow-pig, sphere-torus, horse-knot, spot-eight, femur-elephant,
+// eight-double-torus, knot-double-torus; default all)
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -33,6 +40,9 @@ using namespace qs;
 namespace {
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+// Processor time of the process (all threads), seconds: on a loaded machine the wall clock grows,
+// this does not; over 2 threads, half of it is the wall clock of an idle 2-core machine.
+double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
 struct Pair {
   std::string name, a, b;  // mesh files under ../shared/meshes, or "sphere" / "torus"
@@ -52,31 +62,37 @@ TriMesh load(const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int grid = 150, frames = 11, refine_ends = 1;
-  bool smoothness = false, retime = false, free_volume = false, no_topology = false;
-  std::string methods = "warp,global,blend";
+  int grid = 150, frames = 11, refine_ends = 1, bone_segments = 8;
+  bool steps = true, retime = false, free_volume = false, no_topology = false, no_voting = false, arap = false;
+  std::string methods = "warp";
   std::vector<std::string> wanted;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--grid") && i + 1 < argc) grid = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--smoothness")) smoothness = true;
+    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::max(3, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--no-steps")) steps = false;
     else if (!std::strcmp(argv[i], "--retime")) retime = true;
     else if (!std::strcmp(argv[i], "--free-volume")) free_volume = true;
     else if (!std::strcmp(argv[i], "--no-topology")) no_topology = true;
+    else if (!std::strcmp(argv[i], "--no-voting")) no_voting = true;
+    else if (!std::strcmp(argv[i], "--arap")) arap = true;
     else if (!std::strcmp(argv[i], "--refine-ends") && i + 1 < argc) refine_ends = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--bone-segments") && i + 1 < argc) bone_segments = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--methods") && i + 1 < argc) methods = argv[++i];
     else wanted.push_back(argv[i]);
   }
-  const std::vector<Pair> pairs = {{"sphere-torus", "sphere", "torus"},
+  const std::vector<Pair> pairs = {{"cat-koala", "cat_16k.obj", "koala_7k.obj"},
+                                   {"horse-camel", "horse_5k.obj", "camel_4k_fixed.obj"},
+                                   {"cow-pig", "cow2_9k.off", "pig_4k.off"},
+                                   {"sphere-torus", "sphere", "torus"},
                                    {"horse-knot", "horse_5k.obj", "knot1.off"},
                                    {"spot-eight", "spot_2k.obj", "eight.off"},
                                    {"femur-elephant", "femur.off", "elephant_12k.obj"},
-                                   {"horse-camel", "horse_5k.obj", "camel_4k_fixed.obj"},
-                                   {"cat-koala", "cat_16k.obj", "koala_7k.obj"}};
-  std::printf("dfi benchmark: methods %s, --align similarity, grid %d, %d frames, %u hardware threads\n", methods.c_str(),
-              grid, frames, std::thread::hardware_concurrency());
-  std::printf("%-15s %-14s %9s %8s %8s %8s %9s %14s %10s %8s  %s\n", "pair", "method", "corr. s", "frame s", "max fr s",
-              "ends vox", "1 comp", "mid vol/mean", "smooth", "threads", "genus per frame");
+                                   {"eight-double-torus", "eight.off", "double-torus-example.off"},
+                                   {"knot-double-torus", "knot1.off", "double-torus-example.off"}};
+  std::printf("dfi benchmark: methods %s, --align similarity, grid %d, %d frames%s%s, %u hardware threads\n",
+              methods.c_str(), grid, frames, retime ? ", even timing" : ", uniform timing",
+              no_voting ? ", nearest-first matching" : "", std::thread::hardware_concurrency());
+  std::vector<std::string> summary;
   for (const Pair& p : pairs) {
     if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), p.name) == wanted.end()) continue;
     TriMesh a, b;
@@ -84,7 +100,7 @@ int main(int argc, char** argv) {
       a = load(p.a);
       b = load(p.b);
     } catch (const std::exception& e) {
-      std::printf("%-15s skipped: %s\n", p.name.c_str(), e.what());
+      std::printf("%-18s skipped: %s\n", p.name.c_str(), e.what());
       continue;
     }
     for (const std::string method : {"warp", "global", "blend"}) {
@@ -94,6 +110,9 @@ int main(int argc, char** argv) {
     opt.align = dfi::Align::Similarity;
     opt.warp = method != "blend";
     opt.part_transport = method == "warp";
+    opt.bone_segments = bone_segments;
+    opt.voting = !no_voting;
+    opt.interpolation = arap ? dfi::Interpolation::Arap : dfi::Interpolation::Parts;
     // The plain blend is the paper's baseline: its zero level, whatever volume it encloses.
     opt.volume = method == "blend" || free_volume ? dfi::FrameVolume::Free : dfi::FrameVolume::Linear;
     // Topology control (topology.h) for the warps unless --no-topology (it acts only where both
@@ -111,58 +130,82 @@ int main(int argc, char** argv) {
       times = dfi::even_frame_times(m, frames).times;
       retime_s = since(t0);
     }
-    double total = 0, worst = 0, end_vox = 0, mid_volume = 0;
+    // The inputs' volumes in morph space (the target's through the alignment).
+    const double k0 = m.source_to_morph.scale, k1 = m.target_to_morph.scale;
+    const double v0 = m.source_volume * k0 * k0 * k0, v1 = m.target_volume * k1 * k1 * k1;
+    const double voxel = m.source_sdf.spacing;  // morph space
+    const dfi::MeshStats in0 = dfi::mesh_stats(a), in1 = dfi::mesh_stats(b);
+    const bool ends_one = in0.components == 1 && in1.components == 1;
+    double total = 0, worst = 0, end_vox = 0, vmin = 1e300, vmax = 0, worst_dropped = 0, worst_cpu = 0;
     int one_component = 0;
-    std::string genera, removed;
-    std::vector<TriMesh> seq;
+    std::vector<double> step;
+    TriMesh previous;
+    const std::string label = method + (m.warp ? (!m.arap.empty() ? "/arap" : m.bones.empty() ? "/linear" : "/parts") : "");
+    std::printf("%-18s %-14s correspondence %.2f s%s, %zu node and %zu branch matches (%d voted), input genus %d -> %d\n",
+                p.name.c_str(), label.c_str(), fields_s, retime ? (", retime " + std::to_string(retime_s) + " s").c_str() : "",
+                m.matching.nodes.size(), m.matching.branches.size(),
+                static_cast<int>(std::count_if(m.matching.nodes.begin(), m.matching.nodes.end(),
+                                               [](const dfi::NodePair& n) { return n.votes > 0; })),
+                in0.genus, in1.genus);
+    if (!m.arap.empty())
+      std::printf("%-18s %-14s arap: %zu centres, thin-plate smoothing %g, smallest Jacobian determinant %.3f\n", p.name.c_str(),
+                  label.c_str(), m.arap.source.size(), m.arap_lambda, m.arap_min_det);
+    std::printf("%-18s %6s %5s %5s %9s %8s %8s %8s %9s %7s\n", "  frame", "t", "comp", "genus", "vol/lin", "step vox", "time s", "iso vox",
+                "drop o/oo", "cpu s");
     for (int f = 0; f < frames; ++f) {
       const double t = times[f];
       t0 = Clock::now();
+      const double c0 = cpu_now();
       const bool end = f == 0 || f == frames - 1;
       TriMesh morph_space, mesh;  // mesh: what qs-dfi writes, the frame at its placement
-      dfi::BallReport ball;
+      dfi::BlendInfo info;
       if (end && refine_ends > 1) {
-        mesh = dfi::endpoint_frame(m, f == 0 ? a : b, f != 0, refine_ends, {}, {}, &ball);
+        mesh = dfi::endpoint_frame(m, f == 0 ? a : b, f != 0, refine_ends);
         morph_space = mesh;
-        if (f != 0) for (Vec3& q : morph_space.positions) q = m.target_to_source.apply(q);
+        const dfi::Similarity to_morph = f == 0 ? m.source_to_morph : m.target_to_morph;
+        for (Vec3& q : morph_space.positions) q = to_morph.apply(q);
       } else {
-        dfi::BlendInfo info;
         morph_space = dfi::polygonize(dfi::blend_field(m, t, 0, &info));
-        ball = info.ball;
-        mesh = morph_space;
-        for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, q);
+        mesh = morph_space;  // as frame_mesh places it
+        const dfi::Similarity back = m.source_to_morph.inverse();
+        for (Vec3& q : mesh.positions) q = dfi::placement(m.target_to_source, t, back.apply(q));
       }
-      const double s = since(t0);
+      const double s = since(t0), cpu = cpu_now() - c0;
       total += s;
+      if (!end) worst_cpu = std::max(worst_cpu, cpu);
       worst = std::max(worst, s);
-      const dfi::MeshStats st = dfi::mesh_stats(mesh);
+      const dfi::MeshStats st = dfi::mesh_stats(morph_space);
       one_component += st.components == 1;
-      if (f) genera += ',';
-      genera += std::to_string(st.genus);
-      if (f) removed += ',';
-      removed += dfi::controls_topology(m, t) ? std::to_string(ball.removed) : "-";
-      if (2 * f == frames - 1) mid_volume = dfi::mesh_stats(morph_space).volume;
-      if (f == 0 || f == frames - 1) {
-        const double d = metro::metro(mesh, f == 0 ? a : b).max;
-        const double voxel = f == 0 ? m.source_sdf.spacing : m.source_sdf.spacing / m.target_to_source.scale;
-        end_vox = std::max(end_vox, d / voxel);
+      const double lin = (1 - t) * v0 + t * v1;
+      const double ratio = st.volume / lin;
+      vmin = std::min(vmin, ratio);
+      vmax = std::max(vmax, ratio);
+      double d = 0;
+      if (steps && f > 0) {
+        d = metro::metro(previous, morph_space).max / voxel;
+        step.push_back(d);
       }
-      if (smoothness) seq.push_back(morph_space);
+      if (end) {
+        const double e = metro::metro(mesh, f == 0 ? a : b).max;
+        end_vox = std::max(end_vox, e / (m.spacing() / (f == 0 ? 1.0 : m.target_to_source.scale)));
+      }
+      // Inside samples the topology control left out (a part cut off, a handle closed), per mille.
+      const double dropped = info.ball.inside ? 1000.0 * info.ball.removed / info.ball.inside : 0.0;
+      worst_dropped = std::max(worst_dropped, dropped);
+      std::printf("%-18s %6.3f %5d %5d %9.3f %8.2f %8.2f %8.2f %9.1f %7.2f\n", ("  " + std::to_string(f)).c_str(), t, st.components,
+                  st.genus, ratio, d, s, info.iso_shift / voxel, dropped, cpu);
+      std::fflush(stdout);
+      if (steps) previous = std::move(morph_space);
     }
-    // Volumes in morph space: the target's is scaled to the source's by the alignment.
-    const double mean_end = 0.5 * (m.source_volume + m.target_volume * std::pow(m.target_to_source.scale, 3));
     std::string smooth = "-";
-    if (smoothness) {
-      std::vector<double> d;
-      for (size_t f = 1; f < seq.size(); ++f) d.push_back(metro::metro(seq[f - 1], seq[f]).max);
-      std::vector<double> sorted = d;
+    if (steps && !step.empty()) {
+      std::vector<double> sorted = step;
       std::sort(sorted.begin(), sorted.end());
-      char buf[32];
-      std::snprintf(buf, sizeof buf, "%.2f", *std::max_element(d.begin(), d.end()) / sorted[sorted.size() / 2]);
+      const double median = sorted.size() % 2 ? sorted[sorted.size() / 2]
+                                              : 0.5 * (sorted[sorted.size() / 2 - 1] + sorted[sorted.size() / 2]);
+      char buf[48];
+      std::snprintf(buf, sizeof buf, "%.2f/%.2f=%.2f", sorted.back(), median, sorted.back() / median);
       smooth = buf;
-      std::printf("%-15s consecutive Hausdorff (morph space):", p.name.c_str());
-      for (double x : d) std::printf(" %.4f", x);
-      std::printf("\n");
     }
     // Determinism: the source field and the middle frame's field on 1 and 2 threads.
     dfi::SdfOptions one = opt.sdf, two = opt.sdf;
@@ -170,22 +213,18 @@ int main(int argc, char** argv) {
     two.threads = 2;
     const bool same = dfi::signed_distance(a, m.source_sdf, one).values == dfi::signed_distance(a, m.source_sdf, two).values &&
                       dfi::blend_field(m, 0.5, 1).values == dfi::blend_field(m, 0.5, 2).values;
-    char mid[32];
-    std::snprintf(mid, sizeof mid, "%.3f", mid_volume / mean_end);
-    // Which warp ran: the part warp (bones) or the linear one (no matched branch, or it folds).
-    const std::string label = method + (m.warp ? (m.bones.empty() ? "/linear" : "/parts") : "");
-    if (retime) {
-      std::printf("%-15s retime %.2f s, times", p.name.c_str(), retime_s);
-      for (double t : times) std::printf(" %.3f", t);
-      std::printf("\n");
-    }
-    std::printf("%-15s %-14s topology control: inside samples left out per frame %s\n", p.name.c_str(), method.c_str(),
-                removed.c_str());
-    std::printf("%-15s %-14s %9.2f %8.2f %8.2f %8.2f %6d/%-2d %14s %10s %8s  %s\n", p.name.c_str(), label.c_str(), fields_s,
-                total / frames, worst, end_vox, one_component, frames, mid, smooth.c_str(), same ? "same" : "DIFFER",
-                genera.c_str());
+    char line[512];
+    std::snprintf(line, sizeof line, "%-18s %-14s %7.2f %7.2f %7.2f %6d/%-2d%s %6.3f %6.3f %22s %8.2f %7.1f %7.2f %7s", p.name.c_str(),
+                  label.c_str(), fields_s, total / frames, worst, one_component, frames, ends_one ? " " : "*", vmin, vmax,
+                  smooth.c_str(), end_vox, worst_dropped, worst_cpu, same ? "same" : "DIFFER");
+    summary.push_back(line);
+    std::printf("%s\n", line);
     std::fflush(stdout);
     }
   }
+  std::printf("\nsummary (grid %d, %d frames; * : an input has several components)\n", grid, frames);
+  std::printf("%-18s %-14s %7s %7s %7s %9s %6s %6s %22s %8s %7s %7s %7s\n", "pair", "method", "corr s", "frame s", "max fr",
+              "1 comp", "vol lo", "vol hi", "steps max/median vox", "ends vox", "drop", "cpu fr", "threads");
+  for (const std::string& l : summary) std::printf("%s\n", l.c_str());
   return 0;
 }

@@ -76,7 +76,7 @@ if [ "$quick" = 0 ]; then
     "defaults|Defaults on every shared mesh|The default dissection, then the default remesh at levels 4 and 5 and area-sized tiles: patches, level-5 error, small angles, vertex and texel spreads.|$bench/qs-bench-defaults $meshes default"
     "correspondence|Correspondence|Every pair dissected with qs-dissect as a user would, measured by qs-metro --correspondence against exact ground truth (% of B's diagonal), beside the similarity + nearest-point baseline.|bash bench/correspondence.sh $meshes out/bench-page/correspondence"
     "real-self-pairs|Real meshes against their own re-tessellation|18 shared meshes re-tessellated keeping their shape, landmarks at the principal axes' extremes; the ideal map is the identity.|env RETESS_ARGS=--keep-shape bash bench/real_self_pairs.sh $meshes out/bench-page/real-self-pairs"
-    "dfi|Distance-field morph|qs-dfi's correspondence and frames at grid 150 on six pairs of any genus.|$bench/qs-bench-dfi --methods warp,blend"
+    "dfi|Distance-field morph|qs-dfi at grid 150 as it runs by default: the genus-0 animal pairs (11 frames at even change, refined ends), then pairs of genus 0 to 2 (6 uniform frames); per frame components, genus, volume over the linear interpolation of the inputs', step from the frame before and time; per pair the same summed up, and the ends against the inputs.|bash bench/dfi.sh"
   )
 fi
 

@@ -165,7 +165,8 @@ int main(int argc, char** argv) {
                "Writes OUTDIR/frame_NNNN.<fmt>, OUTDIR/dfi.json and optionally a GLB.\n"
                "Exit codes: 0 done, 1 usage, 2 invalid input, 3 i/o, 4 solver, 70 internal error.",
                "qs-dfi"};
-  std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even", volume = "linear";
+  std::string source_file, target_file, outdir = "dfi-out", format = "obj", align = "none", timing = "even", volume = "linear",
+              matching = "voting", interpolation = "parts";
   std::optional<std::string> glb;
   int frames = 11, grid = 150, threads = 0, band = 3, endpoint_refine = 3;
   double fps = 12;
@@ -186,6 +187,13 @@ int main(int argc, char** argv) {
                                      "shifted, by at most 4 cells, so that its volume follows the linear interpolation "
                                      "of the ends') or free (the blend's zero level)")
       ->check(CLI::IsMember({"linear", "free"}));
+  app.add_option("--matching", matching, "Skeleton feature nodes matched by voting (default: centricity, path "
+                                         "length, topology, spatial configuration and position) or nearest (nearest-first)")
+      ->check(CLI::IsMember({"voting", "nearest"}));
+  app.add_option("--interpolation", interpolation, "In-between positions of the correspondence: parts (default: the "
+                                                   "rotation-aware part warp along matched branches) or arap (as-rigid-as-possible "
+                                                   "centres and thin-plate RBF backward warps with a global affine part)")
+      ->check(CLI::IsMember({"parts", "arap"}));
   app.add_flag("--no-centring", no_centring, "Skeleton nodes where mean curvature flow left them (default: moved to "
                                              "the centre of their cross-section before the matching)");
   app.add_flag("--no-topology-control", no_topology, "Frames as blended; default: when both inputs are genus 0, "
@@ -282,6 +290,8 @@ int main(int argc, char** argv) {
     opt.sdf.threads = threads;
     opt.warp = !no_warp;
     opt.centre_skeletons = !no_centring;
+    opt.voting = matching == "voting";
+    opt.interpolation = interpolation == "arap" ? qs::dfi::Interpolation::Arap : qs::dfi::Interpolation::Parts;
     opt.volume = volume == "free" ? qs::dfi::FrameVolume::Free : qs::dfi::FrameVolume::Linear;
     opt.bone_segments = bone_segments;
     opt.topology_control = !no_topology;
@@ -451,11 +461,11 @@ int main(int argc, char** argv) {
       nlohmann::ordered_json nodes = nlohmann::ordered_json::array(), branches = nlohmann::ordered_json::array(),
                              anchors = nlohmann::ordered_json::array();
       for (const auto& n : morph.matching.nodes)
-        nodes.push_back({{"source", n.source}, {"target", n.target}, {"forced", n.forced}, {"name", n.name}});
+        nodes.push_back({{"source", n.source}, {"target", n.target}, {"forced", n.forced}, {"name", n.name}, {"votes", n.votes}});
       for (const auto& b : morph.matching.branches)
         branches.push_back({{"source", b.source}, {"target", b.target}, {"reversed", b.reversed}});
       for (const auto& a : morph.anchors) anchors.push_back({{"source", vec_json(same(a.source))}, {"target", vec_json(to_target(a.target))}});
-      report["matches"] = {{"nodes", nodes}, {"branches", branches}};
+      report["matches"] = {{"method", matching}, {"nodes", nodes}, {"branches", branches}};
       report["anchors"] = anchors;
       report["correspondence"] = {{"transport", global_transport ? "global" : "per part"},
                                   {"grid_cells", morph.emd_cells},
@@ -464,7 +474,10 @@ int main(int argc, char** argv) {
                                   {"parts", morph.parts},
                                   {"cost", morph.transport_cost},
                                   {"harmonic_agreement", morph.harmonic_agreement},
-                                  {"warp", morph.bones.empty() ? "linear" : "parts"},
+                                  {"warp", !morph.arap.empty() ? "arap" : morph.bones.empty() ? "linear" : "parts"},
+                                  {"arap_centres", morph.arap.source.size()},
+                                  {"arap_smoothing", morph.arap_lambda},
+                                  {"arap_min_det", morph.arap_min_det},
                                   {"bones", morph.bones.size()},
                                   {"bones_min_det", morph.bone_min_det},
                                   {"centring", {{"source_moved", morph.source_centring.moved},
@@ -480,8 +493,10 @@ int main(int argc, char** argv) {
         << " nodes, " << morph.matching.nodes.size() << " node and " << morph.matching.branches.size()
         << " branch matches, " << morph.anchors.size() << " anchors, " << morph.parts << " part(s), "
         << morph.source_voxels << " / " << morph.target_voxels << " voxels, fold check min det "
-        << (morph.bones.empty() ? std::min(morph.source_folds.min_det, morph.target_folds.min_det) : morph.bone_min_det)
-        << (morph.bones.empty() ? ", linear warp" : ", part warp with " + std::to_string(morph.bones.size()) + " bones");
+        << (!morph.arap.empty() ? morph.arap_min_det
+            : morph.bones.empty() ? std::min(morph.source_folds.min_det, morph.target_folds.min_det) : morph.bone_min_det)
+        << (!morph.arap.empty() ? ", ARAP warp with " + std::to_string(morph.arap.source.size()) + " centres"
+            : morph.bones.empty() ? ", linear warp" : ", part warp with " + std::to_string(morph.bones.size()) + " bones");
       say(m.str());
     }
     // dfi.json staged, then the GLB (written under a temporary name and renamed), then the folder

@@ -120,6 +120,30 @@ TEST_F(DfiTool, WarpReportsSkeletonsMatchesAnchorsAndFolds) {
   EXPECT_LT(j["frames"][1]["t"].get<double>(), 1.0);
 }
 
+// --matching and --interpolation: the report says which ran; nearest-first casts no votes; the
+// ARAP warp reports its centres; unknown words are usage errors.
+TEST_F(DfiTool, MatchingAndInterpolationChoices) {
+  const std::string a = write("ma.obj", qs::shapes::ellipsoid(1.6, 0.6, 0.5, 3));
+  const std::string b = write("mb.obj", qs::shapes::ellipsoid(1.2, 0.7, 0.6, 3));
+  const std::string common = " --frames 3 --grid 20 --emd-voxels 200 --timing uniform --endpoint-refine 1 -q -o ";
+  const RunResult n = run_tool("qs-dfi", a + " " + b + " --matching nearest" + common + (dir_ / "mn").string());
+  ASSERT_EQ(n.exit, 0) << n.out;
+  const auto jn = nlohmann::json::parse(std::ifstream(dir_ / "mn" / "dfi.json"));
+  EXPECT_EQ(jn["matches"]["method"], "nearest");
+  ASSERT_GE(jn["matches"]["nodes"].size(), 1u);
+  for (const auto& node : jn["matches"]["nodes"]) EXPECT_EQ(node["votes"].get<double>(), 0.0);
+  const RunResult v = run_tool("qs-dfi", a + " " + b + " --interpolation arap" + common + (dir_ / "ma").string());
+  ASSERT_EQ(v.exit, 0) << v.out;
+  const auto jv = nlohmann::json::parse(std::ifstream(dir_ / "ma" / "dfi.json"));
+  EXPECT_EQ(jv["matches"]["method"], "voting");
+  EXPECT_EQ(jv["correspondence"]["warp"], "arap");
+  EXPECT_GT(jv["correspondence"]["arap_centres"].get<int>(), 8);
+  for (const auto& f : jv["frames"]) EXPECT_EQ(f["components"], 1);
+  EXPECT_EQ(run_tool("qs-dfi", a + " " + b + " --matching random -o " + (dir_ / "x").string()).exit, 1);
+  EXPECT_EQ(run_tool("qs-dfi", a + " " + b + " --interpolation spline -o " + (dir_ / "x").string()).exit, 1);
+  EXPECT_FALSE(fs::exists(dir_ / "x"));
+}
+
 TEST_F(DfiTool, UniformTimingAndEndpointRefinement) {
   const std::string a = write("ua.obj", qs::shapes::icosphere(3));
   const std::string b = write("ub.obj", qs::shapes::torus(48, 16));

@@ -16,7 +16,8 @@
 // skeletons of both shapes, branch matching, anchors along matched branches, harmonic fields on
 // the interior voxels of a coarse grid, the transport per matched part (or globally, the
 // ablation), and from it a displacement field per shape, checked for folds; where branches are
-// matched, the rotation-aware part warp of bones.h replaces that displacement. Frame t then
+// matched, the rotation-aware part warp of bones.h replaces that displacement (with
+// Interpolation::Arap, the as-rigid-as-possible centres and thin-plate warps of arap.h). Frame t then
 // blends the two fields warped toward each other. Without it, the plain blend (1 - t) d_0 + t d_1.
 
 #include <array>
@@ -25,6 +26,7 @@
 
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
+#include "qs/dfi/arap.h"
 #include "qs/dfi/bones.h"
 #include "qs/dfi/centre.h"
 #include "qs/dfi/grid.h"
@@ -55,6 +57,13 @@ enum class FrameVolume {
           ///< fields with the same estimator (volume_below); the ends are never shifted
 };
 
+/// How the in-between positions of the correspondence are interpolated (with the warp).
+enum class Interpolation {
+  Arap,  ///< the paper's: as-rigid-as-possible positions of corresponding centres and thin-plate
+         ///< RBF backward warps with a global affine part (arap.h)
+  Parts  ///< the rotation-aware part warp along matched branches (bones.h), else the linear warp
+};
+
 struct MorphOptions {
   int grid = 150;          ///< cells along the longest side of the common bounding box
   int pad = 3;             ///< empty cells around it
@@ -69,6 +78,8 @@ struct MorphOptions {
   /// displacement (warp.h), which is also what runs when no branch is matched or the part warp
   /// folds (a Jacobian determinant <= 0 at s = 0.5 or 1, after its smoothing).
   int bone_segments = 8;
+  Interpolation interpolation = Interpolation::Parts;
+  int arap_centres = 200;        ///< centre pairs of the ARAP interpolation (Interpolation::Arap)
   /// Skeleton nodes moved to the centre of their cross-section in the distance fields before the
   /// matching (centre.h); false: where mean curvature flow left them.
   bool centre_skeletons = true;
@@ -85,6 +96,8 @@ struct MorphOptions {
   int emd_voxels = 1500;         ///< at most this many interior voxels per shape on the coarse grid
   double position_weight = 0.1;  ///< weight of the voxel distance (per bounding-box diagonal) added to
                                  ///< the harmonic-vector distance in the transport cost (breaks ties)
+  /// Feature nodes matched by the electors' votes (matching.h); false: nearest-first alone.
+  bool voting = true;
   /// Named landmarks forcing skeleton matches: the skeleton nodes nearest to these points (source
   /// coordinates, target coordinates) are matched first.
   struct Landmark {
@@ -139,6 +152,10 @@ struct PreparedMorph {
   double bone_min_det = 1;             ///< smallest Jacobian determinant of the part warps (both ways,
                                        ///< s = 0.5 and 1); <= 0: they fold, bones is left empty and the
                                        ///< linear warp runs
+  // The ARAP interpolation (Interpolation::Arap): used instead of both warps above when not empty.
+  ArapInterpolation arap;
+  double arap_lambda = 0;              ///< the thin-plate smoothing that keeps every frame's warps unfolded
+  double arap_min_det = 1;             ///< smallest Jacobian determinant of the backward warps checked
   /// The grid spacing in the source's units.
   double spacing() const { return source_sdf.spacing / source_to_morph.scale; }
 };
