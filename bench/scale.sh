@@ -8,11 +8,11 @@
 #   usage: bench/scale.sh [--quick] [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-scale)
 #   env:   QS_TOOLS (default build/tools)
 #
-# --quick: spot to 375k faces, the four cones, families of 2-8, one 40k pair (about 2 minutes on
-# 2 idle cores). Without it: spot to 6M faces, families to 32, pairs to 150k (about 15 minutes,
-# 4 GB of memory).
+# --quick: spot to 375k faces, the four cones, families of 1-8, one 40k pair (about 45 s of CPU,
+# 2-3 minutes on 2 busy cores, 300 MB). Without it: spot to 6M faces, families to 32, pairs to
+# 150k (the 6M-face mesh alone takes minutes of CPU and about 5 GB of memory).
 #
-# Per run: wall time, CPU time (user + sys: what the run costs, whatever the machine's load),
+# Per run: wall time, CPU time (user + sys: what the run costs, less dependent on the machine's load),
 # peak resident memory (/usr/bin/time), patches. "exponent": log(cpu ratio) / log(size ratio)
 # against the row above (1 = linear); each table ends with the least-squares exponent of CPU
 # time and of memory over its rows. Families: CPU time per mesh, and per mesh per patch (the
