@@ -10,7 +10,7 @@
 #               benchmark (much longer: about an hour on 2 cores).
 #   --no-build  use the programs already in ./build (default: build the targets it needs first).
 #   --only L    run only the benchmarks named in the comma-separated list L (names: io, dissect,
-#               dissect-set, family-sets, remesh, bake, morph, merge, defaults, correspondence,
+#               dissect-set, family-sets, remesh, bake, morph, merge, scale, defaults, correspondence,
 #               real-self-pairs, dfi); the others keep the outputs of their last run.
 #   --page-only write the page from the outputs of the last run (out/bench-page/) without running.
 #
@@ -47,7 +47,7 @@ bench=build/bench
 mkdir -p "$out"
 
 quick_targets=(qs-bench-io qs-bench-dissect qs-bench-dissect-set qs-bench-family-sets qs-bench-remesh
-               qs-bench-bake qs-bench-morph qs-bench-merge qs-dissect)
+               qs-bench-bake qs-bench-morph qs-bench-merge qs-dissect qs-family)
 full_targets=(qs-bench-defaults qs-bench-dfi qs-family qs-metro qs-remesh)
 targets=("${quick_targets[@]}")
 [ "$quick" = 1 ] || targets+=("${full_targets[@]}")
@@ -71,6 +71,12 @@ runs=(
   "morph|Morph output|100 frames of a 49,688-vertex morph written as OBJ and as binary PLY; a GLB with 8 morph targets; a 4096² frame normal map.|$bench/qs-bench-morph"
   "merge|Exact merge|The four pairs dissected at the defaults, then merged (qs-merge): sizes, crossings, slivers, time on 1 and 2 threads, exactness checks.|bash bench/merge_pairs.sh $meshes out/bench-page/merge"
 )
+# The scale benchmark: its quick set here, its full set (to 6M faces, families to 32) below.
+if [ "$quick" = 1 ]; then
+  runs+=("scale|Scale|qs-dissect as meshes grow (one mesh subdivided, fan caps, families dissected together, a mesh and its re-tessellation): wall and CPU time, peak memory, growth exponents; the quick set.|bash bench/scale.sh --quick $meshes out/bench-page/scale")
+else
+  runs+=("scale|Scale|qs-dissect as meshes grow (one mesh subdivided to 6M faces, fan caps, families of 1-32 dissected together, a mesh and its re-tessellation to 150k faces): wall and CPU time, peak memory, growth exponents.|bash bench/scale.sh $meshes out/bench-page/scale")
+fi
 if [ "$quick" = 0 ]; then
   runs+=(
     "defaults|Defaults on every shared mesh|The default dissection, then the default remesh at levels 4 and 5 and area-sized tiles: patches, level-5 error, small angles, vertex and texel spreads.|$bench/qs-bench-defaults $meshes default"

@@ -737,3 +737,59 @@ TEST(IntrinsicCotan, AHemisphereMapsBijectivelyWithAndWithoutStretchMinimization
 }
 
 }  // namespace qs::param
+
+namespace qs::param {
+namespace {
+
+/// Two stacked "double chains" over [0,1] x [0,2] at z = 0: rows y = 0, 1, 2 of n + 1 vertices
+/// each, every strip between two rows triangulated as two fans (from the lower row's first
+/// vertex to the upper row, and from the upper row's last vertex to the lower row), as a cut
+/// across a fan of slivers leaves it. Lawson's flips to the Delaunay triangulation are quadratic
+/// in n here. Interior vertices: the middle row but its ends.
+PatchMesh double_chain_patch(int n) {
+  std::vector<Vec3> pos;
+  for (int row = 0; row < 3; ++row)
+    for (int i = 0; i <= n; ++i) pos.emplace_back(static_cast<double>(i) / n, row, 0.0);
+  auto at = [n](int row, int i) { return row * (n + 1) + i; };
+  std::vector<Tri> faces;
+  for (int row = 0; row < 2; ++row)
+    for (int i = 0; i < n; ++i) {
+      faces.push_back({at(row, 0), at(row + 1, i + 1), at(row + 1, i)});
+      faces.push_back({at(row + 1, n), at(row, i), at(row, i + 1)});
+    }
+  return make_patch(pos, faces, {at(0, 0), at(0, n), at(2, n), at(2, 0)});
+}
+
+}  // namespace
+
+// The intrinsic Delaunay flips are bounded by a budget linear in the faces: past it the patch is
+// solved with mean-value weights (still a bijection: positive weights, convex border), so that
+// the cost stays linear where Lawson's flips would be quadratic. Small patches keep cotangent
+// weights.
+TEST(IntrinsicCotan, QuadraticFlipsFallBackToMeanValueWithinALinearBudget) {
+  SquareParamOptions o;
+  o.weights = InteriorWeights::IntrinsicCotan;
+  const PatchMesh small = double_chain_patch(12);
+  const SquareParam a = parameterize_square(small, o);
+  EXPECT_EQ(a.weights, InteriorWeights::IntrinsicCotan);
+  EXPECT_GT(a.intrinsic_flips, 0);
+  EXPECT_TRUE(a.bijective());
+
+  const PatchMesh big = double_chain_patch(300);
+  const int nf = static_cast<int>(big.faces.size());
+  o.stretch_iterations = 3;
+  const SquareParam b = parameterize_square(big, o);
+  EXPECT_EQ(b.weights, InteriorWeights::MeanValue);
+  EXPECT_LE(b.intrinsic_flips, 4 * nf + 1000);
+  EXPECT_GT(b.intrinsic_flips, 4 * nf);
+  EXPECT_TRUE(b.bijective()) << b.flipped_faces << " flipped, " << b.zero_area_faces << " zero-area";
+  EXPECT_NEAR(b.uv_area_sum, 1.0, 1e-9);
+  // The same map as asking for mean-value weights.
+  SquareParamOptions mv;
+  mv.stretch_iterations = 3;
+  const SquareParam c = parameterize_square(big, mv);
+  ASSERT_EQ(c.uv.size(), b.uv.size());
+  for (size_t v = 0; v < c.uv.size(); ++v) EXPECT_EQ(c.uv[v], b.uv[v]) << "vertex " << v;
+}
+
+}  // namespace qs::param

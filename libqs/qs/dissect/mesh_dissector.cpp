@@ -238,6 +238,7 @@ Param MeshDissector::parameterize(const Node& node) {
   param::SquareParamOptions base;
   base.weights = p.weights;
   p.sp = param::parameterize_square(p.ex.pm, base, ctx_.without_progress());
+  p.weights = p.sp.weights;  // mean-value where the Delaunay flips ran past their budget
   if (p.weights != param::InteriorWeights::MeanValue && !p.sp.bijective()) {
     // Cotangent weights guarantee a bijection of the intrinsic Delaunay triangulation only: where
     // the patch's own triangles fold (slivers of the cuts), this patch keeps mean-value weights.

@@ -326,7 +326,14 @@ struct IntrinsicMesh {
   std::vector<double> len;
   std::vector<int> twin;
   int flips = 0;
+  bool complete = true;  ///< every interior edge is Delaunay
 };
+
+/// Flip budget of the intrinsic Delaunay triangulation, per face (plus kMinFlipBudget). Lawson's
+/// flips are quadratic in the worst case (a thin band between two chains of vertices, as a cut
+/// leaves across a fan of slivers); patches of ordinary meshes need under one flip per face.
+constexpr long kMaxFlipsPerFace = 4;
+constexpr long kMinFlipBudget = 1000;
 
 /// cot of the angle opposite side a in the triangle with sides a, b, c; +-kMaxCot when the
 /// triangle has no area (the sign of the cosine decides).
@@ -351,7 +358,8 @@ double cot_at(const IntrinsicMesh& m, int h) {
 }
 
 /// Flips the patch to its intrinsic Delaunay triangulation (border edges stay). Every interior
-/// edge ends with cot a + cot b >= -1e-12 (up to a bound of 50 flips per edge).
+/// edge ends with cot a + cot b >= -1e-12, unless the flips reach kMaxFlipsPerFace per face (then
+/// `complete` is false and the triangulation is left part-flipped).
 IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, double min_len) {
   IntrinsicMesh m;
   m.faces = patch.faces;
@@ -370,7 +378,7 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
       stack.push_back(h);
       queued[h] = 1;
     }
-  const long max_flips = 50L * nh + 1000;
+  const long max_flips = kMaxFlipsPerFace * static_cast<long>(m.faces.size()) + kMinFlipBudget;
   auto push = [&](int h) {
     if (h < 0 || m.twin[h] < 0) return;
     const int e = std::min(h, m.twin[h]);
@@ -424,6 +432,7 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
     ++m.flips;
     for (int x : {nf_ki, nf_il, ng_lj, ng_jk}) push(x);
   }
+  m.complete = stack.empty();
   return m;
 }
 
@@ -516,6 +525,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     if (!on_border[v]) interior_index[v] = ni++;
   context.report("parameterize: weights", 0.0);
 
+  result.weights = options.weights;
   if (ni > 0) {
     // The Laplacian's triangulation: the patch itself (mean-value weights) or its intrinsic
     // Delaunay triangulation (cotangent weights).
@@ -525,10 +535,13 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     IntrinsicMesh idt;
     HalfEdges idt_he;
     if (options.weights == InteriorWeights::IntrinsicCotan) {
-      // Cotangent weight of edge ij: (cot a + cot b) / 2 over the two corners opposite it in the
-      // intrinsic Delaunay triangulation, where both sum to at most pi: non-negative.
       idt = intrinsic_delaunay(patch, he, options.min_edge_length);
       result.intrinsic_flips = idt.flips;
+      if (!idt.complete) result.weights = InteriorWeights::MeanValue;
+    }
+    if (result.weights == InteriorWeights::IntrinsicCotan) {
+      // Cotangent weight of edge ij: (cot a + cot b) / 2 over the two corners opposite it in the
+      // intrinsic Delaunay triangulation, where both sum to at most pi: non-negative.
       idt_he = build_half_edges(nv, idt.faces);
       lap_faces = &idt.faces;
       lap_he = &idt_he;

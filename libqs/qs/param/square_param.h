@@ -41,7 +41,8 @@ enum class InteriorWeights {
   /// Bobenko-Springborn 2007): non-negative, so Tutte's guarantee holds for that triangulation,
   /// and a discretization of the harmonic map of the surface that converges under refinement.
   /// The original triangles' images are counted all the same (they may fold where the intrinsic
-  /// triangulation differs).
+  /// triangulation differs). A patch whose Delaunay flips pass 4 per face (plus 1000) gets
+  /// mean-value weights instead (SquareParam::weights says which), so that the cost stays linear.
   IntrinsicCotan,
 };
 
@@ -74,6 +75,7 @@ struct SquareParam {
   int zero_area_faces = 0;  ///< UV faces with |signed area| <= kZeroUvArea
   double uv_area_sum = 0;   ///< sum of signed UV areas; 1 for a valid map
   int intrinsic_flips = 0;  ///< edge flips to the intrinsic Delaunay triangulation (IntrinsicCotan)
+  InteriorWeights weights = InteriorWeights::MeanValue;  ///< the weights the map was solved with
   bool bijective() const { return flipped_faces == 0 && zero_area_faces == 0; }
 };
 
