@@ -1,0 +1,166 @@
+// OpenEXR through the OpenEXR library, to and from memory. The library's exceptions are caught
+// here and turned into qs's messages; their text is never shown.
+#include <Iex.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
+#include <ImfStringAttribute.h>
+#include <ImfTestFile.h>
+#include <ImfVersion.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+
+#include "qs/core/error.h"
+#include "qs/image/image_file.h"
+#include "qs/image/image_file_detail.h"
+
+namespace qs::image {
+namespace {
+
+class MemoryOStream : public Imf::OStream {
+ public:
+  MemoryOStream() : Imf::OStream("memory") {}
+  void write(const char c[], int n) override {
+    const size_t end = pos_ + static_cast<size_t>(n);
+    if (end > bytes.size()) bytes.resize(end);
+    std::memcpy(bytes.data() + pos_, c, static_cast<size_t>(n));
+    pos_ = end;
+  }
+  uint64_t tellp() override { return pos_; }
+  void seekp(uint64_t pos) override { pos_ = static_cast<size_t>(pos); }
+  std::vector<unsigned char> bytes;
+
+ private:
+  size_t pos_ = 0;
+};
+
+class MemoryIStream : public Imf::IStream {
+ public:
+  explicit MemoryIStream(std::span<const unsigned char> bytes) : Imf::IStream("memory"), bytes_(bytes) {}
+  bool read(char c[], int n) override {
+    if (n < 0 || pos_ > bytes_.size() || bytes_.size() - pos_ < static_cast<size_t>(n)) {
+      truncated = true;
+      throw Iex::InputExc("end of data");
+    }
+    std::memcpy(c, bytes_.data() + pos_, static_cast<size_t>(n));
+    pos_ += static_cast<size_t>(n);
+    return pos_ < bytes_.size();
+  }
+  uint64_t tellg() override { return pos_; }
+  void seekg(uint64_t pos) override { pos_ = static_cast<size_t>(std::min<uint64_t>(pos, bytes_.size() + 1)); }
+  bool truncated = false;
+
+ private:
+  std::span<const unsigned char> bytes_;
+  size_t pos_ = 0;
+};
+
+}  // namespace
+
+std::vector<unsigned char> encode_exr(int width, int height, std::span<const float> rgb) {
+  if (width < 1 || height < 1 || rgb.size() != static_cast<size_t>(width) * height * 3)
+    throw InvalidInput("OpenEXR encoding: " + std::to_string(rgb.size()) + " values for " + std::to_string(width) +
+                       " x " + std::to_string(height) + " RGB pixels (expected width * height * 3)");
+  try {
+    Imf::Header header(width, height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const char* name : {"R", "G", "B"}) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    header.insert("capDate", Imf::StringAttribute(""));
+    MemoryOStream stream;
+    {
+      Imf::OutputFile file(stream, header, 0);
+      Imf::FrameBuffer fb;
+      const size_t xs = 3 * sizeof(float), ys = xs * static_cast<size_t>(width);
+      auto* base = const_cast<char*>(reinterpret_cast<const char*>(rgb.data()));
+      fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+      fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+      fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+      file.setFrameBuffer(fb);
+      file.writePixels(height);
+    }
+    return std::move(stream.bytes);
+  } catch (const std::bad_alloc&) {
+    throw IoError("cannot encode the " + std::to_string(width) + " x " + std::to_string(height) +
+                  " OpenEXR image (out of memory)");
+  } catch (const std::exception&) {
+    throw IoError("cannot encode the " + std::to_string(width) + " x " + std::to_string(height) +
+                  " OpenEXR image (the OpenEXR encoder failed)");
+  }
+}
+
+RgbPixels decode_exr(std::span<const unsigned char> bytes, const std::string& where, const Expected& expected,
+                     const Limits& limits) {
+  const auto fail = [&](const std::string& what, const std::string& why) -> RgbPixels {
+    throw InvalidInput(detail::message(where, what, why, expected));
+  };
+  if (bytes.empty()) return fail("empty file", "0 bytes");
+  if (bytes.size() < 4 || !Imf::isImfMagic(reinterpret_cast<const char*>(bytes.data())))
+    return fail("not an OpenEXR file", "its first bytes are not OpenEXR's signature");
+  const int max_side = static_cast<int>(std::clamp<std::int64_t>(limits.max_side, 1, std::numeric_limits<int>::max()));
+  // The header's sanity check refuses larger windows and tiles before anything is allocated.
+  Imf::Header::setMaxImageSize(max_side, max_side);
+  Imf::Header::setMaxTileSize(max_side, max_side);
+  MemoryIStream stream(bytes);
+  RgbPixels out;
+  std::string size_words = "its header";
+  bool header_read = false;
+  try {
+    Imf::InputFile file(stream, 0);
+    header_read = true;
+    const Imf::Header& header = file.header();
+    const Imath::Box2i dw = header.dataWindow();
+    const std::int64_t w = std::int64_t{dw.max.x} - dw.min.x + 1, h = std::int64_t{dw.max.y} - dw.min.y + 1;
+    size_words = std::to_string(w) + " x " + std::to_string(h);
+    if (w < 1 || h < 1 || w > max_side || h > max_side)
+      return fail("image too large or empty", "a data window of " + size_words + " pixels");
+    if (w * h > limits.max_pixels)
+      return fail("image too large",
+                  size_words + " pixels, over the " + std::to_string(limits.max_pixels) + " pixels qs reads");
+    std::string names;
+    int count = 0;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it, ++count)
+      names += std::string(count ? ", " : "") + it.name();
+    const Imf::ChannelList& ch = header.channels();
+    if (count != 3 || !ch.findChannel("R") || !ch.findChannel("G") || !ch.findChannel("B"))
+      return fail("not an RGB image", std::to_string(count) + " channels (" + names + ")");
+    for (const char* c : {"R", "G", "B"})
+      if (ch.findChannel(c)->xSampling != 1 || ch.findChannel(c)->ySampling != 1)
+        return fail("not an RGB image", "subsampled channels");
+    // Compression expands at most a few thousand times: a file far shorter than its pixels is cut
+    // short, and is refused before the pixels are allocated.
+    if (static_cast<std::uint64_t>(w * h) * 12 > 4096 * static_cast<std::uint64_t>(bytes.size()) + (64u << 20))
+      return fail("the OpenEXR file ends early",
+                  "truncated file: " + std::to_string(bytes.size()) + " bytes cannot hold " + size_words + " pixels");
+    out.width = static_cast<int>(w);
+    out.height = static_cast<int>(h);
+    out.bits = 32;
+    out.f32.assign(static_cast<size_t>(w * h) * 3, 0.0f);
+    Imf::FrameBuffer fb;
+    const size_t xs = 3 * sizeof(float), ys = xs * static_cast<size_t>(w);
+    char* base = reinterpret_cast<char*>(out.f32.data());
+    fb.insert("R", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
+    fb.insert("G", Imf::Slice::Make(Imf::FLOAT, base + sizeof(float), dw, xs, ys));
+    fb.insert("B", Imf::Slice::Make(Imf::FLOAT, base + 2 * sizeof(float), dw, xs, ys));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+  } catch (const qs::Error&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw IoError(where + ": out of memory while reading the OpenEXR file");
+  } catch (const std::exception&) {
+    if (stream.truncated)
+      return fail("the OpenEXR file ends early", header_read ? "truncated file; its header says " + size_words + " RGB"
+                                                               : "truncated file: its header is incomplete");
+    if (!header_read) return fail("damaged OpenEXR file", "its header cannot be decoded");
+    return fail("damaged OpenEXR file", "its pixel data does not decode to " + size_words + " pixels");
+  }
+  return out;
+}
+
+}  // namespace qs::image
