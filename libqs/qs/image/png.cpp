@@ -190,6 +190,18 @@ RgbPixels decode_png(std::span<const unsigned char> bytes, const std::string& wh
       return fail("not a PNG file", "its signature is damaged (a text-mode transfer changes line ends)");
     return fail("not a PNG file", "its first bytes are not PNG's signature");
   }
+  const png_uint_32 max_side =
+      static_cast<png_uint_32>(std::clamp<std::int64_t>(limits.max_side, 1, PNG_USER_WIDTH_MAX));
+  if (bytes.size() >= 24 && std::memcmp(bytes.data() + 12, "IHDR", 4) == 0) {  // libpng says only "invalid"
+    const auto be32 = [&](size_t at) {
+      return (png_uint_32{bytes[at]} << 24) | (png_uint_32{bytes[at + 1]} << 16) | (png_uint_32{bytes[at + 2]} << 8) |
+             bytes[at + 3];
+    };
+    const png_uint_32 w = be32(16), h = be32(20);
+    if ((w > max_side || h > max_side) && w <= PNG_UINT_31_MAX && h <= PNG_UINT_31_MAX)
+      return fail("image too large", std::to_string(w) + " x " + std::to_string(h) + " pixels, a side over the " +
+                                         std::to_string(max_side) + " pixels qs reads");
+  }
   ReadCtx ctx;
   ctx.data = bytes.data();
   ctx.size = bytes.size();
@@ -206,18 +218,16 @@ RgbPixels decode_png(std::span<const unsigned char> bytes, const std::string& wh
     ~Destroy() { png_destroy_read_struct(png, info, nullptr); }
   } destroy{&png, &info};
 
-  const png_uint_32 max_side =
-      static_cast<png_uint_32>(std::clamp<std::int64_t>(limits.max_side, 1, PNG_USER_WIDTH_MAX));
   Header h;
   const bool header_read = read_header(&ctx, png, info, &h, max_side);
   const std::string size_words = std::to_string(h.width) + " x " + std::to_string(h.height);
   if (!header_read) {
     switch (classify(ctx)) {
-      case Failure::Truncated: return fail("the PNG ends early", "truncated file: no pixel data after its header");
+      case Failure::Truncated: return fail("the PNG ends early", "truncated file: it ends before its pixel data");
       case Failure::Crc: return fail("damaged PNG", "a chunk's checksum does not match its bytes");
       case Failure::TooLarge:
         return fail("image too large", "a side over " + std::to_string(max_side) + " pixels, the most qs reads");
-      case Failure::Header: return fail("damaged PNG", "its header (IHDR chunk) is invalid");
+      case Failure::Header: return fail("damaged PNG", "its header chunk (IHDR) is malformed");
       case Failure::OutOfMemory: throw IoError(where + ": out of memory while reading the PNG's header");
       default: return fail("damaged PNG", "its chunks cannot be decoded");
     }
