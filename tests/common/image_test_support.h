@@ -92,7 +92,8 @@ inline size_t find_chunk(const std::string& png, const std::string& type) {
 inline const std::vector<std::string>& library_phrases() {
   static const std::vector<std::string> p = {
       "libpng", "CRC error", "Read Error", "Read error", "hit end of file", "IDAT:", "IHDR:", "Not enough image data",
-      "Too much image data", "incorrect header check", "invalid", "Invalid", "Not a PNG", "PNG read", "Cannot read",
+      "Too much image data", "incorrect header check", "invalid distance", "invalid block", "invalid code",
+      "invalid stored", "invalid literal", "Invalid IHDR", "Not a PNG", "PNG read", "Cannot read",
       "Unexpected end", "Error reading", "end of data", "Iex", "magic number", "Imf", "OpenImageIO", "geterror",
       "unknown compression", "Cannot open"};
   return p;

@@ -231,6 +231,12 @@ TEST(ImageFile, DamagedExrsAreRefusedInQsWords) {
     if (m == "no exception") continue;  // a change the format cannot see (a float's bits): not an error
     expect_our_words(m, "dir/n.exr", "");
   }
+  // Tiled, multi-part, deep: refused from the version flags, before OpenEXR reads the header.
+  for (char flag : {char(0x02), char(0x10), char(0x08)}) {
+    std::string other = good;
+    other[5] = static_cast<char>(other[5] | flag);
+    refuse(other, "not a scanline OpenEXR image");
+  }
   // A damaged header: the channel list's name overwritten.
   std::string bad_header = good;
   bad_header.replace(bad_header.find("channels"), 8, "chXnnels");

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <mutex>
 
 #include "qs/core/error.h"
 #include "qs/image/image_file.h"
@@ -22,6 +23,8 @@
 
 namespace qs::image {
 namespace {
+
+constexpr int kMaxSide = 1 << 17;  // OpenEXR's header check: no window side over this
 
 class MemoryOStream : public Imf::OStream {
  public:
@@ -102,10 +105,21 @@ RgbPixels decode_exr(std::span<const unsigned char> bytes, const std::string& wh
   if (bytes.empty()) return fail("empty file", "0 bytes");
   if (bytes.size() < 4 || !Imf::isImfMagic(reinterpret_cast<const char*>(bytes.data())))
     return fail("not an OpenEXR file", "its first bytes are not OpenEXR's signature");
-  const int max_side = static_cast<int>(std::clamp<std::int64_t>(limits.max_side, 1, std::numeric_limits<int>::max()));
-  // The header's sanity check refuses larger windows and tiles before anything is allocated.
-  Imf::Header::setMaxImageSize(max_side, max_side);
-  Imf::Header::setMaxTileSize(max_side, max_side);
+  // Tiled, multi-part and deep files (version flags 0x200, 0x1000, 0x800): qs writes none, and
+  // their offset tables and tile buffers are sized by the header alone.
+  if (bytes.size() < 8) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
+  if (bytes[5] & 0x1A)
+    return fail("not a scanline OpenEXR image",
+                std::string((bytes[5] & 0x10) ? "a multi-part" : (bytes[5] & 0x08) ? "a deep" : "a tiled") +
+                    " file, qs reads single-part scanline files");
+  // OpenEXR's own check of a header's window, before it allocates anything (once, for every
+  // thread: the bound is global in OpenEXR).
+  static std::once_flag bound;
+  std::call_once(bound, [] {
+    Imf::Header::setMaxImageSize(kMaxSide, kMaxSide);
+    Imf::Header::setMaxTileSize(1, 1);
+  });
+  const std::int64_t max_side = std::clamp<std::int64_t>(limits.max_side, 1, kMaxSide);
   MemoryIStream stream(bytes);
   RgbPixels out;
   std::string size_words = "its header";

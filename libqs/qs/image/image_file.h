@@ -23,7 +23,7 @@ std::vector<unsigned char> encode_png16(int width, int height, std::span<const s
 
 /// OpenEXR bytes of width x height RGB pixels as 32-bit float channels R, G, B, scanline, ZIP
 /// compression (16 lines a block), an empty capDate and no type attribute: the bytes depend on the
-/// pixels alone.
+/// pixels alone. Sides up to 2^17.
 /// \throws InvalidInput for a size that does not match, IoError when encoding fails.
 std::vector<unsigned char> encode_exr(int width, int height, std::span<const float> rgb);
 
@@ -58,8 +58,9 @@ struct Expected {
 /// expected.
 RgbPixels decode_png(std::span<const unsigned char> bytes, const std::string& where, const Expected& expected = {},
                      const Limits& limits = {});
-/// Decodes OpenEXR bytes (scanline or tiled, first part): channels exactly R, G, B of any pixel
-/// type, read as 32-bit float. \throws InvalidInput as decode_png.
+/// Decodes OpenEXR bytes: single-part scanline files (any compression) with channels exactly R, G,
+/// B of any pixel type, read as 32-bit float; sides up to 2^17 whatever `limits` says. Tiled,
+/// multi-part and deep files are refused. \throws InvalidInput as decode_png.
 RgbPixels decode_exr(std::span<const unsigned char> bytes, const std::string& where, const Expected& expected = {},
                      const Limits& limits = {});
 /// decode_png or decode_exr by the file's signature; anything else is refused.
