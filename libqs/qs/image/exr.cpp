@@ -112,6 +112,27 @@ RgbPixels decode_exr(std::span<const unsigned char> bytes, const std::string& wh
     return fail("not a scanline OpenEXR image",
                 std::string((bytes[5] & 0x10) ? "a multi-part" : (bytes[5] & 0x08) ? "a deep" : "a tiled") +
                     " file, qs reads single-part scanline files");
+  // The header's attributes, walked before OpenEXR reads them: it allocates each attribute's
+  // declared size before it reads the bytes.
+  for (size_t p = 8;;) {
+    if (p >= bytes.size()) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
+    if (bytes[p] == 0) break;
+    for (int field = 0; field < 2; ++field) {  // the attribute's name, its type's name
+      const size_t end = std::min(bytes.size(), p + 256);
+      const auto* nul = std::find(bytes.data() + p, bytes.data() + end, 0);
+      if (nul == bytes.data() + end)
+        return end == bytes.size() ? fail("the OpenEXR file ends early", "truncated file: its header is incomplete")
+                                   : fail("damaged OpenEXR file", "its header cannot be decoded");
+      p = static_cast<size_t>(nul - bytes.data()) + 1;
+    }
+    if (bytes.size() - p < 4) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
+    const std::uint32_t size = std::uint32_t{bytes[p]} | (std::uint32_t{bytes[p + 1]} << 8) |
+                               (std::uint32_t{bytes[p + 2]} << 16) | (std::uint32_t{bytes[p + 3]} << 24);
+    p += 4;
+    if (size > 0x7fffffffu) return fail("damaged OpenEXR file", "its header cannot be decoded");
+    if (size > bytes.size() - p) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
+    p += size;
+  }
   // OpenEXR's own check of a header's window, before it allocates anything (once, for every
   // thread: the bound is global in OpenEXR).
   static std::once_flag bound;
@@ -148,7 +169,7 @@ RgbPixels decode_exr(std::span<const unsigned char> bytes, const std::string& wh
         return fail("not an RGB image", "subsampled channels");
     // Compression expands at most a few thousand times: a file far shorter than its pixels is cut
     // short, and is refused before the pixels are allocated.
-    if (static_cast<std::uint64_t>(w * h) * 12 > 4096 * static_cast<std::uint64_t>(bytes.size()) + (64u << 20))
+    if (static_cast<std::uint64_t>(w * h) * 12 > 4096 * static_cast<std::uint64_t>(bytes.size()) + (1u << 20))
       return fail("the OpenEXR file ends early",
                   "truncated file: " + std::to_string(bytes.size()) + " bytes cannot hold " + size_words + " pixels");
     out.width = static_cast<int>(w);
