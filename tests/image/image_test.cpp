@@ -237,6 +237,14 @@ TEST(ImageFile, DamagedExrsAreRefusedInQsWords) {
     other[5] = static_cast<char>(other[5] | flag);
     refuse(other, "not a scanline OpenEXR image");
   }
+  // An attribute whose declared size disagrees with its type's value (OpenEXR reads the value by
+  // its type and would go on from another place; an unknown type's size would be allocated).
+  std::string bad_size = good;
+  const size_t chlist = bad_size.find(std::string("chlist\0", 7)) + 7;
+  bad_size[chlist] = static_cast<char>(bad_size[chlist] + 1);
+  refuse(bad_size, "damaged OpenEXR file");
+  std::string huge_opaque = good.substr(0, 8) + std::string("x\0y\0\xff\xff\xff\x7f", 8) + good.substr(8);
+  refuse(huge_opaque, "the OpenEXR file ends early");
   // A damaged header: the channel list's name overwritten.
   std::string bad_header = good;
   bad_header.replace(bad_header.find("channels"), 8, "chXnnels");

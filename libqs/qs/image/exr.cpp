@@ -112,26 +112,63 @@ RgbPixels decode_exr(std::span<const unsigned char> bytes, const std::string& wh
     return fail("not a scanline OpenEXR image",
                 std::string((bytes[5] & 0x10) ? "a multi-part" : (bytes[5] & 0x08) ? "a deep" : "a tiled") +
                     " file, qs reads single-part scanline files");
-  // The header's attributes, walked before OpenEXR reads them: it allocates each attribute's
-  // declared size before it reads the bytes.
-  for (size_t p = 8;;) {
-    if (p >= bytes.size()) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
-    if (bytes[p] == 0) break;
-    for (int field = 0; field < 2; ++field) {  // the attribute's name, its type's name
+  // The header's attributes, walked before OpenEXR reads them: it allocates an unknown
+  // attribute's declared size (and a preview's pixels) before it reads the bytes, and reads a
+  // known type's value by the type, not by the declared size; every size must therefore fit in
+  // the file and agree with its type.
+  {
+    const auto incomplete = [&] { return fail("the OpenEXR file ends early", "truncated file: its header is incomplete"); };
+    const auto damaged = [&] { return fail("damaged OpenEXR file", "its header cannot be decoded"); };
+    const auto le32 = [&](size_t at) {
+      return std::uint32_t{bytes[at]} | (std::uint32_t{bytes[at + 1]} << 8) | (std::uint32_t{bytes[at + 2]} << 16) |
+             (std::uint32_t{bytes[at + 3]} << 24);
+    };
+    // A NUL-terminated name of at most 255 bytes at p: its length, or -1 (past the end), -2 (too long).
+    const auto name_at = [&](size_t p) -> long {
       const size_t end = std::min(bytes.size(), p + 256);
       const auto* nul = std::find(bytes.data() + p, bytes.data() + end, 0);
-      if (nul == bytes.data() + end)
-        return end == bytes.size() ? fail("the OpenEXR file ends early", "truncated file: its header is incomplete")
-                                   : fail("damaged OpenEXR file", "its header cannot be decoded");
-      p = static_cast<size_t>(nul - bytes.data()) + 1;
+      if (nul != bytes.data() + end) return nul - (bytes.data() + p);
+      return end == bytes.size() ? -1 : -2;
+    };
+    static const std::pair<const char*, std::uint32_t> fixed[] = {
+        {"box2i", 16}, {"box2f", 16}, {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
+        {"float", 4}, {"int", 4}, {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64},
+        {"m44d", 128}, {"rational", 8}, {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16},
+        {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"deepImageState", 1}};
+    for (size_t p = 8;;) {
+      if (p >= bytes.size()) return incomplete();
+      if (bytes[p] == 0) break;
+      const long name_len = name_at(p);
+      if (name_len < 0) return name_len == -1 ? incomplete() : damaged();
+      p += static_cast<size_t>(name_len) + 1;
+      const long type_len = name_at(p);
+      if (type_len < 0) return type_len == -1 ? incomplete() : damaged();
+      const std::string type(reinterpret_cast<const char*>(bytes.data() + p), static_cast<size_t>(type_len));
+      p += static_cast<size_t>(type_len) + 1;
+      if (bytes.size() - p < 4) return incomplete();
+      const std::uint32_t size = le32(p);
+      p += 4;
+      if (size > 0x7fffffffu) return damaged();
+      if (size > bytes.size() - p) return incomplete();
+      for (const auto& [t, n] : fixed)
+        if (type == t && size != n) return damaged();
+      if (type == "chlist") {  // channel records up to an empty name: exactly `size` bytes
+        size_t q = p;
+        for (;;) {
+          if (q >= p + size) return damaged();
+          if (bytes[q] == 0) {
+            ++q;
+            break;
+          }
+          const long n = name_at(q);
+          if (n < 0) return n == -1 ? incomplete() : damaged();
+          q += static_cast<size_t>(n) + 1 + 16;
+        }
+        if (q != p + size) return damaged();
+      }
+      if (type == "preview" && (size < 8 || std::uint64_t{le32(p)} * le32(p + 4) * 4 + 8 != size)) return damaged();
+      p += size;
     }
-    if (bytes.size() - p < 4) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
-    const std::uint32_t size = std::uint32_t{bytes[p]} | (std::uint32_t{bytes[p + 1]} << 8) |
-                               (std::uint32_t{bytes[p + 2]} << 16) | (std::uint32_t{bytes[p + 3]} << 24);
-    p += 4;
-    if (size > 0x7fffffffu) return fail("damaged OpenEXR file", "its header cannot be decoded");
-    if (size > bytes.size() - p) return fail("the OpenEXR file ends early", "truncated file: its header is incomplete");
-    p += size;
   }
   // OpenEXR's own check of a header's window, before it allocates anything (once, for every
   // thread: the bound is global in OpenEXR).
