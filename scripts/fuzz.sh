@@ -5,7 +5,7 @@
 #   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET ...]     (default: 600 s, every target)
 #
 # Targets: read_obj read_off read_ply read_stl landmarks chart dissection_json remesh_json
-# map_json studio_request.
+# map_json studio_request image.
 # New inputs go to build-fuzz/corpus/<target>; a crash, leak, timeout (10 s) or out-of-memory
 # (2 GB) is written to build-fuzz/findings/<target>/ and makes the script exit 1 after the
 # remaining targets have run. One summary line per target: runs, seconds, corpus size, findings.
@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(read_obj read_off read_ply read_stl landmarks chart dissection_json remesh_json map_json studio_request)
+[ ${#targets[@]} -gt 0 ] || targets=(read_obj read_off read_ply read_stl landmarks chart dissection_json remesh_json map_json studio_request image)
 
 if ! command -v clang++-16 >/dev/null; then
   echo "fuzz: clang++-16 not found; run scripts/setup.sh (it installs clang-16 and libclang-rt-16-dev)" >&2

@@ -29,7 +29,7 @@ done
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libeigen3-dev libcgal-dev libopenimageio-dev libtinygltf-dev nlohmann-json3-dev
+  libeigen3-dev libcgal-dev libpng-dev libopenexr-dev libtinygltf-dev nlohmann-json3-dev
   libcli11-dev liblemon-dev libcpp-httplib-dev
   ca-certificates  # npm's downloads
 )

@@ -14,8 +14,8 @@ if [ "${QS_SKIP_SANITIZERS:-0}" != 1 ]; then
   # Under ASan + UBSan: the unit tests of the modules the fuzz targets already built (not the
   # tests of ../shared's meshes: the run above has them). The other modules' tests build on the
   # CGAL-heavy ones and take long under the sanitizers: QS_SANITIZE_ALL=1 adds the map refinement's.
-  asan_tests=(qs_core_tests qs_io_tests qs_mesh_tests qs_shapes_tests qs_landmarks_tests qs_param_tests)
-  asan_labels='core|io|mesh|shapes|landmarks|param'
+  asan_tests=(qs_core_tests qs_io_tests qs_mesh_tests qs_shapes_tests qs_landmarks_tests qs_param_tests qs_image_tests)
+  asan_labels='core|io|mesh|shapes|landmarks|param|image'
   if [ "${QS_SANITIZE_ALL:-0}" = 1 ]; then
     asan_tests+=(qs_maprefine_tests)
     asan_labels+='|maprefine'

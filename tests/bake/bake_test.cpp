@@ -14,6 +14,7 @@
 #include "qs/bake/export_glb.h"
 #include "qs/bake/image_io.h"
 #include "qs/bake/split_mesh.h"
+#include "../common/image_test_support.h"
 #include "qs/core/error.h"
 #include "qs/dissect/dissection.h"
 #include "qs/remesh/chart_sampler.h"
@@ -513,21 +514,47 @@ TEST(ExportGlb, CarriesTheFrameAndTexcoordsTheBakeUsed) {
   EXPECT_EQ(go.texcoords.size(), go.positions.size());
 }
 
-// A damaged PNG gives one IoError line that names the file (OpenImageIO's text, libpng's appended
-// to it, used to span lines and print as a stray "libpng error" line before qs's message).
-TEST(ImageIo, DamagedPngIsOneLineIoError) {
-  const auto path = std::filesystem::temp_directory_path() / ("qs_bad_png_" + std::to_string(::getpid()) + ".png");
-  {
-    std::ofstream out(path, std::ios::binary);
-    out << "\x89PNG\r\n\x1a\n" << "0000garbage";
+// A damaged normal map gives one line in qs's words: the file, what is wrong, what was expected,
+// and none of the image library's own text; a missing one is an i/o error.
+TEST(ImageIo, DamagedMapsAreInvalidInputInQsWords) {
+  const Fixture& f = sphere();
+  BakeOptions o;
+  o.tile_size = 8;
+  const BakeResult r = bake(f, o);
+  const fs::path dir = fs::temp_directory_path() / ("qs_bad_map_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(dir / name, std::ios::binary) << bytes;
+    return dir / name;
+  };
+  const auto as_string = [](const std::vector<unsigned char>& v) { return std::string(v.begin(), v.end()); };
+  const std::string png = as_string(encode_image(r.atlas, ImageFormat::Png8));
+  const std::string exr = as_string(encode_image(r.atlas, ImageFormat::Exr));
+  std::string bad_crc = png;
+  bad_crc[30] ^= 1;  // the IHDR chunk's checksum
+  const struct {
+    fs::path path;
+    std::string what;
+  } cases[] = {
+      {write("truncated.png", png.substr(0, png.size() / 2)), "the PNG ends early"},
+      {write("crc.png", bad_crc), "damaged PNG"},
+      {write("header.png", std::string("\x89PNG\r\n\x1a\n") + "0000garbage"), "the PNG ends early"},
+      {write("text.png", "v 0 0 0\n"), "not an image qs reads"},
+      {write("truncated.exr", exr.substr(0, exr.size() - 7)), "the OpenEXR file ends early"},
+  };
+  for (const auto& c : cases) {
+    try {
+      read_normal_image(c.path);
+      ADD_FAILURE() << "expected InvalidInput for " << c.path;
+    } catch (const qs::InvalidInput& e) {
+      const std::string m = e.what();
+      EXPECT_EQ(m.rfind(c.path.string() + ": " + c.what, 0), 0u) << m;
+      EXPECT_NE(m.find("expected a normal map"), std::string::npos) << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+      EXPECT_EQ(qs::test::quoted_library_phrase(m), "") << m;
+    }
   }
-  try {
-    qs::bake::read_normal_image(path);
-    ADD_FAILURE() << "expected IoError";
-  } catch (const qs::IoError& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find(path.string()), std::string::npos) << m;
-    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
-  }
-  std::filesystem::remove(path);
+  EXPECT_THROW(read_rgb8(dir / "crc.png"), qs::InvalidInput);
+  EXPECT_THROW(read_normal_image(dir), qs::IoError);
+  fs::remove_all(dir);
 }

@@ -15,6 +15,7 @@
 #include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
 #include "../common/gltf_test_support.h"
+#include "../common/image_test_support.h"
 #include "qs/morph/blend.h"
 #include "qs/morph/frame_maps.h"
 #include "qs/morph/frames.h"
@@ -442,7 +443,7 @@ TEST_F(MorphFiles, NormalMapsBlendTexelByTexel) {
   EXPECT_NEAR(mid[5], 218, 1);
   EXPECT_THROW(qs::morph::blend_normal_maps(a, {0.5, 0.6}), qs::InvalidInput);
 
-  // PNG round trip through OpenImageIO, and maps of different sizes refused.
+  // PNG round trip, and maps of different sizes refused.
   std::vector<unsigned char> rgb(5 * 3 * 3);
   for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<unsigned char>(i * 5);
   const auto png = qs::morph::encode_png_rgb8(5, 3, rgb);
@@ -457,6 +458,26 @@ TEST_F(MorphFiles, NormalMapsBlendTexelByTexel) {
   EXPECT_THAT(message_of([&] { qs::morph::read_normal_atlases(dir_, {"x", "y"}); }), HasSubstr("4 x 4, the other maps are 5 x 3"));
   EXPECT_THROW(qs::morph::read_normal_atlases(dir_, {"x", "z"}), qs::IoError);
   EXPECT_THROW(qs::morph::encode_png_rgb8(5, 4, rgb), qs::InvalidInput);
+
+  // Damaged maps: the file, what is wrong, what was expected (the shape, the other maps' size);
+  // none of libpng's text.
+  const std::string png_text(png.begin(), png.end());
+  std::string bad_crc = png_text;
+  bad_crc[30] ^= 1;
+  const struct {
+    std::string bytes, what;
+  } damaged[] = {{png_text.substr(0, png_text.size() - 20), "the PNG ends early"},
+                 {bad_crc, "damaged PNG"},
+                 {"P6\n5 3\n255\n", "not a PNG file"},
+                 {qs::test::make_png(5, 3, 8, 6), "not an RGB image"}};
+  for (const auto& d : damaged) {
+    std::ofstream(dir_ / "w_normal.png", std::ios::binary) << d.bytes;
+    const std::string m = message_of([&] { qs::morph::read_normal_atlases(dir_, {"x", "w"}); });
+    EXPECT_EQ(m.rfind((dir_ / "w_normal.png").string() + ": " + d.what, 0), 0u) << m;
+    EXPECT_THAT(m, HasSubstr("expected the 8-bit RGB normal map of shape 'w' written by qs-bake, 5 x 3 as the other maps"));
+    EXPECT_EQ(qs::test::quoted_library_phrase(m), "") << m;
+    EXPECT_THROW(qs::morph::read_normal_atlases(dir_, {"w"}), qs::InvalidInput);
+  }
 }
 
 TEST_F(MorphFiles, TexturedFramesCarryUvsAndTheirOwnMap) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/image_test_support.h"
 #include "tool_runner.h"
 #include "../common/gltf_test_support.h"
 
@@ -408,6 +410,39 @@ TEST_F(MorphTool, MeshesThatDoNotShareAConnectivityAreRefused) {
   EXPECT_THAT(r.out, HasSubstr("b.obj"));
   EXPECT_THAT(r.out, HasSubstr("faces differ"));
   EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// A damaged normal map: exit 2 (invalid input), one message in qs's words that names the file
+// and what was expected, none of the image library's text, nothing written.
+TEST_F(MorphTool, DamagedNormalMapsAreInvalidInput) {
+  const fs::path bake = dir_ / "bake";
+  write_bake(bake, "a", qs::io::read_mesh(R() / "a.obj").mesh);
+  const std::string good = flat_normal_png(8, 8);
+  std::string bad_crc = good;
+  bad_crc[30] ^= 1;  // the IHDR chunk's checksum
+  std::string tall = good;  // a header that promises 9 rows, its checksum right
+  tall[23] = 9;
+  const uint32_t c = crc32(tall.substr(12, 17));
+  for (int k = 0; k < 4; ++k) tall[29 + k] = static_cast<char>(c >> (24 - 8 * k));
+  const struct {
+    std::string bytes, what;
+  } damaged[] = {{good.substr(0, good.size() - 30), "the PNG ends early (truncated file"},
+                 {bad_crc, "damaged PNG (a chunk's checksum does not match"},
+                 {tall, "damaged PNG (its compressed pixel data does not decode to 8 x 9 pixels"},
+                 {"not an image\n", "not a PNG file"},
+                 {"", "empty file"}};
+  const fs::path out = dir_ / "out";
+  std::ofstream(bake / "c_normal.png", std::ios::binary) << good;
+  for (const auto& d : damaged) {
+    std::ofstream(bake / "b_normal.png", std::ios::binary) << d.bytes;
+    const RunResult r = morph("--path a,b --frames 3 --bake " + bake.string() + " --frame-maps -q -o " + out.string());
+    EXPECT_EQ(r.exit, 2) << r.out;
+    EXPECT_THAT(r.out, HasSubstr("invalid input error: " + (bake / "b_normal.png").string() + ": " + d.what));
+    EXPECT_THAT(r.out, HasSubstr("expected the 8-bit RGB normal map of shape 'b' written by qs-bake"));
+    EXPECT_EQ(qs::test::quoted_library_phrase(r.out), "") << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+    EXPECT_FALSE(fs::exists(out));
+  }
 }
 
 TEST_F(MorphTool, FrameMapsGiveEveryFrameUvsAndItsOwnNormalMap) {

@@ -1,5 +1,5 @@
 #pragma once
-// Normal-map files (OpenImageIO stays in the .cpp). Every format stores x * 0.5 + 0.5 per
+// Normal-map files, through qs::image (libpng, OpenEXR). Every format stores x * 0.5 + 0.5 per
 // channel, RGB, linear: no sRGB or gamma tag is written.
 
 #include <filesystem>
@@ -20,9 +20,10 @@ std::vector<unsigned char> encode_image(const NormalAtlas& atlas, ImageFormat fo
 
 /// Reads a normal-map file of any of these formats back as vectors (c * 2 - 1 per channel, not
 /// normalized). \throws IoError for a missing or unreadable file, InvalidInput for one that is
-/// not 3-channel.
+/// damaged, truncated, not a PNG or OpenEXR image, or not RGB (the message names the file).
 NormalAtlas read_normal_image(const std::filesystem::path& path);
-/// Reads an 8-bit RGB image (a PNG written by encode_png8). \throws IoError, InvalidInput.
+/// Reads an RGB PNG as 8-bit (a PNG written by encode_png8; 16-bit ones rounded). \throws IoError,
+/// InvalidInput as read_normal_image.
 Rgb8Image read_rgb8(const std::filesystem::path& path);
 
 }  // namespace qs::bake

@@ -23,8 +23,9 @@ struct NormalAtlases {
   std::vector<std::vector<unsigned char>> png;  ///< per shape: the file's bytes (or empty)
 };
 
-/// Reads `bake_dir`/<stem>_normal.png for every stem (OpenImageIO).
-/// \throws IoError (missing or unreadable file); InvalidInput (not 3 channels, sizes that differ).
+/// Reads `bake_dir`/<stem>_normal.png for every stem (RGB PNGs; 16-bit ones rounded to 8 bits).
+/// \throws IoError (missing or unreadable file); InvalidInput (damaged, truncated, not an RGB PNG,
+/// sizes that differ: the message names the file and what was expected).
 NormalAtlases read_normal_atlases(const std::filesystem::path& bake_dir, const std::vector<std::string>& stems);
 
 /// The blended map for barycentric `weights` (check_weights): per texel the normalized weighted
@@ -33,7 +34,7 @@ NormalAtlases read_normal_atlases(const std::filesystem::path& bake_dir, const s
 /// shape's bytes unchanged. \throws InvalidInput.
 std::vector<unsigned char> blend_normal_maps(const NormalAtlases& atlases, const std::vector<double>& weights);
 
-/// PNG bytes of an 8-bit RGB image (OpenImageIO, zlib level 3). \throws IoError when encoding fails.
+/// PNG bytes of an 8-bit RGB image (qs::image::encode_png, zlib level 3). \throws IoError when encoding fails.
 std::vector<unsigned char> encode_png_rgb8(int width, int height, const std::vector<unsigned char>& rgb);
 
 /// Frame files with texture coordinates: OBJ text "mtllib <mtl>", the blended positions as v, the

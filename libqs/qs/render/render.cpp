@@ -2,15 +2,16 @@
 
 #include <unistd.h>
 
-#include <OpenImageIO/imageio.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <limits>
 #include <string>
 #include <system_error>
 
 #include "qs/core/error.h"
+#include "qs/image/image_file.h"
 
 namespace qs::render {
 namespace {
@@ -489,17 +490,13 @@ void write_png(const std::filesystem::path& path, const Image& image) {
     std::filesystem::remove(tmp, ec);
     throw IoError(path.string() + ": cannot write the PNG (" + why + ")");
   };
+  const std::vector<unsigned char> bytes = qs::image::encode_png(image.width, image.height, image.rgb);
   {
-    auto out = OIIO::ImageOutput::create("png");
-    if (!out) fail("OpenImageIO has no PNG writer: " + OIIO::geterror());
-    const OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
-    if (!out->open(tmp.string(), spec)) fail(out->geterror());
-    const bool wrote = out->write_image(OIIO::TypeDesc::UINT8, image.rgb.data());
-    const bool closed = out->close();
-    if (!wrote || !closed) {
-      std::string why = out->geterror();
-      fail(why.empty() ? "write failed" : why);
-    }
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) fail("cannot create " + tmp.string());
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) fail("write failed (disk full?)");
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);

@@ -2,7 +2,7 @@
 // A small software renderer for looking at qs outputs: shaded meshes (optionally with per-face
 // colours, a wireframe and highlighted edges such as patch boundaries) and uv layouts of charts.
 // Orthographic, z-buffered, single-threaded and deterministic: the same input gives the same
-// pixels. PNG output goes through OpenImageIO, which stays out of this header.
+// pixels. PNG output goes through qs::image (libpng).
 
 #include <array>
 #include <cstdint>
