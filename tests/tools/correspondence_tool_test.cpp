@@ -253,7 +253,8 @@ TEST_F(CorrespondenceTool, SamePoseFollowsTheFirstMeshOnItsOwnRetessellation) {
   EXPECT_LT(found["corner_distance_mean_percent"].get<double>(), common["corner_distance_mean_percent"].get<double>());
   EXPECT_EQ(found["dissection"]["mean_percent"].get<double>(), told["dissection"]["mean_percent"].get<double>());
   const std::string text = read(d() + "/found.txt");
-  EXPECT_THAT(text, HasSubstr("after the landmarks' similarity (mean), at most 1%: one pose (as --same-pose)"));
+  EXPECT_THAT(text, HasSubstr("after the landmarks' similarity (mean; 99% of the area within "));
+  EXPECT_THAT(text, HasSubstr("; one pose: at most 1% and 2%): one pose (as --same-pose)"));
   EXPECT_THAT(text, HasSubstr("same pose: 1 of 1 seed loops routed by pose, "));
   EXPECT_THAT(text, HasSubstr("'s nearest points (one pose), weight 10"));
   // In one pose the sides take five Newton steps unless told otherwise; one otherwise.
