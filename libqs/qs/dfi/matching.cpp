@@ -110,15 +110,16 @@ std::vector<double> centricity(const Skeleton& s) {
   const std::vector<int> degree = node_degrees(s);
   std::vector<double> dist;
   std::vector<int> junc;
+  std::vector<double> length;
   double total = 0;
-  for (const auto& e : s.edges) total += (s.nodes[e[0]] - s.nodes[e[1]]).norm();
+  for (const auto& e : s.edges) total += length.emplace_back((s.nodes[e[0]] - s.nodes[e[1]]).norm());
   for (int i = 0; i < n; ++i) {
     geodesics(s, adj, degree, i, dist, junc);
     double sum = 0;
-    for (const auto& e : s.edges) {
-      const double l = (s.nodes[e[0]] - s.nodes[e[1]]).norm();
+    for (size_t k = 0; k < s.edges.size(); ++k) {
+      const auto& e = s.edges[k];
       const double a = std::isfinite(dist[e[0]]) ? dist[e[0]] : 0, b = std::isfinite(dist[e[1]]) ? dist[e[1]] : 0;
-      sum += l * 0.5 * (a + b);
+      sum += length[k] * 0.5 * (a + b);
     }
     c[i] = total > 0 ? sum / total : 0;
   }

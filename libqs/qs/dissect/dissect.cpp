@@ -80,7 +80,6 @@ std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect
   return out;
 }
 
-// The area-weighted mean distance from `mesh`'s vertices to `to`.
 // The distances from mesh's vertices to `to`, each with its vertex's area (a third of its faces').
 std::vector<std::pair<double, double>> weighted_distances(const TriMesh& mesh, const metro::SurfaceDistance& to) {
   std::vector<double> area(mesh.positions.size(), 0.0);

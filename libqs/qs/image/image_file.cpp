@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <system_error>
 
 #include "qs/core/error.h"
+#include "qs/core/json_strict.h"
 #include "qs/image/image_file_detail.h"
 
 namespace qs::image {
@@ -37,20 +36,8 @@ RgbPixels decode_image(std::span<const unsigned char> bytes, const std::string& 
 }
 
 std::vector<unsigned char> read_file_bytes(const fs::path& path) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (!fs::exists(st)) throw IoError(path.string() + ": no such file");
-  if (fs::is_directory(st)) throw IoError(path.string() + ": a folder, not a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path.string() + ": cannot open the file for reading");
-  std::vector<unsigned char> bytes;
-  char buf[1 << 16];
-  while (in) {
-    in.read(buf, sizeof buf);
-    bytes.insert(bytes.end(), buf, buf + in.gcount());
-  }
-  if (in.bad()) throw IoError(path.string() + ": read error");
-  return bytes;
+  const std::string text = json_strict::read_text_file(path, "PNG or OpenEXR image");
+  return {text.begin(), text.end()};
 }
 
 }  // namespace qs::image
