@@ -20,6 +20,7 @@ cd "$(dirname "$0")/.."
 MESHES=${1:-../shared/meshes}
 OUT=${2:-out/bench-pose-pairs}
 TOOLS=${QS_TOOLS:-build/tools}
+BENCH=${QS_BENCH:-build/bench}
 SAMPLES=${SAMPLES:-30000}
 SEED=${SEED:-1}
 read -r -a POSE <<< "${POSE_ARGS:-}"
@@ -28,7 +29,24 @@ LIST=${MESHES_LIST:-"pig_4k.off camel_4k_fixed.obj horse_5k.obj cow2_9k.off lion
 cat_sumner_14k.obj smpl_man_14k.obj smpl_woman_14k.obj polygirl_20k.off armadillo_29k.obj"}
 mkdir -p "$OUT"
 RESULTS="$OUT/results.tsv"
+ATTRIBUTION="$OUT/attribution.tsv"
 : > "$RESULTS"
+: > "$ATTRIBUTION"
+
+# exact_loop NAME DIR A B LA LB: the posed pair again with B's seed loop replaced by A's (the
+# exact loop; qs-bench-stage-attribution), measured the same way.
+exact_loop() {
+  local name=$1 dir=$2 rc
+  [ -x "$BENCH/qs-bench-stage-attribution" ] || return 0
+  "$BENCH/qs-bench-stage-attribution" "$3" "$4" --landmarks "$5" "$6" -o "$dir" > "$dir.log" 2>&1
+  rc=$?
+  if [ -f "$dir/dissection.json" ] &&
+     "$TOOLS/qs-metro" --correspondence "$dir" --samples "$SAMPLES" --json -o "$dir.corr.json" > "$dir.metro.log" 2>&1; then
+    printf '%s\t%s\t%s\n' "$name" "$rc" "$dir" >> "$ATTRIBUTION"
+  else
+    printf '%s\t%s\t-\n' "$name" "$rc" >> "$ATTRIBUTION"
+  fi
+}
 
 # pair NAME DIR A B LANDMARKS_A LANDMARKS_B MAP_B POSED_OBJ
 pair() {
@@ -71,11 +89,13 @@ for mesh in $LIST; do
   echo "$stem: posed in $(python3 -c "print(f'{$t1-$t0:.1f}')") s: $(head -n1 "$d/pose.log" | sed 's/.*faces; //')"
   pair "$stem" "$d/dissection" "$MESHES/$mesh" "$d/posed.obj" "$d/posed.source.landmarks.json" \
       "$d/posed.landmarks.json" - "$d/posed.obj"
+  exact_loop "$stem" "$d/exact-loop" "$MESHES/$mesh" "$d/posed.obj" "$d/posed.source.landmarks.json" \
+      "$d/posed.landmarks.json"
   pair "$stem re-tessellated" "$d/dissection-r" "$MESHES/$mesh" "$d/posed_r.obj" "$d/posed.source.landmarks.json" \
       "$d/posed_r.landmarks.json" "$d/posed_r.map.json" "$d/posed.obj"
 done
 
-QS_BENCH_DIR="$(dirname "$0")" python3 - "$RESULTS" <<'PY'
+QS_BENCH_DIR="$(dirname "$0")" python3 - "$RESULTS" "$ATTRIBUTION" <<'PY'
 import json, math, os, sys
 
 sys.path.insert(0, os.environ['QS_BENCH_DIR'])
@@ -119,6 +139,7 @@ def same_side(dissection, mb, posed):
     return agree / sum(wb)
 
 rows = [l.rstrip('\n').split('\t') for l in open(sys.argv[1])]
+f = lambda s: f"{s['mean_percent']:.2f} / {s['p95_percent']:.2f} / {s['max_percent']:.2f}%"
 print()
 print('| pair | exit | time | patches | qs: mean / p95 / max | level 4: mean / p95 / max | baseline: mean / p95 / max | same side of the seed loop | same patch | corners (mean) |')
 print('|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
@@ -130,8 +151,20 @@ for name, rc, secs, d, mb, posed in rows:
     p = doc['pairs'][0]
     q = json.load(open(d + '.corr-L4.json'))['pairs'][0]
     e, b, e4 = p['dissection'], p['baseline'], q['dissection']
-    f = lambda s: f"{s['mean_percent']:.2f} / {s['p95_percent']:.2f} / {s['max_percent']:.2f}%"
     side = same_side(d, mb, posed)
     print(f"| {name} | {rc} | {secs} s | {doc['patches']} | {f(e)} | {f(e4)} | {f(b)} | {100 * side:.1f}% | "
           f"{100 * p['same_patch_share']:.1f}% | {p.get('corner_distance_mean_percent', 0):.2f}% |")
+
+# What the seed loop's routing costs: the posed pairs with B's loop replaced by the exact one.
+qs_rows = {r[0]: r for r in rows}
+exact = [l.rstrip('\n').split('\t') for l in open(sys.argv[2])]
+if exact:
+    print()
+    print('| pair | qs: mean / p95 / max | exact seed loop: exit | mean / p95 / max |')
+    print('|---|---:|---:|---:|')
+    for name, rc, d in exact:
+        r = qs_rows.get(name)
+        own = f(json.load(open(r[3] + '.corr.json'))['pairs'][0]['dissection']) if r and r[3] != '-' else 'not measured'
+        ex = f(json.load(open(d + '.corr.json'))['pairs'][0]['dissection']) if d != '-' else 'not measured'
+        print(f'| {name} | {own} | {rc} | {ex} |')
 PY

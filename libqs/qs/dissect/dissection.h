@@ -13,6 +13,7 @@
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/landmarks/landmarks.h"
+#include "qs/dissect/seed_loop.h"
 #include "qs/param/square_param.h"
 
 namespace qs::dissect {
@@ -128,6 +129,10 @@ struct DissectOptions {
   /// pose keeps, instead of each mesh's own shortest loop. Not with same_pose (the loops follow
   /// the first's by pose then).
   bool intrinsic_loops = true;
+  /// Measurement only, empty in every tool: called with every mesh's seed loop (input order) once
+  /// they are routed, before the seed patches are cut. bench/qs-bench-stage-attribution puts exact
+  /// loops there to measure what the loop's routing costs. \pre it keeps each loop valid.
+  std::function<void(std::vector<SeedLoop>&)> replace_seed_loops;
 };
 
 /// Meshes in one pose: a nearest point on the first mesh (the posed corners, the node maps taken

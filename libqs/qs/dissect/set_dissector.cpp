@@ -425,6 +425,7 @@ DissectionSet SetDissector::run() {
   DissectionSet out;
   if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops)
     out.intrinsic_loops = route_intrinsic(loops, out.landmark_discrepancy);
+  if (opt_.replace_seed_loops) opt_.replace_seed_loops(loops);
   std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
   if (opt_.same_pose && nm > 1) {
     seed_posed(loops, roots, out);
