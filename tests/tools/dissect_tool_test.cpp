@@ -10,6 +10,7 @@
 
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/shared_meshes.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
@@ -275,4 +276,21 @@ TEST_F(DissectTool, WindingSeedOrderIsReorderedAndReported) {
     return std::string(std::istreambuf_iterator<char>(f), {});
   };
   EXPECT_EQ(bytes(dir_ / "wound" / "a.chart.ply"), bytes(dir_ / "belt" / "a.chart.ply"));
+}
+
+// The horse against its pose, re-tessellated (qs-family pose, seed 1): on the re-tessellation the
+// shortest loop puts feature tip7 (a weak extremity on the head) on the other side, and no loop
+// through the seeds brings it back; the set takes that mesh's arrangement instead of refusing.
+TEST_F(DissectTool, FeatureSidesTakeTheArrangementEveryMeshCanReach) {
+  const fs::path horse = qs::testing::shared_meshes_dir() / "horse_5k.obj";
+  if (!fs::exists(horse)) GTEST_SKIP() << "no " << horse << " (the shared test meshes)";
+  const fs::path posed = dir_ / "posed.obj";
+  RunResult r = run_tool("qs-family", "pose " + horse.string() + " --seed 1 --retessellate --keep-shape -q -o " +
+                                          posed.string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  r = run_tool("qs-dissect", horse.string() + " " + (dir_ / "posed_r.obj").string() + " --landmarks " +
+                                 (dir_ / "posed.source.landmarks.json").string() + " " +
+                                 (dir_ / "posed_r.landmarks.json").string() + " -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("bijective: yes"));
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -396,31 +397,56 @@ DissectionSet SetDissector::run() {
   });
   // Consistent loops: every feature on the same side in every mesh. The side each feature takes
   // in most meshes (ties: the first mesh's) is required of all; a mesh whose shortest loop puts a
-  // feature on the other side is routed again around it.
+  // feature on the other side is routed again around it. When some mesh cannot be, the meshes'
+  // own arrangements are tried in turn (most common first): a feature near a seed may fit only one.
   if (nm > 1 && !feature_names_.empty()) {
     std::vector<std::vector<int>> sides(nm);
     parallel_for(nm, ctx_, [&](size_t i) { sides[i] = meshes_[i].feature_sides(loops[i]); });
     const size_t nf = feature_names_.size();
-    std::vector<int> want(nf);
+    std::vector<int> majority(nf);
     for (size_t k = 0; k < nf; ++k) {
       size_t zeros = 0;
       for (size_t i = 0; i < nm; ++i) zeros += sides[i][k] == 0;
-      want[k] = 2 * zeros > nm ? 0 : 2 * zeros < nm ? 1 : sides[0][k];
+      majority[k] = 2 * zeros > nm ? 0 : 2 * zeros < nm ? 1 : sides[0][k];
     }
-    parallel_for(nm, ctx_, [&](size_t i) {
-      if (sides[i] == want) return;
-      try {
-        loops[i] = meshes_[i].reroute_loop(loops[i], want);
-      } catch (const InvalidInput& e) {
-        std::string names;
-        for (size_t k = 0; k < nf; ++k)
-          if (sides[i][k] != want[k]) names += (names.empty() ? "'" : ", '") + feature_names_[k] + "'";
-        throw InvalidInput(meshes_[i].name() + ": feature " + names +
-                           " lies on the other side of the seed loop s0-s1-s2-s3 than in most meshes of the set, "
-                           "and no loop through its seeds puts it on the same side (" + e.what() +
-                           "); move the seeds so that each feature is on the same side of the loop in every mesh");
+    std::vector<std::vector<int>> candidates{majority};
+    std::vector<std::pair<size_t, size_t>> own;  // (meshes with it, first mesh) per arrangement
+    for (size_t i = 0; i < nm; ++i)
+      if (std::find(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(i), sides[i]) ==
+          sides.begin() + static_cast<std::ptrdiff_t>(i))
+        own.emplace_back(static_cast<size_t>(std::count(sides.begin(), sides.end(), sides[i])), i);
+    std::stable_sort(own.begin(), own.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (const auto& [count, i] : own)
+      if (sides[i] != majority) candidates.push_back(sides[i]);
+    std::optional<InvalidInput> first_failure;
+    for (const std::vector<int>& want : candidates) {
+      std::vector<SeedLoop> routed = loops;
+      std::vector<std::string> failure(nm);
+      parallel_for(nm, ctx_, [&](size_t i) {
+        if (sides[i] == want) return;
+        try {
+          routed[i] = meshes_[i].reroute_loop(loops[i], want);
+        } catch (const InvalidInput& e) {
+          failure[i] = e.what();
+        }
+      });
+      const auto bad = std::find_if(failure.begin(), failure.end(), [](const std::string& f) { return !f.empty(); });
+      if (bad == failure.end()) {
+        loops = std::move(routed);
+        first_failure.reset();
+        break;
       }
-    });
+      if (first_failure) continue;
+      const size_t i = static_cast<size_t>(bad - failure.begin());
+      std::string names;
+      for (size_t k = 0; k < nf; ++k)
+        if (sides[i][k] != want[k]) names += (names.empty() ? "'" : ", '") + feature_names_[k] + "'";
+      first_failure = InvalidInput(meshes_[i].name() + ": feature " + names +
+                                   " lies on the other side of the seed loop s0-s1-s2-s3 than in most meshes of the set, "
+                                   "and no loop through its seeds puts it on the same side (" + *bad +
+                                   "); move the seeds so that each feature is on the same side of the loop in every mesh");
+    }
+    if (first_failure) throw *first_failure;
   }
   DissectionSet out;
   if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops)
