@@ -55,8 +55,6 @@ mesh::ValidationResult read_valid(const std::filesystem::path& file) {
   return v;
 }
 
-enum class Kind { Sphere, Identity, Surface };
-
 }  // namespace
 
 TruthMesh load_truth_mesh(const std::filesystem::path& mesh_file, const std::optional<std::filesystem::path>& map_file) {
@@ -96,6 +94,7 @@ TruthMesh load_truth_mesh(const std::filesystem::path& mesh_file, const std::opt
 }
 
 struct GroundTruth::Impl {
+  enum class Kind { Sphere, Identity, Surface };
   struct Side {
     Kind kind = Kind::Identity;
     std::unique_ptr<metro::SurfaceDistance> mesh_distance;   // Surface: closest point of the mesh
@@ -171,9 +170,9 @@ GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique
   for (const TruthMesh& m : ms) {
     Impl::Side s;
     if (!m.map) {
-      s.kind = Kind::Identity;
+      s.kind = Impl::Kind::Identity;
     } else if (m.map->domain == family::MapDomain::Sphere) {
-      s.kind = Kind::Sphere;
+      s.kind = Impl::Kind::Sphere;
       ++spheres;
       s.parameter_mesh.positions = m.map->sphere;
       s.parameter_mesh.faces = m.mesh.faces;
@@ -218,7 +217,7 @@ GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique
           s.neighbour[f][k] = it->second.first;
         }
     } else {
-      s.kind = Kind::Surface;
+      s.kind = Impl::Kind::Surface;
       const double tol = 1e-9 * bounding_box(m.mesh.positions).diagonal();
       for (int v = 0; v < m.mesh.num_vertices(); ++v)
         if ((landmarks::position_of(m.reference, m.map->origins[v]) - m.mesh.positions[v]).norm() > tol)
@@ -233,13 +232,13 @@ GroundTruth::GroundTruth(std::vector<TruthMesh> meshes) : impl_(std::make_unique
       impl_->tolerance = std::max(impl_->tolerance, mr.max);
       impl_->tolerance_mean = std::max(impl_->tolerance_mean, mr.mean);
     }
-    if (s.kind != Kind::Sphere) {
-      const std::vector<Tri>* faces = s.kind == Kind::Identity ? &m.mesh.faces : &m.reference.faces;
+    if (s.kind != Impl::Kind::Sphere) {
+      const std::vector<Tri>* faces = s.kind == Impl::Kind::Identity ? &m.mesh.faces : &m.reference.faces;
       if (!domain_faces) {
         domain_faces = faces;
         domain_owner = m.name;
       } else if (*faces != *domain_faces) {
-        throw InvalidInput("ground truth: " + m.name + (s.kind == Kind::Identity ? "" : " (through its map's reference)") +
+        throw InvalidInput("ground truth: " + m.name + (s.kind == Impl::Kind::Identity ? "" : " (through its map's reference)") +
                            " does not have the connectivity of " + domain_owner +
                            "; without map files, meshes must share one face list (give each a map file, "
                            "e.g. <stem>.map.json)");
