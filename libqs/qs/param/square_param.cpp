@@ -325,20 +325,21 @@ struct CholeskyCache {
 };
 
 /// A symmetric positive definite system (cotangent weights, every weight positive, the border
-/// fixed): sparse Cholesky with AMD ordering, about 5x faster than the LU and without pivoting.
-Eigen::MatrixX2d solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs,
-                                const Context& context, CholeskyCache& cache) {
+/// fixed; A holds its lower triangle): sparse Cholesky with AMD ordering, about twice as fast as
+/// the LU and without pivoting. False when a pivot is not positive in floating point (weights
+/// many orders of magnitude apart): the caller solves by LU instead.
+bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs, const Context& context,
+                    CholeskyCache& cache, Eigen::MatrixX2d& x) {
   auto& llt = cache.llt;
   if (!cache.ready) {
     llt.analyzePattern(A);
     cache.ready = true;
   }
   llt.factorize(A);
-  if (llt.info() != Eigen::Success)
-    throw SolverError("parameterize_square: sparse Cholesky factorization of the " + std::to_string(A.rows()) +
-                      "x" + std::to_string(A.rows()) + " cotangent system failed: not positive definite");
+  if (llt.info() != Eigen::Success) return false;
   context.report("parameterize: solve", 0.9);
-  return llt.solve(rhs);
+  x = llt.solve(rhs);
+  return llt.info() == Eigen::Success && x.allFinite();
 }
 
 /// A triangulation of the patch's vertices given by edge lengths only (Fisher, Springborn, Schroeder,
@@ -599,10 +600,11 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     // Assembles the system for half-edge weights ww and solves it into result.uv.
     SymbolicCache symbolic;
     CholeskyCache cholesky;
-    auto solve_with = [&](const std::vector<double>& ww) {
+    // One solve, by Cholesky when `spd` and the weights allow it; false when the Cholesky
+    // factorization failed (nothing is changed then).
+    auto solve_once = [&](const std::vector<double>& ww, bool spd) {
       // Symmetric assembly: the floor of edge ij is the larger of its two rows' floors, so the
       // matrix stays symmetric; a row without a usable weight falls back to the general path.
-      bool spd = symmetric;
       if (spd) {
         row_max_w.assign(nv, 0.0);
         for (int i = 0; i < nv && spd; ++i) {
@@ -653,15 +655,25 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       context.report("parameterize: factorize", 0.2);
       context.check_cancel();
 
-      const Eigen::MatrixX2d x = spd ? solve_cholesky(A, rhs, context, cholesky)
-                                 : options.ordering == LuOrdering::SymmetricAmd
-                                     ? solve_symmetric_amd(A, rhs, context, symbolic)
-                                     : solve_colamd(A, rhs, context);
+      Eigen::MatrixX2d x;
+      if (spd) {
+        if (!solve_cholesky(A, rhs, context, cholesky, x)) return false;
+      } else {
+        x = options.ordering == LuOrdering::SymmetricAmd ? solve_symmetric_amd(A, rhs, context, symbolic)
+                                                         : solve_colamd(A, rhs, context);
+      }
       if (!x.allFinite())
         throw SolverError("parameterize_square: the " + std::string(spd ? "cotangent" : "mean-value") + " solve (" +
                           std::to_string(ni) + " interior vertices) gave no finite solution");
       for (int v = 0; v < nv; ++v)
         if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
+      return true;
+    };
+    bool use_cholesky = symmetric;  // false once a Cholesky factorization failed
+    auto solve_with = [&](const std::vector<double>& ww) {
+      if (use_cholesky && solve_once(ww, true)) return;
+      use_cholesky = false;
+      solve_once(ww, false);
     };
     solve_with(w);
 
