@@ -5,7 +5,6 @@
 #include <Eigen/Geometry>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 #include <algorithm>
 #include <cmath>
@@ -17,6 +16,7 @@
 
 #include "qs/core/error.h"
 #include "qs/core/problem_list.h"
+#include "qs/param/sparse_cholesky.h"
 
 namespace qs::param {
 namespace {
@@ -318,28 +318,27 @@ Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const
   return cache.perm * y;
 }
 
-/// What a repeated symmetric solve keeps: the Cholesky factor's AMD ordering and symbolic analysis.
+/// What a repeated symmetric solve keeps: the Cholesky factor's ordering and supernodes.
 struct CholeskyCache {
   bool ready = false;
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> llt;
+  SupernodalCholesky llt;
 };
 
 /// A symmetric positive definite system (cotangent weights, every weight positive, the border
-/// fixed; A holds its lower triangle): sparse Cholesky with AMD ordering, about twice as fast as
-/// the LU and without pivoting. False when a pivot is not positive in floating point (weights
-/// many orders of magnitude apart): the caller solves by LU instead.
+/// fixed; A holds its lower triangle): sparse Cholesky, without pivoting. False when a pivot is
+/// not positive in floating point (weights many orders of magnitude apart): the caller solves by
+/// LU instead.
 bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs, const Context& context,
                     CholeskyCache& cache, Eigen::MatrixX2d& x) {
   auto& llt = cache.llt;
   if (!cache.ready) {
-    llt.analyzePattern(A);
+    llt.analyze(A);
     cache.ready = true;
   }
-  llt.factorize(A);
-  if (llt.info() != Eigen::Success) return false;
+  if (!llt.factorize(A)) return false;
   context.report("parameterize: solve", 0.9);
   x = llt.solve(rhs);
-  return llt.info() == Eigen::Success && x.allFinite();
+  return x.allFinite();
 }
 
 /// A triangulation of the patch's vertices given by edge lengths only (Fisher, Springborn, Schroeder,
