@@ -184,7 +184,8 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower) {
   const double* value = lower.valuePtr();
   const int ns = static_cast<int>(panel_.size());
   std::vector<int> relpos(n_, 0);
-  std::vector<Eigen::MatrixXd> update(ns);  // per supernode: the update to its parent's front
+  // Per supernode: the update to its parent's front, its lower triangle packed by columns.
+  std::vector<std::vector<double>> update(ns);
   std::vector<int> head(ns, -1), next(ns, -1), at;
   for (int s = ns - 1; s >= 0; --s)
     if (parent_[s] >= 0) {
@@ -200,15 +201,17 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower) {
       for (int q = col_start_[c]; q < col_start_[c + 1]; ++q)
         front(relpos[row_index_[q]], c - first_[s]) += value[source_[q]];
     for (int t = head[s]; t != -1; t = next[t]) {
-      Eigen::MatrixXd& u = update[t];
       const int kt = first_[t + 1] - first_[t];
       const int* rt = rows_.data() + row_start_[t] + kt;
-      const int mt = static_cast<int>(u.rows());
+      const int mt = row_start_[t + 1] - row_start_[t] - kt;
       at.resize(mt);
       for (int a = 0; a < mt; ++a) at[a] = relpos[rt[a]];
-      for (int b = 0; b < mt; ++b)
-        for (int a = b; a < mt; ++a) front(at[a], at[b]) += u(a, b);
-      u = Eigen::MatrixXd();
+      const double* u = update[t].data();
+      for (int b = 0; b < mt; ++b) {
+        double* column = &front(0, at[b]);
+        for (int a = b; a < mt; ++a) column[at[a]] += *u++;
+      }
+      std::vector<double>().swap(update[t]);
     }
     Eigen::Ref<Eigen::MatrixXd> diagonal_block = front.topLeftCorner(k, k);
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(diagonal_block);  // in place: L11 in the lower triangle
@@ -217,11 +220,16 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower) {
     if (m > k) {
       auto l21 = front.bottomLeftCorner(m - k, k);
       l11.transpose().solveInPlace<Eigen::OnTheRight>(l21);
-      Eigen::MatrixXd u = front.bottomRightCorner(m - k, m - k);
+      auto u = front.bottomRightCorner(m - k, m - k);
       u.selfadjointView<Eigen::Lower>().rankUpdate(l21, -1.0);
-      update[s] = std::move(u);
+      std::vector<double>& packed = update[s];
+      packed.resize(static_cast<std::size_t>(m - k) * (m - k + 1) / 2);
+      double* out = packed.data();
+      for (int b = 0; b < m - k; ++b)
+        for (int a = b; a < m - k; ++a) *out++ = u(a, b);
     }
-    panel_[s] = front.leftCols(k);
+    front.conservativeResize(m, k);  // keeps the first k columns in place (column-major)
+    panel_[s] = std::move(front);
   }
   return true;
 }
