@@ -3,13 +3,13 @@
 #include "qs/maprefine/map_refine_detail.h"
 
 #include <Eigen/Cholesky>
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <unordered_map>
 
+#include "qs/param/sparse_cholesky.h"
 #include "qs/param/square_param.h"
 
 namespace qs::maprefine {
@@ -297,10 +297,9 @@ class PatchSolver {
     double mu = 1e-10 * std::max(diag, 1e-300);
     for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
       for (int i = 0; i < n; ++i) h_.valuePtr()[diag_slot_[i]] = plain[i] + mu;
-      ldlt_.factorize(h_);
-      if (ldlt_.info() != Eigen::Success) continue;
-      d = ldlt_.solve(-g);
-      if (ldlt_.info() == Eigen::Success && d.allFinite() && g.dot(d) < 0) break;
+      if (!llt_.factorize(h_)) continue;  // not positive definite: more regularization
+      d = llt_.solve(-g);
+      if (d.allFinite() && g.dot(d) < 0) break;
       d.resize(0);
     }
     if (d.size() == 0) return false;
@@ -411,7 +410,7 @@ class PatchSolver {
     for (size_t k = 0; k < visited; ++k) slot_[k] = &h_.coeffRef(trip[k].row(), trip[k].col()) - base;
     diag_slot_.resize(n);
     for (int i = 0; i < n; ++i) diag_slot_[i] = &h_.coeffRef(i, i) - base;
-    ldlt_.analyzePattern(h_);
+    llt_.analyze(h_);
     analyzed_ = true;
   }
 
@@ -419,7 +418,7 @@ class PatchSolver {
   std::vector<Eigen::Vector4d> b_;
   Eigen::SparseMatrix<double> h_;
   std::vector<std::ptrdiff_t> slot_, diag_slot_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  param::SupernodalCholesky llt_;
   bool analyzed_ = false;
 };
 

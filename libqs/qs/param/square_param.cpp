@@ -16,6 +16,7 @@
 
 #include "qs/core/error.h"
 #include "qs/core/problem_list.h"
+#include "qs/param/sparse_cholesky.h"
 
 namespace qs::param {
 namespace {
@@ -317,6 +318,29 @@ Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const
   return cache.perm * y;
 }
 
+/// What a repeated symmetric solve keeps: the Cholesky factor's ordering and supernodes.
+struct CholeskyCache {
+  bool ready = false;
+  SupernodalCholesky llt;
+};
+
+/// A symmetric positive definite system (cotangent weights, every weight positive, the border
+/// fixed; A holds its lower triangle): sparse Cholesky, without pivoting. False when a pivot is
+/// not positive in floating point (weights many orders of magnitude apart): the caller solves by
+/// LU instead.
+bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs, const Context& context,
+                    CholeskyCache& cache, Eigen::MatrixX2d& x) {
+  auto& llt = cache.llt;
+  if (!cache.ready) {
+    llt.analyze(A);
+    cache.ready = true;
+  }
+  if (!llt.factorize(A)) return false;
+  context.report("parameterize: solve", 0.9);
+  x = llt.solve(rhs);
+  return x.allFinite();
+}
+
 /// A triangulation of the patch's vertices given by edge lengths only (Fisher, Springborn, Schroeder,
 /// Bobenko 2007): it starts as the patch itself and is flipped to the intrinsic Delaunay
 /// triangulation of the same surface. Half-edge h = 3 f + c runs from faces[f][c] to
@@ -567,9 +591,30 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       }
     }
 
+    // Cotangent weights are symmetric (w_ij = w_ji), so with the border fixed the system is
+    // symmetric positive definite and is solved by Cholesky; mean-value weights are not (LU).
+    const bool symmetric = result.weights == InteriorWeights::IntrinsicCotan;
+    std::vector<double> row_max_w;  // per vertex, the largest weight of its row (symmetric floor)
+
     // Assembles the system for half-edge weights ww and solves it into result.uv.
     SymbolicCache symbolic;
-    auto solve_with = [&](const std::vector<double>& ww) {
+    CholeskyCache cholesky;
+    // One solve, by Cholesky when `spd` and the weights allow it; false when the Cholesky
+    // factorization failed (nothing is changed then).
+    auto solve_once = [&](const std::vector<double>& ww, bool spd) {
+      // Symmetric assembly: the floor of edge ij is the larger of its two rows' floors, so the
+      // matrix stays symmetric; a row without a usable weight falls back to the general path.
+      if (spd) {
+        row_max_w.assign(nv, 0.0);
+        for (int i = 0; i < nv && spd; ++i) {
+          for (int k = lap_he->out_offset[i]; k < lap_he->out_offset[i + 1]; ++k) {
+            const double x = ww[lap_he->out[k]];
+            if (!std::isfinite(x)) spd = false;
+            row_max_w[i] = std::max(row_max_w[i], x);
+          }
+          if (interior_index[i] >= 0 && !(row_max_w[i] > 0)) spd = false;
+        }
+      }
       std::vector<Eigen::Triplet<double>> triplets;
       triplets.reserve(lap_he->out.size() + ni);
       Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
@@ -591,27 +636,43 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
         for (int k = begin; k < end; ++k) {
           const int h = lap_he->out[k];
           const int j = he_to(*lap_faces, h);
-          const double x = uniform ? 1.0 : std::max(ww[h], floor_w);
+          const double x = spd ? std::max(ww[h], kRelativeWeightFloor * std::max(wmax, row_max_w[j]))
+                               : uniform ? 1.0
+                                         : std::max(ww[h], floor_w);
           diag += x;
-          if (interior_index[j] >= 0) triplets.emplace_back(r, interior_index[j], -x);
-          else rhs.row(r) += x * result.uv[j].transpose();
+          if (interior_index[j] >= 0) {
+            if (!spd || interior_index[j] <= r) triplets.emplace_back(r, interior_index[j], -x);
+          } else {
+            rhs.row(r) += x * result.uv[j].transpose();
+          }
         }
         triplets.emplace_back(r, r, diag);
       }
       Eigen::SparseMatrix<double> A(ni, ni);
-      A.setFromTriplets(triplets.begin(), triplets.end());
+      A.setFromTriplets(triplets.begin(), triplets.end());  // spd: the lower triangle only
       triplets = {};
       context.report("parameterize: factorize", 0.2);
       context.check_cancel();
 
-      const Eigen::MatrixX2d x = options.ordering == LuOrdering::SymmetricAmd
-                                     ? solve_symmetric_amd(A, rhs, context, symbolic)
-                                     : solve_colamd(A, rhs, context);
+      Eigen::MatrixX2d x;
+      if (spd) {
+        if (!solve_cholesky(A, rhs, context, cholesky, x)) return false;
+      } else {
+        x = options.ordering == LuOrdering::SymmetricAmd ? solve_symmetric_amd(A, rhs, context, symbolic)
+                                                         : solve_colamd(A, rhs, context);
+      }
       if (!x.allFinite())
-        throw SolverError("parameterize_square: the mean-value solve (" + std::to_string(ni) +
-                          " interior vertices) gave no finite solution");
+        throw SolverError("parameterize_square: the " + std::string(spd ? "cotangent" : "mean-value") + " solve (" +
+                          std::to_string(ni) + " interior vertices) gave no finite solution");
       for (int v = 0; v < nv; ++v)
         if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
+      return true;
+    };
+    bool use_cholesky = symmetric;  // false once a Cholesky factorization failed
+    auto solve_with = [&](const std::vector<double>& ww) {
+      if (use_cholesky && solve_once(ww, true)) return;
+      use_cholesky = false;
+      solve_once(ww, false);
     };
     solve_with(w);
 
@@ -650,18 +711,34 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
         }
         for (int v = 0; v < nv; ++v)
           sigma[v] = area[v] > 0 && sum[v] > 0 && std::isfinite(sum[v]) ? std::sqrt(sum[v] / area[v]) : 1.0;
-        std::fill(row_max.begin(), row_max.end(), 0.0);
-        for (int f = 0; f < nf; ++f)
-          for (int c = 0; c < 3; ++c) {
-            double& x = w[3 * f + c];
-            x /= sigma[(*lap_faces)[f][(c + 1) % 3]];
-            row_max[(*lap_faces)[f][c]] = std::max(row_max[(*lap_faces)[f][c]], x);
-          }
-        // Rows rescaled to a largest weight of 1 (the map does not change): repeated divisions
-        // would otherwise underflow.
-        for (int f = 0; f < nf; ++f)
-          for (int c = 0; c < 3; ++c)
-            if (row_max[(*lap_faces)[f][c]] > 0) w[3 * f + c] /= row_max[(*lap_faces)[f][c]];
+        if (symmetric) {
+          // Row i of the system with w_ij / sigma_j, multiplied by the product of 1 / sigma_i
+          // over the rounds so far (the map does not change), has the symmetric weights
+          // w_ij / (sigma_i sigma_j) round after round: still a Cholesky system. All weights are
+          // rescaled to a largest of 1, so that repeated divisions do not underflow.
+          double wmax = 0;
+          for (int f = 0; f < nf; ++f)
+            for (int c = 0; c < 3; ++c) {
+              double& x = w[3 * f + c];
+              x /= sigma[(*lap_faces)[f][c]] * sigma[(*lap_faces)[f][(c + 1) % 3]];
+              wmax = std::max(wmax, x);
+            }
+          if (wmax > 0)
+            for (double& x : w) x /= wmax;
+        } else {
+          std::fill(row_max.begin(), row_max.end(), 0.0);
+          for (int f = 0; f < nf; ++f)
+            for (int c = 0; c < 3; ++c) {
+              double& x = w[3 * f + c];
+              x /= sigma[(*lap_faces)[f][(c + 1) % 3]];
+              row_max[(*lap_faces)[f][c]] = std::max(row_max[(*lap_faces)[f][c]], x);
+            }
+          // Rows rescaled to a largest weight of 1 (the map does not change): repeated divisions
+          // would otherwise underflow.
+          for (int f = 0; f < nf; ++f)
+            for (int c = 0; c < 3; ++c)
+              if (row_max[(*lap_faces)[f][c]] > 0) w[3 * f + c] /= row_max[(*lap_faces)[f][c]];
+        }
         try {
           solve_with(w);
         } catch (const SolverError&) {

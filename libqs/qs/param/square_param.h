@@ -98,7 +98,10 @@ void count_uv_faces(const std::vector<Tri>& faces, SquareParam& sp);
 
 /// Border by arc length on each side (3D edge lengths), interior by Floater mean-value weights
 /// w_ij = (tan(a/2) + tan(b/2)) / |p_i - p_j| from the 3D one-ring angles, one sparse LU solve
-/// (Eigen SparseLU, ordering per options.ordering) for u and v together.
+/// (Eigen SparseLU, ordering per options.ordering) for u and v together. Cotangent weights are
+/// symmetric: that system (and each stretch-minimization round's, its rows rescaled) is solved by
+/// sparse Cholesky (SupernodalCholesky) instead, and a weight's floor is the larger of its two
+/// rows'; should a pivot not be positive in floating point, the patch falls back to LU.
 /// Degenerate geometry never yields NaN: edge lengths are floored at options.min_edge_length;
 /// a corner without an angle (zero-length edge) contributes 0, an angle within ~2e-8 rad of pi is
 /// clamped; in each row, edges left with a weight below 1e-8 times the row's largest get that
