@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <optional>
 #include <iterator>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -410,14 +410,12 @@ DissectionSet SetDissector::run() {
       majority[k] = 2 * zeros > nm ? 0 : 2 * zeros < nm ? 1 : sides[0][k];
     }
     std::vector<std::vector<int>> candidates{majority};
-    std::vector<std::pair<size_t, size_t>> own;  // (meshes with it, first mesh) per arrangement
-    for (size_t i = 0; i < nm; ++i)
-      if (std::find(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(i), sides[i]) ==
-          sides.begin() + static_cast<std::ptrdiff_t>(i))
-        own.emplace_back(static_cast<size_t>(std::count(sides.begin(), sides.end(), sides[i])), i);
-    std::stable_sort(own.begin(), own.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    for (const auto& [count, i] : own)
-      if (sides[i] != majority) candidates.push_back(sides[i]);
+    std::vector<std::vector<int>> own = sides;  // the meshes' arrangements, most common first
+    std::stable_sort(own.begin(), own.end(), [&](const auto& a, const auto& b) {
+      return std::count(sides.begin(), sides.end(), a) > std::count(sides.begin(), sides.end(), b);
+    });
+    for (const auto& a : own)
+      if (std::find(candidates.begin(), candidates.end(), a) == candidates.end()) candidates.push_back(a);
     std::optional<InvalidInput> first_failure;
     for (const std::vector<int>& want : candidates) {
       std::vector<SeedLoop> routed = loops;
