@@ -33,19 +33,30 @@ ATTRIBUTION="$OUT/attribution.tsv"
 : > "$RESULTS"
 : > "$ATTRIBUTION"
 
-# exact_loop NAME DIR A B LA LB: the posed pair again with B's seed loop replaced by A's (the
-# exact loop; qs-bench-stage-attribution), measured the same way.
-exact_loop() {
-  local name=$1 dir=$2 rc
+# STAGES: what each stage costs (qs-bench-stage-attribution): the posed pair again with B's stages
+# replaced, one more at a time, by their exact counterparts taken from A: the bench's options per
+# level (the table's columns below name them).
+STAGES=("--exact loop" "--exact splits" "--exact maps" "--exact maps --no-refine"
+        "--exact maps --no-refine --leaf-rounds 0")
+# attribution NAME DIR A B LA LB: one line per pair: NAME, then per level "exit:folder" ("exit:-"
+# when nothing was measured).
+attribution() {
+  local name=$1 dir=$2 line=$1 k=0 rc level args
   [ -x "$BENCH/qs-bench-stage-attribution" ] || return 0
-  "$BENCH/qs-bench-stage-attribution" "$3" "$4" --landmarks "$5" "$6" -o "$dir" > "$dir.log" 2>&1
-  rc=$?
-  if [ -f "$dir/dissection.json" ] &&
-     "$TOOLS/qs-metro" --correspondence "$dir" --samples "$SAMPLES" --json -o "$dir.corr.json" > "$dir.metro.log" 2>&1; then
-    printf '%s\t%s\t%s\n' "$name" "$rc" "$dir" >> "$ATTRIBUTION"
-  else
-    printf '%s\t%s\t-\n' "$name" "$rc" >> "$ATTRIBUTION"
-  fi
+  for level in "${STAGES[@]}"; do
+    read -r -a args <<< "$level"
+    "$BENCH/qs-bench-stage-attribution" "$3" "$4" --landmarks "$5" "$6" "${args[@]}" -o "$dir-$k" > "$dir-$k.log" 2>&1
+    rc=$?
+    if [ -f "$dir-$k/dissection.json" ] &&
+       "$TOOLS/qs-metro" --correspondence "$dir-$k" --samples "$SAMPLES" --json -o "$dir-$k.corr.json" \
+         > "$dir-$k.metro.log" 2>&1; then
+      line+=$'\t'"$rc:$dir-$k"
+    else
+      line+=$'\t'"$rc:-"
+    fi
+    k=$((k + 1))
+  done
+  printf '%s\n' "$line" >> "$ATTRIBUTION"
 }
 
 # pair NAME DIR A B LANDMARKS_A LANDMARKS_B MAP_B POSED_OBJ
@@ -89,7 +100,7 @@ for mesh in $LIST; do
   echo "$stem: posed in $(python3 -c "print(f'{$t1-$t0:.1f}')") s: $(head -n1 "$d/pose.log" | sed 's/.*faces; //')"
   pair "$stem" "$d/dissection" "$MESHES/$mesh" "$d/posed.obj" "$d/posed.source.landmarks.json" \
       "$d/posed.landmarks.json" - "$d/posed.obj"
-  exact_loop "$stem" "$d/exact-loop" "$MESHES/$mesh" "$d/posed.obj" "$d/posed.source.landmarks.json" \
+  attribution "$stem" "$d/exact" "$MESHES/$mesh" "$d/posed.obj" "$d/posed.source.landmarks.json" \
       "$d/posed.landmarks.json"
   pair "$stem re-tessellated" "$d/dissection-r" "$MESHES/$mesh" "$d/posed_r.obj" "$d/posed.source.landmarks.json" \
       "$d/posed_r.landmarks.json" "$d/posed_r.map.json" "$d/posed.obj"
@@ -155,16 +166,21 @@ for name, rc, secs, d, mb, posed in rows:
     print(f"| {name} | {rc} | {secs} s | {doc['patches']} | {f(e)} | {f(e4)} | {f(b)} | {100 * side:.1f}% | "
           f"{100 * p['same_patch_share']:.1f}% | {p.get('corner_distance_mean_percent', 0):.2f}% |")
 
-# What the seed loop's routing costs: the posed pairs with B's loop replaced by the exact one.
+# What each stage costs: B's stages replaced one more at a time by A's (the levels of STAGES).
 qs_rows = {r[0]: r for r in rows}
+levels = ['exact seed loop', '+ exact splits', '+ exact node maps', '+ no refinement', '+ no leaf rounds']
 exact = [l.rstrip('\n').split('\t') for l in open(sys.argv[2])]
 if exact:
     print()
-    print('| pair | qs: mean / p95 / max | exact seed loop: exit | mean / p95 / max |')
-    print('|---|---:|---:|---:|')
-    for name, rc, d in exact:
+    print('| pair | qs | ' + ' | '.join(levels) + ' |')
+    print('|---|' + '---:|' * (len(levels) + 1))
+    for cols in exact:
+        name = cols[0]
         r = qs_rows.get(name)
-        own = f(json.load(open(r[3] + '.corr.json'))['pairs'][0]['dissection']) if r and r[3] != '-' else 'not measured'
-        ex = f(json.load(open(d + '.corr.json'))['pairs'][0]['dissection']) if d != '-' else 'not measured'
-        print(f'| {name} | {own} | {rc} | {ex} |')
+        cells = [f(json.load(open(r[3] + '.corr.json'))['pairs'][0]['dissection']) if r and r[3] != '-' else 'not measured']
+        for c in cols[1:]:
+            rc, d = c.split(':', 1)
+            v = f(json.load(open(d + '.corr.json'))['pairs'][0]['dissection']) if d != '-' else 'not measured'
+            cells.append(v if rc == '0' else f'exit {rc}: {v}')
+        print(f"| {name} | " + ' | '.join(cells) + ' |')
 PY

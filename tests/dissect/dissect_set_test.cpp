@@ -359,3 +359,45 @@ TEST(DissectSet, LandmarksThatDoNotCorrespondAreNotInvalidInput) {
     ADD_FAILURE() << "valid meshes and landmarks refused as invalid input: " << e.what();
   }
 }
+
+// The measurement hooks (DissectOptions::replace_seed_loops, replace_node_maps) as
+// qs-bench-stage-attribution uses them: with A's loop and A's node maps put into B (one
+// connectivity, other positions), B's chart is A's: the same cut mesh and the same (u, v).
+TEST(DissectSet, ExactStagesFromTheFirstMeshGiveItsChart) {
+  const auto a = qs::shapes::bumpy_sphere(0.08, 3, 4);
+  const auto b = deform(a);
+  MeshToDissect ma{&a, equator_seeds(a), {}, "a"};
+  MeshToDissect mb{&b, ma.seeds, {}, "b"};
+  qs::dissect::DissectOptions o;
+  // Splits by area, every leaf within tau: no leaf rounds or repairs, which run on each surface.
+  o.tau = 10;
+  o.max_patch_area = 0.1;
+  o.stretch_iterations = 0;
+  o.geodesic_seed_curves = false;
+  int loops = 0, maps = 0;
+  o.replace_seed_loops = [&](std::vector<qs::dissect::GeodesicLoop>& l) {
+    ASSERT_EQ(l.size(), 2u);
+    l[1].loop = l[0].loop;
+    ++loops;
+  };
+  o.replace_node_maps = [&](std::vector<qs::dissect::DissectOptions::NodeMapRef>& m, bool) {
+    ASSERT_EQ(*m[1].vertices, *m[0].vertices);
+    *m[1].uv = *m[0].uv;
+    ++maps;
+  };
+  const DissectionSet s = qs::dissect::dissect_set({ma, mb}, o);
+  EXPECT_EQ(loops, 1);
+  EXPECT_GT(s.meshes[0].chart.patches.size(), 2u);
+  EXPECT_GT(maps, 2);
+  const auto& ca = s.meshes[0].chart;
+  const auto& cb = s.meshes[1].chart;
+  ASSERT_EQ(cb.mesh.faces, ca.mesh.faces);
+  EXPECT_EQ(cb.face_patch, ca.face_patch);
+  for (size_t f = 0; f < ca.face_uv.size(); ++f)
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(cb.face_uv[f][k], ca.face_uv[f][k]) << "face " << f;
+  // Without the hooks the deformed mesh has maps of its own.
+  o.replace_seed_loops = nullptr;
+  o.replace_node_maps = nullptr;
+  const DissectionSet own = qs::dissect::dissect_set({ma, mb}, o);
+  EXPECT_NE(own.meshes[1].chart.face_uv, own.meshes[0].chart.face_uv);
+}

@@ -13,6 +13,7 @@
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/landmarks/landmarks.h"
+#include "qs/dissect/geodesic_loop.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/param/square_param.h"
 
@@ -130,9 +131,20 @@ struct DissectOptions {
   /// the first's by pose then).
   bool intrinsic_loops = true;
   /// Measurement only, empty in every tool: called with every mesh's seed loop (input order) once
-  /// they are routed, before the seed patches are cut. bench/qs-bench-stage-attribution puts exact
-  /// loops there to measure what the loop's routing costs. \pre it keeps each loop valid.
-  std::function<void(std::vector<SeedLoop>&)> replace_seed_loops;
+  /// they are routed and straightened (geodesic_seed_curves; else each mesh as it is with its edge
+  /// paths), before the seed patches are cut. qs-bench-stage-attribution puts exact loops there to
+  /// measure what the loop's routing costs. \pre it keeps each loop valid on its mesh.
+  std::function<void(std::vector<GeodesicLoop>&)> replace_seed_loops;
+  /// Measurement only, empty in every tool: called with every mesh's map of a node (input order):
+  /// the node's vertices (local -> global id) and their (u, v), which it may replace. Called once
+  /// a node is parameterized, before its features are aligned (`before_split` false), and before
+  /// it is split (true: the cuts run where these maps put them). qs-bench-stage-attribution puts
+  /// the first mesh's map there (exact splits, exact maps). \pre it keeps each map bijective.
+  struct NodeMapRef {
+    const std::vector<int>* vertices;
+    std::vector<Vec2>* uv;
+  };
+  std::function<void(std::vector<NodeMapRef>&, bool before_split)> replace_node_maps;
 };
 
 /// Meshes in one pose: a nearest point on the first mesh (the posed corners, the node maps taken

@@ -54,6 +54,18 @@ bool squeezed_tip(const std::vector<Param>& ps) {
   return tip >= 0;
 }
 
+// DissectOptions::replace_node_maps (measurement only), with the maps' counts and stretch updated.
+void replace_node_maps(const DissectOptions& opt, std::vector<Param>& ps, bool before_split) {
+  if (!opt.replace_node_maps) return;
+  std::vector<DissectOptions::NodeMapRef> maps;
+  for (Param& p : ps) maps.push_back({&p.ex.verts, &p.sp.uv});
+  opt.replace_node_maps(maps, before_split);
+  for (Param& p : ps) {
+    param::count_uv_faces(p.ex.pm.faces, p.sp);
+    p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
+  }
+}
+
 SetDissector::SetDissector(const std::vector<MeshToDissect>& in, const DissectOptions& options,
                            const Context& context)
     : in_(in), opt_(options), ctx_(context) {
@@ -101,6 +113,7 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   for (size_t i = 0; i < meshes_.size(); ++i) faces += meshes_[i].node_faces(nodes[i]);
   parallel_for(meshes_.size(), faces >= kParallelFaces ? 0 : 1, ctx_,
                [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i]); });
+  replace_node_maps(opt_, ps, false);
   // The same features must lie inside the node in every mesh: they are aligned before every split,
   // so only the seed loops (traced on each mesh independently) can separate them.
   for (size_t i = 1; i < ps.size(); ++i) {
@@ -449,13 +462,29 @@ DissectionSet SetDissector::run() {
   DissectionSet out;
   if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops)
     out.intrinsic_loops = route_intrinsic(loops, out.landmark_discrepancy);
-  if (opt_.replace_seed_loops) opt_.replace_seed_loops(loops);
+  std::vector<std::optional<GeodesicLoop>> straightened(nm);
+  if (opt_.replace_seed_loops) {
+    std::vector<GeodesicLoop> g(nm);
+    for (size_t i = 0; i < nm; ++i) {
+      if (opt_.geodesic_seed_curves) {
+        g[i] = meshes_[i].straighten(loops[i]);
+      } else {
+        g[i].mesh = meshes_[i].trimesh();
+        g[i].loop = loops[i];
+      }
+    }
+    opt_.replace_seed_loops(g);
+    for (size_t i = 0; i < nm; ++i) {
+      loops[i] = g[i].loop;
+      if (opt_.geodesic_seed_curves) straightened[i] = std::move(g[i]);
+    }
+  }
   std::array<std::vector<Node>, 2> roots;  // the same names, labels and corner roles in every mesh
   if (opt_.same_pose && nm > 1) {
     seed_posed(loops, roots, out);
   } else {
     for (size_t i = 0; i < nm; ++i) {
-      const auto r = meshes_[i].seed(std::move(loops[i]));
+      const auto r = meshes_[i].seed(std::move(loops[i]), std::move(straightened[i]));
       for (int k = 0; k < 2; ++k) roots[k].push_back(r[k]);
       ctx_.report("seed loops", static_cast<double>(i + 1) / static_cast<double>(nm));
     }
@@ -615,6 +644,7 @@ DissectionSet SetDissector::run() {
           out.same_pose_untangled += taken[i] == Transfer::Untangled;
         }
       }
+      replace_node_maps(opt_, ps, true);
       std::vector<std::array<Node, 5>> kids(meshes_.size());
       // DissectOptions::same_pose: every mesh's inner corners where mesh 0's lie on its surface;
       // when that fails (no such quad, or the split fails with it), the common (u, v) after all.
