@@ -220,8 +220,9 @@ class PatchSolver {
  public:
   // `metric`: the reference's (scaled) metric for local face t at uv point q of the problem;
   // `linearize`, when given, replaces it (the per-face Jacobian's affine model at the current uv).
-  PatchSolver(PatchProblem& prob, const MetricFn& metric, const LinearizeFn* linearize = nullptr)
-      : prob_(prob), metric_(metric), linearize_(linearize) {
+  // `threads`: the factorization's (RefineOptions::threads).
+  PatchSolver(PatchProblem& prob, const MetricFn& metric, const LinearizeFn* linearize, int threads)
+      : prob_(prob), metric_(metric), linearize_(linearize), threads_(threads) {
     a_.resize(prob.faces.size());
     b_.assign(prob.faces.size(), Eigen::Vector4d::Zero());
   }
@@ -274,7 +275,7 @@ class PatchSolver {
     Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
     if (!analyzed_) {
       std::vector<Eigen::Triplet<double>> trip;
-      trip.reserve(prob_.faces.size() * 36 + prob_.pull.size() * 4 + n);
+      trip.reserve(prob_.faces.size() * 36 + prob_.pull.size() * 4);
       if (!assemble(g, [&](int row, int col, double x) {
             trip.emplace_back(row, col, x);
             if (row == col) diag = std::max(diag, x);
@@ -297,7 +298,7 @@ class PatchSolver {
     double mu = 1e-10 * std::max(diag, 1e-300);
     for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
       for (int i = 0; i < n; ++i) h_.valuePtr()[diag_slot_[i]] = plain[i] + mu;
-      if (!llt_.factorize(h_)) continue;  // not positive definite: more regularization
+      if (!llt_.factorize(h_, threads_)) continue;  // not positive definite: more regularization
       d = llt_.solve(-g);
       if (d.allFinite() && g.dot(d) < 0) break;
       d.resize(0);
@@ -332,6 +333,7 @@ class PatchSolver {
   PatchProblem& prob_;
   const MetricFn& metric_;
   const LinearizeFn* linearize_;
+  int threads_;
   // The gradient into g and every Hessian entry to add(row, col, value), faces then the pose pull,
   // in the same order at every call; false when a face's energy is not finite.
   template <class Add>
@@ -395,22 +397,55 @@ class PatchSolver {
     return ncols;
   }
 
-  // The Hessian's pattern, the same at every step: the first step's entries `trip` (summed where
-  // they repeat) and the whole diagonal, which takes the regularization; ordered once. slot_ is
-  // where each entry lands in the value array, diag_slot_ each diagonal entry.
-  void analyze(std::vector<Eigen::Triplet<double>>& trip) {
+  // The Hessian's pattern, the same at every step: the first step's entries `trip` and the whole
+  // diagonal, which takes the regularization; ordered once. slot_ is where each entry lands in
+  // the value array (entries that repeat are summed there in `trip`'s order), diag_slot_ each
+  // diagonal entry. Built by columns in linear time (a counting sort, then each column's rows
+  // scattered).
+  void analyze(const std::vector<Eigen::Triplet<double>>& trip) {
     const int n = prob_.unknowns;
     const size_t visited = trip.size();
-    for (int i = 0; i < n; ++i) trip.emplace_back(i, i, 0.0);
-    h_.resize(n, n);
-    h_.setFromTriplets(trip.begin(), trip.end());
-    h_.makeCompressed();
-    const double* base = h_.valuePtr();
+    std::vector<int> by_col_start(n + 1, 0);
+    for (const auto& t : trip) ++by_col_start[t.col() + 1];
+    for (int j = 0; j < n; ++j) by_col_start[j + 1] += by_col_start[j];
+    std::vector<int> by_col(visited), fill(by_col_start.begin(), by_col_start.end() - 1);
+    for (size_t k = 0; k < visited; ++k) by_col[fill[trip[k].col()]++] = static_cast<int>(k);
+    std::vector<int> outer(n + 1, 0), inner, mark(n, -1), rows;
+    std::vector<std::ptrdiff_t> at(n, 0);
+    inner.reserve(visited / 2 + n);
     slot_.resize(visited);
-    for (size_t k = 0; k < visited; ++k) slot_[k] = &h_.coeffRef(trip[k].row(), trip[k].col()) - base;
     diag_slot_.resize(n);
-    for (int i = 0; i < n; ++i) diag_slot_[i] = &h_.coeffRef(i, i) - base;
-    llt_.analyze(h_);
+    for (int j = 0; j < n; ++j) {
+      rows.assign(1, j);  // the diagonal
+      mark[j] = j;
+      for (int q = by_col_start[j]; q < by_col_start[j + 1]; ++q) {
+        const int r = trip[by_col[q]].row();
+        if (mark[r] != j) {
+          mark[r] = j;
+          rows.push_back(r);
+        }
+      }
+      std::sort(rows.begin(), rows.end());
+      for (int r : rows) {
+        at[r] = static_cast<std::ptrdiff_t>(inner.size());
+        inner.push_back(r);
+      }
+      outer[j + 1] = static_cast<int>(inner.size());
+      for (int q = by_col_start[j]; q < by_col_start[j + 1]; ++q) slot_[by_col[q]] = at[trip[by_col[q]].row()];
+      diag_slot_[j] = at[j];
+    }
+    h_.resize(n, n);
+    h_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+    std::copy(outer.begin(), outer.end(), h_.outerIndexPtr());
+    std::copy(inner.begin(), inner.end(), h_.innerIndexPtr());
+    double* const value = h_.valuePtr();
+    std::fill(value, value + inner.size(), 0.0);
+    for (size_t k = 0; k < visited; ++k) value[slot_[k]] += trip[k].value();
+    // Ordered by nested dissection of the unknowns' vertices at their (u, v).
+    Eigen::MatrixXd points(n, 2);
+    for (size_t v = 0; v < prob_.uv.size(); ++v)
+      for (int k = 0; k < prob_.dims[v]; ++k) points.row(prob_.var[v] + k) = prob_.uv[v].transpose();
+    llt_.analyze(h_, &points);
     analyzed_ = true;
   }
 
@@ -431,7 +466,7 @@ PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const Refine
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
   if (pr.faces.empty()) return res;
-  PatchSolver solver(pr, metric, linearize);
+  PatchSolver solver(pr, metric, linearize, options.threads);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
   double e = solver.energy(pr.uv);
