@@ -515,7 +515,8 @@ class PatchSolver {
 
 // Refines a problem's free (u, v) (all inside [0, hi.x] x [0, hi.y]) under `metric`.
 PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const RefineOptions& options, bool optimize,
-                          const Vec2& hi, const Vec2& lo, const LinearizeFn* linearize) {
+                          const Vec2& hi, const Vec2& lo, const LinearizeFn* linearize,
+                          double max_start_distortion) {
   PatchResult res;
   res.area = pr.total_area;
   for (int v : pr.var) (v >= 0 ? res.free : res.held) += 1;
@@ -523,13 +524,17 @@ PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const Refine
   PatchSolver solver(pr, metric, linearize, options.threads);
   solver.update_metric();
   const std::vector<Vec2> start = pr.uv;
-  double e = solver.energy(pr.uv);
-  const double e_start = e;
   res.energy_before = solver.distortion(pr.uv);
+  double e = std::isfinite(res.energy_before) ? res.energy_before + solver.pull(pr.uv) : kInf;  // energy()
+  const double e_start = e;
   res.energy_after = res.energy_before;
   if (!std::isfinite(e)) {
     res.skipped = true;  // folded to start with: left alone, and left out of the energies
     res.energy_before = res.energy_after = res.area = 0;
+    return res;
+  }
+  if (max_start_distortion > 0 && (!(res.area > 0) || res.energy_before / res.area / 4 > max_start_distortion)) {
+    res.skipped = true;
     return res;
   }
   if (!optimize || pr.unknowns == 0 || options.iterations == 0) return res;
