@@ -95,9 +95,9 @@ void adjacency(const Eigen::SparseMatrix<double>& a, std::vector<int>& start, st
       }
 }
 
-/// Nested dissection of a graph whose nodes have points: a part is cut across one axis, at the
-/// position within the middle 30% of its nodes (in that axis's order) where the fewest edges cross
-/// per node of the smaller side; the nodes of the side with fewer of them that touch the other
+/// Nested dissection of a graph whose nodes have points: a part is cut across the axis of its
+/// largest extent, at the position within the middle 30% of its nodes (in that axis's order) where
+/// the fewest edges cross per node of the smaller side; the nodes of the side with fewer of them that touch the other
 /// side form the separator, ordered after both sides. Parts of at most `leaf` nodes keep their
 /// index order.
 class Dissector {
@@ -131,13 +131,22 @@ class Dissector {
     }
     const int me = ++stamp_;
     for (int i : lists[0]) part_[i] = me;
-    // Per axis, the edges crossing each cut position (a difference array over the ranks).
+    // The axis of the largest extent; the edges crossing each cut position across it (a
+    // difference array over the ranks).
     int best_axis = 0, best_cut = m / 2;
+    double extent = -1;
+    for (size_t a = 0; a < lists.size(); ++a) {
+      const double e = points_(lists[a].back(), static_cast<Eigen::Index>(a)) - points_(lists[a].front(), static_cast<Eigen::Index>(a));
+      if (e > extent) {
+        extent = e;
+        best_axis = static_cast<int>(a);
+      }
+    }
     double best_score = std::numeric_limits<double>::infinity();
     std::vector<long> diff(m + 1);
     const int lo = std::max(1, static_cast<int>(0.35 * m)), hi = std::min(m - 1, static_cast<int>(0.65 * m));
-    for (size_t a = 0; a < lists.size(); ++a) {
-      const std::vector<int>& l = lists[a];
+    {
+      const std::vector<int>& l = lists[best_axis];
       for (int k = 0; k < m; ++k) rank_[l[k]] = k;
       std::fill(diff.begin(), diff.end(), 0);
       for (int k = 0; k < m; ++k) {
@@ -156,7 +165,6 @@ class Dissector {
         const double score = static_cast<double>(cross) / std::min(c, m - c);
         if (score < best_score) {
           best_score = score;
-          best_axis = static_cast<int>(a);
           best_cut = c;
         }
       }

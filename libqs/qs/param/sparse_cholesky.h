@@ -17,8 +17,8 @@ class SupernodalCholesky {
  public:
   /// The ordering and the supernodes of `lower`'s pattern. \pre square; only the lower triangle
   /// (the diagonal included) is read. `points`: null (AMD), or one point per row (a row of any
-  /// width): the pattern's graph is cut recursively by axis-aligned planes (fewest crossing
-  /// edges per balance), each separator ordered after its two sides; on meshes its factor takes
+  /// width): the pattern's graph is cut recursively across its longest axis (fewest
+  /// crossing edges per balance), each separator ordered after its two sides; on meshes its factor takes
   /// fewer operations than AMD's. \throws InternalError when points has another row count.
   void analyze(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd* points = nullptr);
   /// Factorizes `lower` (the pattern given to analyze()). False when a pivot is not positive
