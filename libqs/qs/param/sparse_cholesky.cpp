@@ -259,6 +259,10 @@ void nested_dissection(const Eigen::SparseMatrix<double>& lower, const Eigen::Ma
     for (int q = node_start[v]; q < node_start[v + 1]; ++q) new_index[by_point[q]] = k++;
 }
 
+/// Factorizations of less work than this (k m^2 summed over the supernodes, about the
+/// multiply-adds) run on one thread: a few milliseconds, less than starting threads is worth.
+constexpr double kParallelWork = 2e7;
+
 void require_compressed(const Eigen::SparseMatrix<double>& a) {
   if (!a.isCompressed() || a.rows() != a.cols())
     throw InternalError("SupernodalCholesky: the matrix must be square and compressed");
@@ -435,32 +439,34 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
   // independent subtrees run, so the factor does not depend on the thread count.
   const int count = inside_parallel_loop() ? 1 : thread_count(threads, Context{});
   std::vector<int> relpos(n_, 0), at;
-  if (count <= 1 || ns < 2) {
+  // Subtrees (consecutive in the postorder: [lowest[s], s]) handed to the threads: the roots'
+  // subtrees, the heaviest split into its children's while it exceeds a quarter of a thread's
+  // share; the supernodes split off run afterwards, in order, on this thread. A factorization of
+  // little work (k m^2 summed over the supernodes) runs on this thread alone.
+  std::vector<int> lowest(ns);
+  std::vector<double> work(ns, 0.0);
+  double total = 0;
+  if (count > 1) {
+    for (int s = 0; s < ns; ++s) lowest[s] = s;
+    for (int s = 0; s < ns; ++s) {
+      const double m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
+      work[s] += k * m * m;
+      if (parent_[s] >= 0) {
+        lowest[parent_[s]] = std::min(lowest[parent_[s]], lowest[s]);
+        work[parent_[s]] += work[s];
+      } else {
+        total += work[s];
+      }
+    }
+  }
+  if (count <= 1 || ns < 2 || total < kParallelWork) {
     for (int s = 0; s < ns; ++s)
       if (!process(s, relpos, at)) return false;
     return true;
   }
-  // Subtrees (consecutive in the postorder: [lowest[s], s]) handed to the threads: the roots'
-  // subtrees, the heaviest split into its children's while it exceeds a quarter of a thread's
-  // share; the supernodes split off run afterwards, in order, on this thread.
-  std::vector<int> lowest(ns);
-  std::vector<double> work(ns, 0.0);
-  for (int s = 0; s < ns; ++s) lowest[s] = s;
-  for (int s = 0; s < ns; ++s) {
-    const double m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
-    work[s] += k * m * m;
-    if (parent_[s] >= 0) {
-      lowest[parent_[s]] = std::min(lowest[parent_[s]], lowest[s]);
-      work[parent_[s]] += work[s];
-    }
-  }
-  double total = 0;
   std::vector<int> tasks, top;
   for (int s = 0; s < ns; ++s)
-    if (parent_[s] < 0) {
-      tasks.push_back(s);
-      total += work[s];
-    }
+    if (parent_[s] < 0) tasks.push_back(s);
   const double limit = total / (4.0 * count);
   for (;;) {
     auto heaviest = std::max_element(tasks.begin(), tasks.end(), [&](int a, int b) { return work[a] < work[b]; });
