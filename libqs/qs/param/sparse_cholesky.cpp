@@ -8,6 +8,7 @@
 #include <Eigen/OrderingMethods>
 #include <algorithm>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "qs/core/error.h"
@@ -393,12 +394,12 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
     }
   // Supernode s's front: its entries of the matrix and its children's updates (in child order),
   // factorized; its columns of L go to panel_[s], its update to update[s]. relpos: a workspace of
-  // n_ entries. False when a pivot is not positive.
-  auto process = [&](int s, std::vector<int>& relpos, std::vector<int>& at) {
+  // n_ entries; buffer: room for the front (m^2). False when a pivot is not positive.
+  auto process = [&](int s, std::vector<int>& relpos, std::vector<int>& at, double* buffer) {
     const int* rs = rows_.data() + row_start_[s];
     const int m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
     for (int a = 0; a < m; ++a) relpos[rs[a]] = a;
-    Eigen::MatrixXd front(m, m);  // only its lower triangle is read or written: zeroed
+    Eigen::Map<Eigen::MatrixXd> front(buffer, m, m);  // only its lower triangle is read or written: zeroed
     for (int b = 0; b < m; ++b) std::fill(&front(b, b), &front(0, b) + m, 0.0);
     for (int c = first_[s]; c < first_[s + 1]; ++c)
       for (int q = col_start_[c]; q < col_start_[c + 1]; ++q)
@@ -431,9 +432,18 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
       for (int b = 0; b < m - k; ++b)
         for (int a = b; a < m - k; ++a) *out++ = u(a, b);
     }
-    front.conservativeResize(m, k);  // keeps the first k columns in place (column-major)
-    panel_[s] = std::move(front);
+    panel_[s].resize(m, k);  // the size of the last factorization's: no allocation
+    panel_[s] = front.leftCols(k);
     return true;
+  };
+  // The largest front of a range of supernodes.
+  auto largest_front = [&](int from, int to) {
+    std::size_t most = 0;
+    for (int s = from; s <= to; ++s) {
+      const std::size_t m = static_cast<std::size_t>(row_start_[s + 1] - row_start_[s]);
+      most = std::max(most, m * m);
+    }
+    return most;
   };
   // Every supernode's computation is the same whichever thread runs it and in whatever order
   // independent subtrees run, so the factor does not depend on the thread count.
@@ -459,9 +469,11 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
       }
     }
   }
+  // The calling thread's front buffer is kept from one factorization to the next (no fresh pages).
+  front_buffer_.resize(std::max(front_buffer_.size(), largest_front(0, ns - 1)));
   if (count <= 1 || ns < 2 || total < kParallelWork) {
     for (int s = 0; s < ns; ++s)
-      if (!process(s, relpos, at)) return false;
+      if (!process(s, relpos, at, front_buffer_.data())) return false;
     return true;
   }
   std::vector<int> tasks, top;
@@ -482,12 +494,13 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
   threads_only.threads = count;
   parallel_for(static_cast<int>(tasks.size()), count, threads_only, [&](int i) {
     std::vector<int> rel(n_, 0), at_i;
-    for (int s = lowest[tasks[i]]; s <= tasks[i] && ok[i]; ++s) ok[i] = process(s, rel, at_i);
+    const std::unique_ptr<double[]> buffer(new double[largest_front(lowest[tasks[i]], tasks[i])]);
+    for (int s = lowest[tasks[i]]; s <= tasks[i] && ok[i]; ++s) ok[i] = process(s, rel, at_i, buffer.get());
   });
   if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
   std::sort(top.begin(), top.end());
   for (int s : top)
-    if (!process(s, relpos, at)) return false;
+    if (!process(s, relpos, at, front_buffer_.data())) return false;
   return true;
 }
 

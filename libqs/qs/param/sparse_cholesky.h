@@ -42,6 +42,7 @@ class SupernodalCholesky {
   std::vector<int> col_start_, row_index_;
   std::vector<long> source_;      ///< per permuted entry: its index in the input's value array
   std::vector<Eigen::MatrixXd> panel_;  ///< per supernode: its columns of L (rows_ x columns)
+  std::vector<double> front_buffer_;     ///< room for the largest front, kept between factorizations
 };
 
 }  // namespace qs::param
