@@ -97,10 +97,10 @@ void adjacency(const Eigen::SparseMatrix<double>& a, std::vector<int>& start, st
 }
 
 /// Nested dissection of a graph whose nodes have points: a part is cut across the axis of its
-/// largest extent, at the position within the middle 30% of its nodes (in that axis's order) where
-/// the fewest edges cross per node of the smaller side; the nodes of the side with fewer of them that touch the other
-/// side form the separator, ordered after both sides. Parts of at most `leaf` nodes keep their
-/// index order.
+/// largest extent, at the position within the middle 30% of its nodes (in that axis's order)
+/// where the fewest edges cross per node of the smaller side; the nodes of one side that touch the
+/// other (the side with fewer such nodes) form the separator, ordered after both sides. Parts of
+/// at most `leaf` nodes keep their index order.
 class Dissector {
  public:
   Dissector(const Eigen::MatrixXd& points, const std::vector<int>& start, const std::vector<int>& adj, int leaf)
@@ -137,7 +137,8 @@ class Dissector {
     int best_axis = 0, best_cut = m / 2;
     double extent = -1;
     for (size_t a = 0; a < lists.size(); ++a) {
-      const double e = points_(lists[a].back(), static_cast<Eigen::Index>(a)) - points_(lists[a].front(), static_cast<Eigen::Index>(a));
+      const auto axis = static_cast<Eigen::Index>(a);
+      const double e = points_(lists[a].back(), axis) - points_(lists[a].front(), axis);
       if (e > extent) {
         extent = e;
         best_axis = static_cast<int>(a);
@@ -214,7 +215,8 @@ constexpr int kDissectionLeaf = 32;
 /// The rows of `lower` in nested-dissection order (Dissector) of the graph whose nodes are the
 /// rows' distinct points (rows at one point stay together, in index order); new_index[row] = its
 /// position.
-void nested_dissection(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd& p, std::vector<int>& new_index) {
+void nested_dissection(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd& p,
+                       std::vector<int>& new_index) {
   const int n = static_cast<int>(lower.cols());
   const int d = static_cast<int>(p.cols());
   std::vector<int> by_point(n);
@@ -488,7 +490,8 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
     top.push_back(s);
     for (int t = head[s]; t != -1; t = next[t]) tasks.push_back(t);
   }
-  std::sort(tasks.begin(), tasks.end(), [&](int a, int b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
+  std::sort(tasks.begin(), tasks.end(),
+            [&](int a, int b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
   std::vector<char> ok(tasks.size(), 1);
   Context threads_only;
   threads_only.threads = count;
