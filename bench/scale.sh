@@ -1,18 +1,22 @@
 #!/usr/bin/env bash
 # How qs-dissect grows with its input, run as a user runs it: one mesh subdivided 1->4 per step
 # (spot_6k, 6k to 6M faces), double cones whose caps are fans (one vertex of valence 5k-40k),
-# generated families of 2-32 meshes dissected together (qs-family generate), and a mesh paired
-# with its own re-tessellation (qs-family retessellate, 40k-150k faces). Every mesh is made by
-# script (bench/scale_meshes.py, qs-family) into OUT_DIR/meshes and kept for the next run.
+# generated families of 2-32 meshes dissected together (qs-family generate), a mesh paired
+# with its own re-tessellation (qs-family retessellate, 40k-150k faces), a face re-tessellated
+# twice (max_planck_11k to 28k and 140k faces) and a set of four generated 100k-face meshes.
+# Every mesh is made by script (bench/scale_meshes.py, qs-family) into OUT_DIR/meshes and kept
+# for the next run.
 #
 #   usage: bench/scale.sh [--quick] [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-scale)
 #   env:   QS_TOOLS (default build/tools)
 #
-# --quick: spot to 375k faces, the four cones, families of 1-8, one 40k pair (about 45 s of CPU,
-# 2-3 minutes on 2 busy cores, 300 MB). Without it: spot to 6M faces, families to 32, pairs to
-# 150k (the 6M-face mesh alone takes minutes of CPU and about 5 GB of memory).
+# --quick: spot to 375k faces, the four cones, families of 1-16, one 40k pair and the face pair
+# (about 70 s of CPU, 2-3 minutes on 2 busy cores, 300 MB). Without it: spot to 6M faces,
+# families to 32, pairs to 150k, the four 100k-face meshes (the 6M-face mesh alone takes minutes
+# of CPU and about 4 GB of memory).
 #
-# Per run: wall time, CPU time (user + sys: what the run costs, less dependent on the machine's load),
+# Per run (qs-dissect as a user runs it: dissection and map refinement, all threads): wall time,
+# CPU time (user + sys: what the run costs, less dependent on the machine's load),
 # peak resident memory (/usr/bin/time), patches. "exponent": log(cpu ratio) / log(size ratio)
 # against the row above (1 = linear); each table ends with the least-squares exponent of CPU
 # time and of memory over its rows. Families: CPU time per mesh, and per mesh per patch (the
@@ -117,7 +121,7 @@ table "Double cones with fan caps (one vertex of valence k, 2k faces)" valence "
 
 # 3. Generated families dissected together (8000 faces a mesh; shape i does not depend on N).
 maxn=32
-[ "$quick" = 1 ] && maxn=8
+[ "$quick" = 1 ] && maxn=16
 fam=$M/family8k
 if [ ! -f "$fam/family.json" ] || [ "$(ls "$fam"/shape*.obj 2>/dev/null | wc -l)" -lt "$maxn" ]; then
   rm -rf "$fam"
@@ -154,3 +158,32 @@ for fc in $sizes; do
   rows+=("elephant+$fc $((fc + $(faces_of "$MESHES/elephant_12k.obj"))) $(run "pair_$fc" "$MESHES/elephant_12k.obj" "$r")")
 done
 table "A mesh and its re-tessellation as a pair (elephant_12k; faces of both)" faces "${rows[@]}"
+
+# 5. One face re-tessellated twice (about 28k and 140k faces), dissected as a pair.
+rows=()
+pair=()
+for fc in 24000 120000; do
+  r=$M/max_planck_$fc.obj
+  if [ ! -f "$r" ]; then
+    "$TOOLS/qs-family" retessellate "$MESHES/max_planck_11k.obj" --faces "$fc" -o "$r" -q \
+      || { echo "scale.sh: qs-family retessellate failed" >&2; exit 1; }
+  fi
+  pair+=("$r")
+done
+echo "== max_planck_11k re-tessellated to $(faces_of "${pair[0]}") and $(faces_of "${pair[1]}") faces" >&2
+rows+=("max_planck_pair $(($(faces_of "${pair[0]}") + $(faces_of "${pair[1]}"))) $(run face_pair "${pair[@]}")")
+table "One face re-tessellated twice, as a pair (max_planck_11k; faces of both)" faces "${rows[@]}"
+
+# 6. Four generated 100k-face meshes dissected together (full set only).
+if [ "$quick" = 0 ]; then
+  fam=$M/family100k
+  if [ ! -f "$fam/family.json" ] || [ "$(ls "$fam"/shape*.obj 2>/dev/null | wc -l)" -lt 4 ]; then
+    rm -rf "$fam"
+    "$TOOLS/qs-family" generate -n 4 --faces 100000 --seed 1 -o "$fam" -q \
+      || { echo "scale.sh: qs-family generate failed" >&2; exit 1; }
+  fi
+  mapfile -t shapes < <(ls "$fam"/shape*.obj | sort | head -n 4)
+  echo "== four 100k-face meshes" >&2
+  table "Four generated meshes dissected together (qs-family generate, 100000 faces a mesh)" faces \
+    "family100k_4 400000 $(run family100k_4 "${shapes[@]}")"
+fi

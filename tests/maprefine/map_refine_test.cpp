@@ -1047,13 +1047,20 @@ TEST(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   const std::vector<Vec2> start = moved;
   const double before = err(moved);
   // Nothing held inside: the reference's own map is the only isometric one. The face metric and
-  // the composition see the reference exactly and find it (to the solver's tolerance); the clamped
-  // vertex-averaged metric comes close.
+  // the composition see the reference exactly and find it (to the solver's tolerance, here
+  // RefineOptions::tolerance); the clamped vertex-averaged metric comes close. A node's own,
+  // coarser tolerance (the default) stops a few steps earlier, still close.
   {
+    mr::NodeRefineOptions exact;
+    exact.tolerance = 0;
     auto free = moved;
-    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, mr::NodeRefineOptions{}));
+    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, exact));
     EXPECT_LT(err(free), 1e-4 * before)
         << "mean uv distance to the reference's map: " << before << " -> " << err(free);
+    auto coarse = moved;
+    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, coarse, std::vector<char>(uv.size(), 0), {}, mr::NodeRefineOptions{}));
+    EXPECT_LT(err(coarse), 1e-3 * before)
+        << "mean uv distance to the reference's map: " << before << " -> " << err(coarse);
   }
   // One interior vertex held away from it.
   ASSERT_TRUE(mr::refine_patch(pm, uv, pm, moved, held, {}, mr::NodeRefineOptions{}));
@@ -1081,6 +1088,9 @@ TEST(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   }
   capped.max_start_distortion = -1;
   EXPECT_THROW(mr::refine_patch(pm, uv, pm, again, held, {}, capped), qs::InvalidInput);
+  mr::NodeRefineOptions negative;
+  negative.tolerance = -1e-4;
+  EXPECT_THROW(mr::refine_patch(pm, uv, pm, again, held, {}, negative), qs::InvalidInput);
 }
 
 // untangle_patch (the same-pose untangler): a grid patch's map pulled toward targets that fold

@@ -21,6 +21,15 @@ inline int thread_count(int threads, const Context& context) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
+namespace detail {
+/// Set on the threads of a parallel_for that runs on more than one thread, while they run its body.
+inline thread_local bool in_parallel_loop = false;
+}  // namespace detail
+
+/// Whether the calling thread runs the body of a parallel_for that uses more than one thread: an
+/// inner pass that could split its work over threads of its own then runs on this one instead.
+inline bool inside_parallel_loop() { return detail::in_parallel_loop; }
+
 /// Calls body(i) for every i in [0, n) on min(thread_count(threads, context), n) threads, the calling
 /// thread among them; indices are handed out in increasing order as threads come free. A body that
 /// throws does not stop the others: every index runs, then the exception of the lowest index that
@@ -36,6 +45,12 @@ void parallel_for(int n, int threads, const Context& context, F&& body, const st
   std::atomic<int> next{0}, done{0};
   std::atomic<bool> stop{false};
   auto work = [&](bool reporting) {
+    const bool outer = detail::in_parallel_loop;
+    detail::in_parallel_loop = outer || count > 1;
+    struct Restore {
+      bool value;
+      ~Restore() { detail::in_parallel_loop = value; }
+    } restore{outer};
     for (int i; !stop.load() && !(context.cancel && context.cancel->load()) && (i = next++) < n;) {
       try {
         body(i);

@@ -130,6 +130,10 @@ struct NodeRefineOptions {
   /// Dirichlet / 4; 1 = isometric) above this is left as it is (docs/algorithms.md, "Map refinement").
   /// 0: no limit. \pre >= 0
   double max_start_distortion = 10;
+  /// A node's refinement stops when a Newton step lowers its energy by less than this fraction
+  /// (instead of RefineOptions::tolerance; the leaves' maps are refined again by refine_maps).
+  /// 0: RefineOptions::tolerance. \pre >= 0
+  double tolerance = 1e-4;
 };
 
 /// Refines one patch of one mesh against the same patch of the reference, as refine_maps refines a

@@ -174,10 +174,12 @@ struct PatchResult {
 };
 
 // Refines a problem's free (u, v) (all inside [lo, hi]) under `metric` (or `linearize`, when
-// given): projected Newton, kept only if bijective, inside and lower in energy.
+// given): projected Newton, kept only if bijective, inside and lower in energy. With
+// max_start_distortion > 0, a problem without area or whose start's normalized distortion
+// (energy_before / area / 4) exceeds it is left as it is (skipped).
 PatchResult solve_problem(PatchProblem& pr, const MetricFn& metric, const RefineOptions& options, bool optimize,
                           const Vec2& hi = Vec2(1, 1), const Vec2& lo = Vec2(0, 0),
-                          const LinearizeFn* linearize = nullptr);
+                          const LinearizeFn* linearize = nullptr, double max_start_distortion = 0);
 
 // The set's checks of refine_maps (see its \throws).
 void check_set(const std::vector<dissect::Dissection>& meshes, const RefineOptions& options);

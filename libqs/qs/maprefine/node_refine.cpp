@@ -205,6 +205,9 @@ std::optional<PatchProblem> node_problem(const char* who, const param::PatchMesh
 bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, const param::PatchMesh& patch,
                   std::vector<Vec2>& uv, const std::vector<char>& held, const RefineOptions& options,
                   const NodeRefineOptions& node) {
+  if (!(node.tolerance >= 0))
+    throw InvalidInput("refine_patch: node tolerance " + std::to_string(node.tolerance) +
+                       " must be >= 0 (0: RefineOptions::tolerance)");
   if (!(node.max_start_distortion >= 0))
     throw InvalidInput("refine_patch: max_start_distortion (" + std::to_string(node.max_start_distortion) +
                        ") must be >= 0 (0: no limit)");
@@ -215,11 +218,10 @@ bool refine_patch(const param::PatchMesh& ref, const std::vector<Vec2>& ref_uv, 
   const double scale = exact.area() > 0 ? pr.total_area / exact.area() : 1.0;
   const LinearizeFn linearize = composition_linearization(pr, exact, scale);
   const MetricFn unused = [](size_t, const Vec2&) { return Eigen::Matrix2d(Eigen::Matrix2d::Identity()); };
-  if (node.max_start_distortion > 0) {
-    const PatchResult start = solve_problem(pr, unused, options, false, Vec2(1, 1), Vec2(0, 0), &linearize);
-    if (!(start.area > 0) || start.energy_before / start.area / 4 > node.max_start_distortion) return false;
-  }
-  const PatchResult r = solve_problem(pr, unused, options, true, Vec2(1, 1), Vec2(0, 0), &linearize);
+  RefineOptions node_options = options;
+  if (node.tolerance > 0) node_options.tolerance = node.tolerance;
+  const PatchResult r =
+      solve_problem(pr, unused, node_options, true, Vec2(1, 1), Vec2(0, 0), &linearize, node.max_start_distortion);
   if (!r.changed) return false;
   uv = pr.uv;
   return true;

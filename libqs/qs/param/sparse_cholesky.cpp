@@ -1,15 +1,18 @@
 // Supernodal multifrontal sparse Cholesky (Liu 1992; Davis, "Direct Methods for Sparse Linear
-// Systems", 2006): AMD ordering, elimination tree in postorder, fundamental supernodes, one dense
-// frontal matrix per supernode.
+// Systems", 2006): AMD or nested-dissection ordering, elimination tree in postorder, relaxed
+// supernodes, one dense frontal matrix per supernode.
 
 #include "qs/param/sparse_cholesky.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
 #include <algorithm>
+#include <limits>
+#include <memory>
 #include <string>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 
 namespace qs::param {
 namespace {
@@ -70,6 +73,199 @@ std::vector<int> elimination_tree(int n, const std::vector<int>& col_start, cons
   return parent;
 }
 
+/// The symmetric adjacency (CSR, no diagonal) of a lower triangle's pattern.
+void adjacency(const Eigen::SparseMatrix<double>& a, std::vector<int>& start, std::vector<int>& adj) {
+  const int n = static_cast<int>(a.cols());
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  start.assign(n + 1, 0);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p)
+      if (inner[p] > j) {
+        ++start[inner[p] + 1];
+        ++start[j + 1];
+      }
+  for (int j = 0; j < n; ++j) start[j + 1] += start[j];
+  adj.resize(start[n]);
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p)
+      if (inner[p] > j) {
+        adj[fill[inner[p]]++] = j;
+        adj[fill[j]++] = inner[p];
+      }
+}
+
+/// Nested dissection of a graph whose nodes have points: a part is cut across the axis of its
+/// largest extent, at the position within the middle 30% of its nodes (in that axis's order)
+/// where the fewest edges cross per node of the smaller side; the nodes of one side that touch the
+/// other (the side with fewer such nodes) form the separator, ordered after both sides. Parts of
+/// at most `leaf` nodes keep their index order.
+class Dissector {
+ public:
+  Dissector(const Eigen::MatrixXd& points, const std::vector<int>& start, const std::vector<int>& adj, int leaf)
+      : points_(points), start_(start), adj_(adj), leaf_(leaf), part_(points.rows(), 0), rank_(points.rows(), 0) {}
+
+  /// The nodes in elimination order.
+  std::vector<int> order() {
+    const int n = static_cast<int>(points_.rows());
+    std::vector<std::vector<int>> sorted(points_.cols(), std::vector<int>(n));
+    for (int a = 0; a < points_.cols(); ++a) {
+      for (int i = 0; i < n; ++i) sorted[a][i] = i;
+      std::stable_sort(sorted[a].begin(), sorted[a].end(),
+                       [&](int x, int y) { return points_(x, a) < points_(y, a); });
+    }
+    out_.reserve(n);
+    run(std::move(sorted));
+    return std::move(out_);
+  }
+
+ private:
+  // `lists`: the part's nodes in each axis's order.
+  void run(std::vector<std::vector<int>> lists) {
+    const int m = static_cast<int>(lists[0].size());
+    if (m <= leaf_) {
+      std::vector<int> ids = std::move(lists[0]);
+      std::sort(ids.begin(), ids.end());
+      out_.insert(out_.end(), ids.begin(), ids.end());
+      return;
+    }
+    const int me = ++stamp_;
+    for (int i : lists[0]) part_[i] = me;
+    // The axis of the largest extent; the edges crossing each cut position across it (a
+    // difference array over the ranks).
+    int best_axis = 0, best_cut = m / 2;
+    double extent = -1;
+    for (size_t a = 0; a < lists.size(); ++a) {
+      const auto axis = static_cast<Eigen::Index>(a);
+      const double e = points_(lists[a].back(), axis) - points_(lists[a].front(), axis);
+      if (e > extent) {
+        extent = e;
+        best_axis = static_cast<int>(a);
+      }
+    }
+    double best_score = std::numeric_limits<double>::infinity();
+    std::vector<long> diff(m + 1);
+    const int lo = std::max(1, static_cast<int>(0.35 * m)), hi = std::min(m - 1, static_cast<int>(0.65 * m));
+    {
+      const std::vector<int>& l = lists[best_axis];
+      for (int k = 0; k < m; ++k) rank_[l[k]] = k;
+      std::fill(diff.begin(), diff.end(), 0);
+      for (int k = 0; k < m; ++k) {
+        const int i = l[k];
+        for (int q = start_[i]; q < start_[i + 1]; ++q) {
+          const int j = adj_[q];
+          if (part_[j] != me || rank_[j] <= k) continue;
+          ++diff[k + 1];  // cuts at k + 1 .. rank(j) separate i from j
+          --diff[rank_[j] + 1];
+        }
+      }
+      long cross = 0;
+      for (int c = 1; c <= hi; ++c) {
+        cross += diff[c];
+        if (c < lo) continue;
+        const double score = static_cast<double>(cross) / std::min(c, m - c);
+        if (score < best_score) {
+          best_score = score;
+          best_cut = c;
+        }
+      }
+    }
+    const std::vector<int>& l = lists[best_axis];
+    const int left = ++stamp_, right = ++stamp_;
+    for (int k = 0; k < m; ++k) part_[l[k]] = k < best_cut ? left : right;
+    auto touching = [&](int from, int to) {
+      std::vector<int> t;
+      for (int i : l)
+        if (part_[i] == from)
+          for (int q = start_[i]; q < start_[i + 1]; ++q)
+            if (part_[adj_[q]] == to) {
+              t.push_back(i);
+              break;
+            }
+      return t;
+    };
+    std::vector<int> from_left = touching(left, right), from_right = touching(right, left);
+    std::vector<int> separator = std::move(from_left.size() <= from_right.size() ? from_left : from_right);
+    const int cut = ++stamp_;
+    for (int i : separator) part_[i] = cut;
+    std::vector<std::vector<int>> left_lists(lists.size()), right_lists(lists.size());
+    for (size_t a = 0; a < lists.size(); ++a) {
+      for (int i : lists[a])
+        if (part_[i] == left) left_lists[a].push_back(i);
+        else if (part_[i] == right) right_lists[a].push_back(i);
+      std::vector<int>().swap(lists[a]);
+    }
+    run(std::move(left_lists));
+    run(std::move(right_lists));
+    out_.insert(out_.end(), separator.begin(), separator.end());
+  }
+
+  const Eigen::MatrixXd& points_;
+  const std::vector<int>& start_;
+  const std::vector<int>& adj_;
+  int leaf_;
+  std::vector<int> part_, rank_, out_;
+  int stamp_ = 0;
+};
+
+/// Parts of the nested dissection that keep their own order (nodes).
+constexpr int kDissectionLeaf = 32;
+
+/// The rows of `lower` in nested-dissection order (Dissector) of the graph whose nodes are the
+/// rows' distinct points (rows at one point stay together, in index order); new_index[row] = its
+/// position.
+void nested_dissection(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd& p,
+                       std::vector<int>& new_index) {
+  const int n = static_cast<int>(lower.cols());
+  const int d = static_cast<int>(p.cols());
+  std::vector<int> by_point(n);
+  for (int i = 0; i < n; ++i) by_point[i] = i;
+  std::sort(by_point.begin(), by_point.end(), [&](int x, int y) {
+    for (int a = 0; a < d; ++a)
+      if (p(x, a) != p(y, a)) return p(x, a) < p(y, a);
+    return x < y;
+  });
+  std::vector<int> node(n), node_start;
+  for (int k = 0; k < n; ++k) {
+    const int i = by_point[k];
+    bool same = k > 0;
+    for (int a = 0; a < d && same; ++a) same = p(i, a) == p(by_point[k - 1], a);
+    if (!same) node_start.push_back(k);
+    node[i] = static_cast<int>(node_start.size()) - 1;
+  }
+  const int nodes = static_cast<int>(node_start.size());
+  node_start.push_back(n);
+  Eigen::MatrixXd node_point(nodes, d);
+  for (int v = 0; v < nodes; ++v) node_point.row(v) = p.row(by_point[node_start[v]]);
+  std::vector<int> row_start, row_adj;
+  adjacency(lower, row_start, row_adj);
+  std::vector<int> start(nodes + 1, 0), adj, seen(nodes, -1);
+  adj.reserve(row_adj.size() / 2);
+  for (int v = 0; v < nodes; ++v) {
+    for (int k = node_start[v]; k < node_start[v + 1]; ++k) {
+      const int i = by_point[k];
+      for (int q = row_start[i]; q < row_start[i + 1]; ++q) {
+        const int w = node[row_adj[q]];
+        if (w != v && seen[w] != v) {
+          seen[w] = v;
+          adj.push_back(w);
+        }
+      }
+    }
+    start[v + 1] = static_cast<int>(adj.size());
+  }
+  const std::vector<int> order = Dissector(node_point, start, adj, kDissectionLeaf).order();
+  new_index.assign(n, 0);
+  int k = 0;
+  for (int v : order)
+    for (int q = node_start[v]; q < node_start[v + 1]; ++q) new_index[by_point[q]] = k++;
+}
+
+/// Factorizations of less work than this (k m^2 summed over the supernodes, about the
+/// multiply-adds) run on one thread: a few milliseconds, less than starting threads is worth.
+constexpr double kParallelWork = 2e7;
+
 void require_compressed(const Eigen::SparseMatrix<double>& a) {
   if (!a.isCompressed() || a.rows() != a.cols())
     throw InternalError("SupernodalCholesky: the matrix must be square and compressed");
@@ -77,16 +273,23 @@ void require_compressed(const Eigen::SparseMatrix<double>& a) {
 
 }  // namespace
 
-void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower) {
+void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd* points) {
   require_compressed(lower);
   n_ = static_cast<int>(lower.cols());
   const int n = n_;
-  // AMD on the symmetric pattern; Eigen's permutation maps new positions to old rows.
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
-  Eigen::AMDOrdering<int> amd;
-  amd(lower, pinv);
-  new_index_.assign(n, 0);
-  for (int k = 0; k < n; ++k) new_index_[pinv.indices()[k]] = k;
+  if (points && points->rows() != n)
+    throw InternalError("SupernodalCholesky: " + std::to_string(points->rows()) + " points for " + std::to_string(n) +
+                        " rows");
+  if (points && points->cols() > 0 && n > 0 && points->allFinite()) {
+    nested_dissection(lower, *points, new_index_);
+  } else {
+    // AMD on the symmetric pattern; Eigen's permutation maps new positions to old rows.
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
+    Eigen::AMDOrdering<int> amd;
+    amd(lower, pinv);
+    new_index_.assign(n, 0);
+    for (int k = 0; k < n; ++k) new_index_[pinv.indices()[k]] = k;
+  }
   permuted_lower(lower, new_index_, col_start_, row_index_, source_);
   // Postorder of the elimination tree: every subtree's columns consecutive, children first.
   {
@@ -178,25 +381,28 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower) {
   panel_.assign(ns, Eigen::MatrixXd());
 }
 
-bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower) {
+bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int threads) {
   require_compressed(lower);
   if (lower.cols() != n_) throw InternalError("SupernodalCholesky: factorize() with another size than analyze()");
   const double* value = lower.valuePtr();
   const int ns = static_cast<int>(panel_.size());
-  std::vector<int> relpos(n_, 0);
   // Per supernode: the update to its parent's front, its lower triangle packed by columns.
   std::vector<std::vector<double>> update(ns);
-  std::vector<int> head(ns, -1), next(ns, -1), at;
+  std::vector<int> head(ns, -1), next(ns, -1);
   for (int s = ns - 1; s >= 0; --s)
     if (parent_[s] >= 0) {
       next[s] = head[parent_[s]];
       head[parent_[s]] = s;
     }
-  for (int s = 0; s < ns; ++s) {
+  // Supernode s's front: its entries of the matrix and its children's updates (in child order),
+  // factorized; its columns of L go to panel_[s], its update to update[s]. relpos: a workspace of
+  // n_ entries; buffer: room for the front (m^2). False when a pivot is not positive.
+  auto process = [&](int s, std::vector<int>& relpos, std::vector<int>& at, double* buffer) {
     const int* rs = rows_.data() + row_start_[s];
     const int m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
     for (int a = 0; a < m; ++a) relpos[rs[a]] = a;
-    Eigen::MatrixXd front = Eigen::MatrixXd::Zero(m, m);  // the lower triangle is used
+    Eigen::Map<Eigen::MatrixXd> front(buffer, m, m);  // only its lower triangle is read or written: zeroed
+    for (int b = 0; b < m; ++b) std::fill(&front(b, b), &front(0, b) + m, 0.0);
     for (int c = first_[s]; c < first_[s + 1]; ++c)
       for (int q = col_start_[c]; q < col_start_[c + 1]; ++q)
         front(relpos[row_index_[q]], c - first_[s]) += value[source_[q]];
@@ -228,9 +434,76 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower) {
       for (int b = 0; b < m - k; ++b)
         for (int a = b; a < m - k; ++a) *out++ = u(a, b);
     }
-    front.conservativeResize(m, k);  // keeps the first k columns in place (column-major)
-    panel_[s] = std::move(front);
+    panel_[s].resize(m, k);  // the size of the last factorization's: no allocation
+    panel_[s] = front.leftCols(k);
+    return true;
+  };
+  // The largest front of a range of supernodes.
+  auto largest_front = [&](int from, int to) {
+    std::size_t most = 0;
+    for (int s = from; s <= to; ++s) {
+      const std::size_t m = static_cast<std::size_t>(row_start_[s + 1] - row_start_[s]);
+      most = std::max(most, m * m);
+    }
+    return most;
+  };
+  // Every supernode's computation is the same whichever thread runs it and in whatever order
+  // independent subtrees run, so the factor does not depend on the thread count.
+  const int count = inside_parallel_loop() ? 1 : thread_count(threads, Context{});
+  std::vector<int> relpos(n_, 0), at;
+  // Subtrees (consecutive in the postorder: [lowest[s], s]) handed to the threads: the roots'
+  // subtrees, the heaviest split into its children's while it exceeds a quarter of a thread's
+  // share; the supernodes split off run afterwards, in order, on this thread. A factorization of
+  // little work (k m^2 summed over the supernodes) runs on this thread alone.
+  std::vector<int> lowest(ns);
+  std::vector<double> work(ns, 0.0);
+  double total = 0;
+  if (count > 1) {
+    for (int s = 0; s < ns; ++s) lowest[s] = s;
+    for (int s = 0; s < ns; ++s) {
+      const double m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
+      work[s] += k * m * m;
+      if (parent_[s] >= 0) {
+        lowest[parent_[s]] = std::min(lowest[parent_[s]], lowest[s]);
+        work[parent_[s]] += work[s];
+      } else {
+        total += work[s];
+      }
+    }
   }
+  // The calling thread's front buffer is kept from one factorization to the next (no fresh pages).
+  front_buffer_.resize(std::max(front_buffer_.size(), largest_front(0, ns - 1)));
+  if (count <= 1 || ns < 2 || total < kParallelWork) {
+    for (int s = 0; s < ns; ++s)
+      if (!process(s, relpos, at, front_buffer_.data())) return false;
+    return true;
+  }
+  std::vector<int> tasks, top;
+  for (int s = 0; s < ns; ++s)
+    if (parent_[s] < 0) tasks.push_back(s);
+  const double limit = total / (4.0 * count);
+  for (;;) {
+    auto heaviest = std::max_element(tasks.begin(), tasks.end(), [&](int a, int b) { return work[a] < work[b]; });
+    if (heaviest == tasks.end() || work[*heaviest] <= limit || head[*heaviest] == -1) break;
+    const int s = *heaviest;
+    tasks.erase(heaviest);
+    top.push_back(s);
+    for (int t = head[s]; t != -1; t = next[t]) tasks.push_back(t);
+  }
+  std::sort(tasks.begin(), tasks.end(),
+            [&](int a, int b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
+  std::vector<char> ok(tasks.size(), 1);
+  Context threads_only;
+  threads_only.threads = count;
+  parallel_for(static_cast<int>(tasks.size()), count, threads_only, [&](int i) {
+    std::vector<int> rel(n_, 0), at_i;
+    const std::unique_ptr<double[]> buffer(new double[largest_front(lowest[tasks[i]], tasks[i])]);
+    for (int s = lowest[tasks[i]]; s <= tasks[i] && ok[i]; ++s) ok[i] = process(s, rel, at_i, buffer.get());
+  });
+  if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
+  std::sort(top.begin(), top.end());
+  for (int s : top)
+    if (!process(s, relpos, at, front_buffer_.data())) return false;
   return true;
 }
 

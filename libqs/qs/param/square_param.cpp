@@ -335,7 +335,7 @@ bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d
     llt.analyze(A);
     cache.ready = true;
   }
-  if (!llt.factorize(A)) return false;
+  if (!llt.factorize(A, context.threads)) return false;
   context.report("parameterize: solve", 0.9);
   x = llt.solve(rhs);
   return x.allFinite();
