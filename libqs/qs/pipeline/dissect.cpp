@@ -48,7 +48,9 @@ std::vector<std::string> chart_names(const std::vector<Input>& inputs) {
   for (const auto& in : inputs) {
     const std::string stem = chart_stem_of(fs::path(in.file).stem().string());
     const int n = ++seen[stem];
-    names.push_back(stem + (n > 1 ? "-" + std::to_string(n) : "") + ".chart.ply");
+    std::string name = stem;
+    if (n > 1) name += '-' + std::to_string(n);
+    names.push_back(name + ".chart.ply");
   }
   return names;
 }
@@ -77,7 +79,10 @@ Input load_input(const std::string& mesh_file, const std::optional<std::string>&
 
 std::string default_dissection_folder(const std::vector<std::string>& files) {
   std::string d;
-  for (size_t i = 0; i < files.size() && i < 3; ++i) d += (i ? "_" : "") + fs::path(files[i]).stem().string();
+  for (size_t i = 0; i < files.size() && i < 3; ++i) {
+    if (i) d += '_';
+    d += fs::path(files[i]).stem().string();
+  }
   if (files.size() > 3) d += "_etc";
   return d + ".dissection";
 }
