@@ -1,7 +1,7 @@
 // Benchmark: what each stage costs on a pair with one connectivity (vertex i <-> vertex i: a mesh
 // and its pose from `qs-family pose`). The pair is dissected as qs-dissect does by default, except
 // that stages of B are replaced by their exact counterparts taken from A, one more per level:
-//   loop    B's seed loop is A's own vertices (the same curve on B's surface);
+//   loop    B's straightened seed loop is A's (the same curve on B's surface);
 //   splits  also, before every split, B's map of the node is A's map of it (the same vertices at
 //           the same (u, v)), so every cut runs through the same points of the surface and B's
 //           patches are A's where the feature alignment left both meshes' nodes alike (a node
@@ -10,10 +10,10 @@
 //           aligned): B's leaves start from A's maps; what is left is the leaf repair and the
 //           refinement, each on B's own surface.
 // --no-refine also turns the map refinement off (before splits and after the dissection), which
-// says what the refinement brings at that level. Measure the folder with `qs-metro
+// says what the refinement brings at that level; --leaf-rounds N sets the leaves' stretch rounds. Measure the folder with `qs-metro
 // --correspondence OUT` (bench/pose_pairs.sh does, beside qs-dissect's own result).
 //
-//   usage: qs-bench-stage-attribution A B --landmarks LA LB [--exact loop|splits|maps] [--no-refine] -o OUT
+//   usage: qs-bench-stage-attribution A B --landmarks LA LB [--exact loop|splits|maps] [--no-refine] [--leaf-rounds N] -o OUT
 //   exit:  0 written (bijective), 4 written with folded leaves, 1 usage, 2 invalid input, 3 i/o
 #include <algorithm>
 #include <cmath>
@@ -51,7 +51,9 @@ bool parse(const std::vector<std::string>& args, Args& r) {
       r.exact_splits = v != "loop";
       r.exact_maps = v == "maps";
     } else if (s == "--leaf-rounds" && i + 1 < args.size()) {
-      r.leaf_rounds = std::stoi(args[++i]);
+      const std::string& v = args[++i];
+      if (v.empty() || v.size() > 2 || v.find_first_not_of("0123456789") != std::string::npos) return false;
+      r.leaf_rounds = std::stoi(v);  // 0..99 digits: cannot throw
     } else if (s == "--no-refine") {
       r.refine = false;
     } else if (!s.empty() && s[0] == '-') {
@@ -102,7 +104,7 @@ qs::dissect::GeodesicLoop exact_on(const qs::dissect::GeodesicLoop& ga, const qs
 int main(int argc, char** argv) {
   Args args;
   if (!parse(std::vector<std::string>(argv + 1, argv + argc), args)) {
-    std::cerr << "usage: qs-bench-stage-attribution A B --landmarks LA LB [--exact loop|splits|maps] [--no-refine] -o OUT\n";
+    std::cerr << "usage: qs-bench-stage-attribution A B --landmarks LA LB [--exact loop|splits|maps] [--no-refine] [--leaf-rounds N] -o OUT\n";
     return 1;
   }
   try {
@@ -129,8 +131,6 @@ int main(int argc, char** argv) {
       config.dissect.replace_node_maps = [&](std::vector<qs::dissect::DissectOptions::NodeMapRef>& m,
                                              bool before_split) {
         if (!before_split && !args.exact_maps) return;
-        // With the exact loop and exact cuts above, B's cut mesh is A's: the same new vertices in
-        // the same order.
         // B's cut mesh is A's (the same new vertices in the same order) until a leaf repair refines
         // one of them; a node whose vertices differ keeps B's own map and is counted.
         if (*m[1].vertices != *m[0].vertices) {
