@@ -16,15 +16,16 @@
 
 namespace qs::tools {
 
-/// Blocks up to 8 MiB come from the heap, and up to 1 GiB of freed heap is kept for reuse,
-/// instead of being mapped afresh and page-faulted (zeroed) by the kernel at every allocation;
-/// larger blocks (mesh-sized arrays) are mapped and given back at once, so that peak memory stays
-/// about the same. qs-dissect: a quarter less CPU time on a mesh with a fan of 40k faces, some 10%
-/// on large meshes.
+/// Blocks up to 8 MiB come from the heap, which grows 64 MiB at a time, and up to 1 GiB of freed
+/// heap is kept for reuse, instead of being mapped afresh and page-faulted (zeroed) by the kernel
+/// at every allocation; larger blocks (mesh-sized arrays) are mapped and given back at once, so
+/// that peak memory stays about the same. qs-dissect: a quarter less CPU time on a mesh with a fan
+/// of 40k faces; on a 1.5M-face mesh half the page faults and a fifth less CPU time.
 inline void tune_allocator() {
 #if defined(__GLIBC__)
   mallopt(M_MMAP_THRESHOLD, 8 << 20);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
+  mallopt(M_TOP_PAD, 64 << 20);
 #endif
 }
 

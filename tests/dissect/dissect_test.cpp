@@ -178,6 +178,49 @@ TEST(CutMesh, SplitsKeepTheHalfEdgeStructureConsistent) {
   EXPECT_EQ(valid.report.euler_characteristic, 2);
 }
 
+TEST(CutMesh, RollbackUndoesEverySplitSinceTheCheckpointAndCommitKeepsThem) {
+  qs::dissect::CutMesh cm(qs::shapes::icosphere(1));
+  cm.split_edge(4, 0.5);  // before the checkpoint: kept by the rollback
+  const qs::dissect::CutMesh before = cm;
+  auto same = [](const qs::dissect::CutMesh& a, const qs::dissect::CutMesh& b) {
+    if (a.positions() != b.positions() || a.faces() != b.faces() || a.face_patches() != b.face_patches()) return false;
+    for (int h = 0; h < 3 * a.num_faces(); ++h)
+      if (a.opposite(h) != b.opposite(h)) return false;
+    for (int v = 0; v < a.num_vertices(); ++v)
+      if (a.out_halfedge(v) != b.out_halfedge(v)) return false;
+    return true;
+  };
+  cm.checkpoint();
+  cm.split_edge(0, 0.3);
+  cm.split_face(5, qs::Vec3(0.2, 0.3, 0.5));
+  cm.split_edge(3 * (cm.num_faces() - 1), 0.5);  // an edge of a face the checkpoint did not see
+  cm.split_edge(3 * 7 + 2, 0.5);
+  ASSERT_FALSE(same(cm, before));
+  cm.rollback();
+  EXPECT_TRUE(same(cm, before));
+  EXPECT_THROW(cm.rollback(), qs::InternalError);  // the rollback ended the recording
+  cm.checkpoint();
+  cm.split_edge(0, 0.3);
+  cm.commit();
+  EXPECT_EQ(cm.num_vertices(), before.num_vertices() + 1);
+  EXPECT_TRUE(qs::mesh::validate(cm.to_trimesh()).report.accepted);
+}
+
+TEST(CutMesh, RefusesAFaceWithAVertexOutOfRangeAndAnOpenEdge) {
+  qs::TriMesh m = qs::shapes::icosphere(0);
+  qs::TriMesh bad = m;
+  bad.faces[3][1] = m.num_vertices();
+  EXPECT_THROW(qs::dissect::CutMesh{bad}, qs::InvalidInput);
+  qs::TriMesh open = m;
+  open.faces.pop_back();
+  try {
+    qs::dissect::CutMesh cm(open);
+    FAIL() << "an open mesh was accepted";
+  } catch (const qs::InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is not shared by exactly two oppositely oriented faces"));
+  }
+}
+
 TEST(DissectionFolder, ReadsBackWhatWasWrittenIncludingAnInfiniteStretch) {
   const auto m = qs::shapes::ellipsoid(1.5, 1, 0.8, 3);
   qs::dissect::DissectedMesh dm;

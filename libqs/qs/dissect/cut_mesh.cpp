@@ -13,22 +13,38 @@ CutMesh::CutMesh(const TriMesh& mesh) : positions_(mesh.positions), faces_(mesh.
   opp_.assign(nh, -1);
   vertex_halfedge_.assign(num_vertices(), -1);
   face_patch_.assign(num_faces(), 0);
-  // Pair half-edges by sorting (min, max, h) keys.
-  std::vector<std::pair<std::uint64_t, int>> keys(nh);
+  // Pair half-edges in the order of their (min, max, h) keys: two stable counting sorts, by the
+  // larger end and then by the smaller one (linear time).
+  const int nv = num_vertices();
+  for (const Tri& t : faces_)
+    for (int v : t)
+      if (v < 0 || v >= nv)
+        throw InvalidInput("cut mesh: a face refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
+  std::vector<int> start(nv + 1), by_max(nh), order(nh);
+  auto counting_sort = [&](const std::vector<int>& in, std::vector<int>& out, bool by_larger) {
+    std::fill(start.begin(), start.end(), 0);
+    auto key = [&](int h) { return by_larger ? std::max(tail(h), head(h)) : std::min(tail(h), head(h)); };
+    for (int h = 0; h < nh; ++h) ++start[key(h) + 1];
+    for (int v = 0; v < nv; ++v) start[v + 1] += start[v];
+    for (int h : in) out[start[key(h)]++] = h;
+  };
   for (int h = 0; h < nh; ++h) {
-    const std::uint64_t a = tail(h), b = head(h);
-    keys[h] = {(std::min(a, b) << 32) | std::max(a, b), h};
-    vertex_halfedge_[a] = h;
+    order[h] = h;
+    vertex_halfedge_[tail(h)] = h;
   }
-  std::sort(keys.begin(), keys.end());
+  counting_sort(order, by_max, true);
+  counting_sort(by_max, order, false);
+  auto same_edge = [&](int a, int b) {
+    return std::min(tail(a), head(a)) == std::min(tail(b), head(b)) &&
+           std::max(tail(a), head(a)) == std::max(tail(b), head(b));
+  };
   for (int i = 0; i < nh;) {
     int j = i;
-    while (j < nh && keys[j].first == keys[i].first) ++j;
-    if (j - i != 2 || tail(keys[i].second) == tail(keys[i + 1].second))
-      throw InvalidInput("cut mesh: edge " + std::to_string(tail(keys[i].second)) + "-" +
-                         std::to_string(head(keys[i].second)) +
+    while (j < nh && same_edge(order[j], order[i])) ++j;
+    if (j - i != 2 || tail(order[i]) == tail(order[i + 1]))
+      throw InvalidInput("cut mesh: edge " + std::to_string(tail(order[i])) + "-" + std::to_string(head(order[i])) +
                          " is not shared by exactly two oppositely oriented faces");
-    link(keys[i].second, keys[i + 1].second);
+    link(order[i], order[i + 1]);
     i = j;
   }
   for (int v = 0; v < num_vertices(); ++v)
@@ -67,8 +83,8 @@ int CutMesh::split_edge(int h, double t) {
   face_patch_.push_back(face_patch_[f]);
   face_patch_.push_back(face_patch_[g]);
   opp_.resize(3 * faces_.size(), -1);
-  faces_[f][(k + 1) % 3] = m;
-  faces_[g][(kt + 1) % 3] = m;
+  set_corner(f, (k + 1) % 3, m);
+  set_corner(g, (kt + 1) % 3, m);
 
   const int f_xm = 3 * f + k, f_mz = 3 * f + (k + 1) % 3;
   const int g_ym = 3 * g + kt, g_mw = 3 * g + (kt + 1) % 3;
@@ -78,9 +94,9 @@ int CutMesh::split_edge(int h, double t) {
   link(g_mw, 3 * f2 + 2);         // m->w | w->m
   link(f_xm, 3 * f2 + 0);         // x->m | m->x
   link(3 * f1 + 0, g_ym);         // m->y | y->m
-  vertex_halfedge_[x] = f_xm;
-  vertex_halfedge_[y] = g_ym;
-  vertex_halfedge_[m] = 3 * f1;
+  set_vertex_halfedge(x, f_xm);
+  set_vertex_halfedge(y, g_ym);
+  set_vertex_halfedge(m, 3 * f1);
   return m;
 }
 
@@ -92,7 +108,7 @@ int CutMesh::split_face(int f, const Vec3& bary) {
   positions_.push_back(bary[0] * positions_[a] + bary[1] * positions_[b] + bary[2] * positions_[c]);
   vertex_halfedge_.push_back(-1);
   const int f1 = num_faces(), f2 = f1 + 1;
-  faces_[f] = {a, b, m};
+  set_corner(f, 2, m);
   faces_.push_back({b, c, m});
   faces_.push_back({c, a, m});
   face_patch_.push_back(face_patch_[f]);
@@ -103,11 +119,54 @@ int CutMesh::split_face(int f, const Vec3& bary) {
   link(3 * f + 1, 3 * f1 + 2);   // b->m | m->b
   link(3 * f1 + 1, 3 * f2 + 2);  // c->m | m->c
   link(3 * f2 + 1, 3 * f + 2);   // a->m | m->a
-  vertex_halfedge_[a] = 3 * f;
-  vertex_halfedge_[b] = 3 * f + 1;
-  vertex_halfedge_[c] = 3 * f1 + 1;
-  vertex_halfedge_[m] = 3 * f + 2;
+  set_vertex_halfedge(a, 3 * f);
+  set_vertex_halfedge(b, 3 * f + 1);
+  set_vertex_halfedge(c, 3 * f1 + 1);
+  set_vertex_halfedge(m, 3 * f + 2);
   return m;
+}
+
+void CutMesh::set_opp(int h, int value) {
+  if (journal_.on && static_cast<size_t>(h) < 3 * journal_.faces) journal_.entries.push_back({'o', h, opp_[h]});
+  opp_[h] = value;
+}
+
+void CutMesh::set_corner(int f, int c, int v) {
+  if (journal_.on && static_cast<size_t>(f) < journal_.faces) journal_.entries.push_back({'c', 3 * f + c, faces_[f][c]});
+  faces_[f][c] = v;
+}
+
+void CutMesh::set_vertex_halfedge(int v, int h) {
+  if (journal_.on && static_cast<size_t>(v) < journal_.vertices)
+    journal_.entries.push_back({'v', v, vertex_halfedge_[v]});
+  vertex_halfedge_[v] = h;
+}
+
+void CutMesh::checkpoint() {
+  journal_.on = true;
+  journal_.vertices = positions_.size();
+  journal_.faces = faces_.size();
+  journal_.entries.clear();
+}
+
+void CutMesh::rollback() {
+  if (!journal_.on) throw InternalError("cut mesh: rollback without a checkpoint");
+  for (auto e = journal_.entries.rbegin(); e != journal_.entries.rend(); ++e) {
+    if (e->array == 'o') opp_[e->index] = e->old;
+    else if (e->array == 'c') faces_[e->index / 3][e->index % 3] = e->old;
+    else vertex_halfedge_[e->index] = e->old;
+  }
+  positions_.resize(journal_.vertices);
+  vertex_halfedge_.resize(journal_.vertices);
+  faces_.resize(journal_.faces);
+  face_patch_.resize(journal_.faces);
+  opp_.resize(3 * journal_.faces);
+  commit();
+}
+
+void CutMesh::commit() {
+  journal_.on = false;
+  journal_.entries.clear();
 }
 
 }  // namespace qs::dissect

@@ -47,8 +47,32 @@ class CutMesh {
 
   TriMesh to_trimesh() const { return {positions_, faces_}; }
 
+  /// Starts recording the splits, so that rollback() can undo them without a copy of the mesh.
+  void checkpoint();
+  /// Undoes every split since checkpoint() and stops recording.
+  void rollback();
+  /// Keeps every split since checkpoint() and stops recording.
+  void commit();
+
  private:
-  void link(int a, int b) { opp_[a] = b; opp_[b] = a; }
+  void link(int a, int b) {
+    set_opp(a, b);
+    set_opp(b, a);
+  }
+  void set_opp(int h, int value);
+  void set_corner(int f, int c, int v);
+  void set_vertex_halfedge(int v, int h);
+  /// What checkpoint() saw, and the old values of entries that existed then, in write order.
+  struct Journal {
+    bool on = false;
+    size_t vertices = 0, faces = 0;
+    struct Entry {
+      char array;  ///< 'o': opp_, 'c': a face corner (index 3f+c), 'v': vertex_halfedge_
+      int index, old;
+    };
+    std::vector<Entry> entries;
+  };
+  Journal journal_;
   std::vector<Vec3> positions_;
   std::vector<Tri> faces_;
   std::vector<int> opp_;

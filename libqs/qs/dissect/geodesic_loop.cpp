@@ -237,7 +237,8 @@ struct Straightened {
   std::vector<int> path;  ///< vertex ids of cm after insertion
 };
 
-/// Straightens path (an edge path of cm) and cuts it into cm. On failure cm is unchanged.
+/// Straightens path (an edge path of cm) and cuts it into cm. On failure cm may be cut in part:
+/// the caller rolls it back to its checkpoint.
 Straightened straighten_one(CutMesh& cm, const std::vector<int>& path, const std::vector<char>& blocked,
                             const GeodesicLoopOptions& opt) {
   Straightened res;
@@ -357,8 +358,8 @@ Straightened straighten_one(CutMesh& cm, const std::vector<int>& path, const std
         return res;
       }
   }
-  // Cut it in, on a copy.
-  CutMesh work = cm;
+  // Cut it in.
+  CutMesh& work = cm;
   std::vector<int> out{s};
   for (size_t i = 1; i < items.size(); ++i) {
     const Item& it = items[i];
@@ -378,7 +379,6 @@ Straightened straighten_one(CutMesh& cm, const std::vector<int>& path, const std
     }
     out.push_back(v);
   }
-  cm = std::move(work);
   res.ok = true;
   res.path = std::move(out);
   return res;
@@ -419,9 +419,10 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
       if (j == i) continue;
       for (size_t k = 1; k + 1 < cur.paths[j].size(); ++k) blocked[cur.paths[j][k]] = 1;
     }
-    CutMesh before = cm;
+    cm.checkpoint();
     Straightened st = straighten_one(cm, cur.paths[i], blocked, options);
     if (!st.ok) {
+      cm.rollback();
       result.why[i] = "curve " + std::to_string(i) + " kept as an edge path: " + st.why;
       continue;
     }
@@ -432,10 +433,11 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
         for (size_t k = 1; k < cur.paths[j].size() && intact; ++k)
           intact = cm.find_halfedge(cur.paths[j][k - 1], cur.paths[j][k]) >= 0;
     if (!intact) {
-      cm = std::move(before);
+      cm.rollback();
       result.why[i] = "curve " + std::to_string(i) + " kept as an edge path: its straightened form cuts another curve";
       continue;
     }
+    cm.commit();
     cur.paths[i] = std::move(st.path);
     result.straightened[i] = true;
   }
