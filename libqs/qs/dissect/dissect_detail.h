@@ -88,6 +88,9 @@ struct Param {
   param::Stretch st;
   std::vector<std::pair<int, int>> features;  // (feature index, local vertex), by feature index
   param::InteriorWeights weights = param::InteriorWeights::MeanValue;  // of every solve of this patch
+  // The map of one plain solve of ex with `weights` (no pins, no rounds), or empty: where stretch
+  // minimization starts without solving it again.
+  std::vector<Vec2> plain_uv;
 };
 
 // 1 at the local vertices of p's features, 0 elsewhere (the vertices a node map must keep).

@@ -248,6 +248,7 @@ Param MeshDissector::parameterize(const Node& node) {
       p.weights = param::InteriorWeights::MeanValue;
     }
   }
+  p.plain_uv = p.sp.uv;
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
   collect_features(p);
   // A map squeezed to zero area (a long protrusion) that holds features is spread out by stretch
@@ -258,6 +259,7 @@ Param MeshDissector::parameterize(const Node& node) {
     param::SquareParamOptions po;
     po.weights = p.weights;
     po.stretch_iterations = kRepairRounds;
+    po.first_solve = &p.plain_uv;
     try {
       param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
       // Kept when it folds less, or, both bijective, when it is less stretched.

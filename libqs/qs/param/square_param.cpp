@@ -674,7 +674,10 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       use_cholesky = false;
       solve_once(ww, false);
     };
-    solve_with(w);
+    if (options.first_solve && options.first_solve->size() == pos.size() && options.pinned.empty())
+      result.uv = *options.first_solve;
+    else
+      solve_with(w);
 
     // Stretch minimization (Yoshizawa, Belyaev, Seidel 2004): divide every weight w_ij by the
     // stretch at j (area-weighted RMS of the face stretches around j) and solve again; keep the

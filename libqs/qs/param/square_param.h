@@ -63,6 +63,10 @@ struct SquareParamOptions {
   /// bijective map is kept. 0: the plain mean-value map.
   int stretch_iterations = 0;
   InteriorWeights weights = InteriorWeights::MeanValue;
+  /// The map of the first solve when the caller has it already: a previous call's uv on the same
+  /// patch with the same weights, without pins or rounds. With one uv per vertex and no pins it
+  /// is taken instead of solving again (stretch minimization starts from it); otherwise ignored.
+  const std::vector<Vec2>* first_solve = nullptr;
 };
 
 /// A UV face with |signed area| <= this counts as zero-area (and neither as flipped).
