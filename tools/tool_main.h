@@ -5,9 +5,13 @@
 #include <CLI/CLI.hpp>
 #if defined(__GLIBC__)
 #include <malloc.h>
+#include <unistd.h>
 #endif
+#include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <new>
 #include <string>
@@ -29,11 +33,38 @@ inline void tune_allocator() {
 #endif
 }
 
+/// glibc gives its heap transparent huge pages only when asked before main (the tunable
+/// glibc.malloc.hugetlb, read from the environment at start-up), and the kernel gives them, where
+/// its setting is "madvise", only to memory so marked. A tool therefore starts itself once more
+/// with the tunable set: on a 1.5M-face mesh qs-dissect takes 96% fewer page faults and a fifth
+/// less CPU time. Not where the kernel gives huge pages to all memory or to none, and not under
+/// valgrind (its preload would be lost); when the restart fails the tool runs as it is.
+inline void restart_with_huge_pages(char** argv) {
+#if defined(__GLIBC__) && defined(__linux__)
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  if (tunables && std::strstr(tunables, "glibc.malloc.hugetlb")) return;
+  const char* preload = std::getenv("LD_PRELOAD");
+  if (preload && std::strstr(preload, "vgpreload")) return;
+  std::string mode;
+  std::getline(std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled"), mode);
+  if (mode.find("[madvise]") == std::string::npos) return;
+  const std::string value =
+      tunables && *tunables ? std::string(tunables) + ":glibc.malloc.hugetlb=1" : "glibc.malloc.hugetlb=1";
+  if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  execv("/proc/self/exe", argv);  // returns only when it failed
+  if (tunables) setenv("GLIBC_TUNABLES", tunables, 1);
+  else unsetenv("GLIBC_TUNABLES");
+#else
+  (void)argv;
+#endif
+}
+
 /// Runs `body` (which parses with `app` and does the work), mapping every exception to a
 /// one-line message on stderr, prefixed with the tool's name, and a documented exit code.
 template <class Body>
 int run_tool(CLI::App& app, int argc, char** argv, Body&& body) {
   const std::string name = app.get_name();
+  restart_with_huge_pages(argv);
   tune_allocator();
   try {
     try {
