@@ -359,20 +359,19 @@ Straightened straighten_one(CutMesh& cm, const std::vector<int>& path, const std
       }
   }
   // Cut it in.
-  CutMesh& work = cm;
   std::vector<int> out{s};
   for (size_t i = 1; i < items.size(); ++i) {
     const Item& it = items[i];
     int v = it.vertex;
     if (v < 0) {
-      const int h = work.find_halfedge(it.a, it.b);
+      const int h = cm.find_halfedge(it.a, it.b);
       if (h < 0) {
         res.why = "edge " + std::to_string(it.a) + "-" + std::to_string(it.b) + " is crossed twice";
         return res;
       }
-      v = work.split_edge(h, it.t);
+      v = cm.split_edge(h, it.t);
     }
-    if (work.find_halfedge(out.back(), v) < 0) {
+    if (cm.find_halfedge(out.back(), v) < 0) {
       res.why = "consecutive points " + std::to_string(out.back()) + " and " + std::to_string(v) +
                 " of the straightened curve do not share a face";
       return res;
