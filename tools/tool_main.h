@@ -23,8 +23,7 @@ namespace qs::tools {
 /// Blocks up to 8 MiB come from the heap, which grows 64 MiB at a time, and up to 1 GiB of freed
 /// heap is kept for reuse, instead of being mapped afresh and page-faulted (zeroed) by the kernel
 /// at every allocation; larger blocks (mesh-sized arrays) are mapped and given back at once, so
-/// that peak memory stays about the same. qs-dissect: a quarter less CPU time on a mesh with a fan
-/// of 40k faces; on a 1.5M-face mesh half the page faults and a fifth less CPU time.
+/// that peak memory stays about the same (figures: docs/developers.md, docs/benchmarks.md).
 inline void tune_allocator() {
 #if defined(__GLIBC__)
   mallopt(M_MMAP_THRESHOLD, 8 << 20);
@@ -36,9 +35,9 @@ inline void tune_allocator() {
 /// glibc gives its heap transparent huge pages only when asked before main (the tunable
 /// glibc.malloc.hugetlb, read from the environment at start-up), and the kernel gives them, where
 /// its setting is "madvise", only to memory so marked. A tool therefore starts itself once more
-/// with the tunable set: on a 1.5M-face mesh qs-dissect takes 96% fewer page faults and a fifth
-/// less CPU time. Not where the kernel gives huge pages to all memory or to none, and not under
-/// valgrind (its preload would be lost); when the restart fails the tool runs as it is.
+/// with the tunable set (most page faults of a large mesh go). Not where the kernel gives huge
+/// pages to all memory or to none, and not under valgrind (its preload would be lost); when the
+/// restart fails the tool runs as it is.
 inline void restart_with_huge_pages(char** argv) {
 #if defined(__GLIBC__) && defined(__linux__)
   const char* tunables = std::getenv("GLIBC_TUNABLES");

@@ -1,7 +1,6 @@
 #include "qs/dissect/cut_mesh.h"
 
 #include <algorithm>
-#include <cstdint>
 #include <string>
 
 #include "qs/core/error.h"
