@@ -304,6 +304,16 @@ TEST(ChooseSeeds, IsDeterministicAndDistinct) {
   }
 }
 
+// A mesh large enough for the candidates to route on two threads gets the seeds it gets on one.
+TEST(ChooseSeeds, SameSeedsOnOneAndTwoThreads) {
+  TriMesh m = qs::shapes::icosphere(6);  // 81920 faces
+  for (Vec3& p : m.positions) p = Vec3(3 * p.x(), 2 * p.y(), p.z() + 0.3 * p.x() * p.y());
+  qs::Context one, two;
+  one.threads = 1;
+  two.threads = 2;
+  EXPECT_EQ(qs::dissect::choose_seeds(m, one), qs::dissect::choose_seeds(m, two));
+}
+
 // The rule prefers the shortest belt that cuts off a sizable part: around an ellipsoid with
 // semi-axes 3 > 2 > 1 that is the belt in the plane of the two short axes (length ~9.7, against
 // ~13.4 and ~15.9 for the other principal planes), splitting the area in halves.

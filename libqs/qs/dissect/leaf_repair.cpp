@@ -120,9 +120,16 @@ void MeshDissector::run_repairs() {
   std::vector<param::SquareParam> result(repairs_.size());
   size_t faces = 0;
   for (const auto& r : repairs_) faces += r.param.ex.faces.size();
-  parallel_for(
-      repairs_.size(), faces >= kParallelFaces / 8 ? 0 : 1, ctx_,
-      [&](size_t r) { result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet); });
+  // The largest leaves first, so that the threads end together.
+  std::vector<size_t> order(repairs_.size());
+  for (size_t r = 0; r < order.size(); ++r) order[r] = r;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return repairs_[a].param.ex.faces.size() > repairs_[b].param.ex.faces.size();
+  });
+  parallel_for(repairs_.size(), faces >= kParallelFaces / 8 ? 0 : 1, ctx_, [&](size_t k) {
+    const size_t r = order[k];
+    result[r] = minimized_leaf(repairs_[r].param, repairs_[r].rounds, quiet);
+  });
   for (size_t r = 0; r < repairs_.size(); ++r) {
     const Param& p = repairs_[r].param;
     if (result[r].uv.empty()) continue;

@@ -5,12 +5,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <functional>
 #include <optional>
 #include <set>
 #include <string>
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/dissect/seed_routing_detail.h"
 
@@ -19,6 +22,9 @@ namespace qs::dissect {
 using namespace routing;
 
 namespace {
+
+/// choose_seeds routes its candidates on several threads from this many faces.
+constexpr int kParallelRouteFaces = 20000;
 
 /// Vertex areas (a third of each incident face's area); all 1 for used vertices when the mesh has
 /// no area. Unused vertices weigh 0 and are flagged in `used`.
@@ -325,19 +331,17 @@ std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
   no_routable_seeds(why);
 }
 
-std::array<int, 4> choose_seeds(const TriMesh& mesh) {
+std::array<int, 4> choose_seeds(const TriMesh& mesh, const Context& context) {
   std::vector<char> used;
   const Axes axes = checked_axes(mesh, used);
   const Graph g = build_graph(mesh);
-  Dijkstra dijkstra(g);
   const std::vector<double> area = face_areas(mesh);
-  std::string why;
   // Candidates: ray belts in the three principal planes, each also turned by 45 degrees about the
   // plane's normal, then the principal-axis extremes and the geodesically farthest vertices. The
   // loop with the best area fraction per length wins among those enclosing at least 5% of the
   // area (else the most even one): a short belt that cuts the shape in two sizable halves.
   const Vec3 e3 = axes.e1.cross(axes.e2);
-  std::vector<std::pair<std::string, std::array<int, 4>>> candidates;
+  std::vector<std::pair<std::string, std::function<std::array<int, 4>(Dijkstra&)>>> rules;
   const std::array<std::pair<Vec3, Vec3>, 3> planes = {
       std::pair{axes.e1, axes.e2}, std::pair{axes.e1, e3}, std::pair{axes.e2, e3}};
   const char* plane_names[] = {"e1-e2", "e1-e3", "e2-e3"};
@@ -347,22 +351,49 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
       const double c = std::cos(turn * M_PI / 4), s = std::sin(turn * M_PI / 4);
       a.e1 = c * planes[pl].first + s * planes[pl].second;
       a.e2 = -s * planes[pl].first + c * planes[pl].second;
-      candidates.emplace_back(std::string("the ") + plane_names[pl] + " rays" + (turn ? " turned 45 degrees" : ""),
-                              pca_seeds(mesh, used, a));
+      rules.emplace_back(std::string("the ") + plane_names[pl] + " rays" + (turn ? " turned 45 degrees" : ""),
+                         [&, a](Dijkstra&) { return pca_seeds(mesh, used, a); });
     }
-  candidates.emplace_back("the principal-axis extremes", extreme_seeds(mesh, used, axes));
-  candidates.emplace_back("the geodesically farthest vertices", farthest_seeds(mesh, dijkstra, used, axes));
-  const size_t others = candidates.size();
+  rules.emplace_back("the principal-axis extremes", [&](Dijkstra&) { return extreme_seeds(mesh, used, axes); });
+  const size_t farthest = rules.size();
+  rules.emplace_back("the geodesically farthest vertices",
+                     [&](Dijkstra& d) { return farthest_seeds(mesh, d, used, axes); });
+  const size_t others = rules.size();
   for (int turn = 0; turn < 2; ++turn) {
     const double c = std::cos(turn * M_PI / 4), s = std::sin(turn * M_PI / 4);
-    candidates.emplace_back(std::string("the e1 slab extremes") + (turn ? " turned 45 degrees" : ""),
-                            slab_seeds(mesh, used, axes.centroid, axes.e1, c * axes.e2 + s * e3, -s * axes.e2 + c * e3));
+    const Vec3 b = c * axes.e2 + s * e3, n = -s * axes.e2 + c * e3;
+    rules.emplace_back(std::string("the e1 slab extremes") + (turn ? " turned 45 degrees" : ""),
+                       [&, b, n](Dijkstra&) { return slab_seeds(mesh, used, axes.centroid, axes.e1, b, n); });
   }
+  // Each rule's seeds are found and routed on their own (one search state each), on the
+  // context's threads; the farthest vertices, the slowest rule, first.
+  std::vector<size_t> order{farthest};
+  for (size_t i = 0; i < rules.size(); ++i)
+    if (i != farthest) order.push_back(i);
+  std::vector<std::array<int, 4>> seeds(rules.size());
+  std::vector<std::optional<LoopScore>> scores(rules.size());
+  std::vector<std::string> failures(rules.size());
+  std::vector<std::exception_ptr> errors(rules.size());
+  parallel_for(rules.size(), mesh.num_faces() >= kParallelRouteFaces ? 0 : 1, context, [&](size_t k) {
+    const size_t i = order[k];
+    try {
+      Dijkstra dijkstra(g);
+      seeds[i] = rules[i].second(dijkstra);
+      scores[i] = route_score(mesh, g, dijkstra, area, rules[i].first, seeds[i], failures[i]);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : errors)  // the first rule's error, as one after the other
+    if (e) std::rethrow_exception(e);
+  std::string why;
+  for (const std::string& f : failures)
+    if (!f.empty()) why += (why.empty() ? "" : "; ") + f;
   int best = -1;
   LoopScore best_score;
   bool best_ok = false;
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    const auto score = route_score(mesh, g, dijkstra, area, candidates[i].first, candidates[i].second, why);
+  for (size_t i = 0; i < rules.size(); ++i) {
+    const auto& score = scores[i];
     if (!score) continue;
     const bool ok = score->fraction >= 0.05;
     // A slab candidate must beat the others clearly (kSlabMargin): where the rays give a good belt
@@ -378,7 +409,7 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh) {
     }
   }
   if (best < 0) no_routable_seeds(why);
-  return candidates[best].second;
+  return seeds[best];
 }
 
 std::array<int, 4> choose_seeds_farthest(const TriMesh& mesh) {

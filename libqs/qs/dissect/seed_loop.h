@@ -93,9 +93,9 @@ std::vector<int> seed_patch_of_faces(const TriMesh& mesh, const SeedLoop& loop);
 /// that route and enclose at least 5% of the area, the largest (smaller side's area fraction) /
 /// (loop length / sqrt(area)) wins (else the most even loop; a slab candidate must score 1.5
 /// times the best of the others): a short belt cutting the shape into two sizable parts.
-/// Deterministic.
+/// Deterministic (the candidates route on the context's threads; the result does not depend on them).
 /// \throws InvalidInput when the mesh has fewer than 4 used vertices, or no candidate routes.
-std::array<int, 4> choose_seeds(const TriMesh& mesh);
+std::array<int, 4> choose_seeds(const TriMesh& mesh, const Context& context = {});
 
 /// The first candidate (name, seeds) whose loop routes. \throws InvalidInput naming every rule
 /// and why it failed, asking for seeds by hand, when none routes.

@@ -405,7 +405,7 @@ DissectionSet SetDissector::run() {
   parallel_for(nm, ctx_, [&](size_t i) {
     const std::array<int, 4> s = meshes_[i].inserted_seeds ? *meshes_[i].inserted_seeds
                                  : in_[i].seeds      ? *in_[i].seeds
-                                                     : choose_seeds(*in_[i].mesh);
+                                                     : choose_seeds(*in_[i].mesh, ctx_);
     loops[i] = meshes_[i].trace_loop(s);
   });
   // Consistent loops: every feature on the same side in every mesh. The side each feature takes
