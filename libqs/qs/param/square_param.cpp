@@ -9,12 +9,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <future>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <utility>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/core/problem_list.h"
 #include "qs/param/sparse_cholesky.h"
 
@@ -322,7 +324,12 @@ Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const
 struct CholeskyCache {
   bool ready = false;
   SupernodalCholesky llt;
+  std::future<void> pending;  // llt.analyze() running on another thread
 };
+
+/// Large cotangent systems are ordered (the analysis depends on the pattern only) on another
+/// thread while the weights are computed and the matrix assembled.
+constexpr int kEarlyAnalysisRows = 20000;
 
 /// A symmetric positive definite system (cotangent weights, every weight positive, the border
 /// fixed; A holds its lower triangle): sparse Cholesky, without pivoting. False when a pivot is
@@ -331,6 +338,10 @@ struct CholeskyCache {
 bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d& rhs, const Context& context,
                     CholeskyCache& cache, Eigen::MatrixX2d& x) {
   auto& llt = cache.llt;
+  if (cache.pending.valid()) {
+    cache.pending.get();
+    cache.ready = true;
+  }
   if (!cache.ready) {
     llt.analyze(A);
     cache.ready = true;
@@ -558,6 +569,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     std::vector<double> w(3 * nf, 0.0);
     IntrinsicMesh idt;
     HalfEdges idt_he;
+    CholeskyCache cholesky;
     if (options.weights == InteriorWeights::IntrinsicCotan) {
       idt = intrinsic_delaunay(patch, he, options.min_edge_length);
       result.intrinsic_flips = idt.flips;
@@ -569,6 +581,26 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       idt_he = build_half_edges(nv, idt.faces);
       lap_faces = &idt.faces;
       lap_he = &idt_he;
+      const bool solves = !options.first_solve || options.stretch_iterations > 0;
+      if (solves && ni >= kEarlyAnalysisRows && !inside_parallel_loop() && thread_count(0, context) > 1) {
+        // The lower triangle's pattern as the assembly below makes it (same entries, same order).
+        cholesky.pending = std::async(std::launch::async, [&] {
+          std::vector<Eigen::Triplet<double>> pattern;
+          pattern.reserve(idt_he.out.size() / 2 + ni);
+          for (int i = 0; i < nv; ++i) {
+            const int r = interior_index[i];
+            if (r < 0) continue;
+            for (int k = idt_he.out_offset[i]; k < idt_he.out_offset[i + 1]; ++k) {
+              const int j = interior_index[he_to(idt.faces, idt_he.out[k])];
+              if (j >= 0 && j <= r) pattern.emplace_back(r, j, 1.0);
+            }
+            pattern.emplace_back(r, r, 1.0);
+          }
+          Eigen::SparseMatrix<double> lower(ni, ni);
+          lower.setFromTriplets(pattern.begin(), pattern.end());
+          cholesky.llt.analyze(lower);
+        });
+      }
       for (int h = 0; h < 3 * nf; ++h) {
         double x = cot_at(idt, h);
         if (idt.twin[h] >= 0) x += cot_at(idt, idt.twin[h]);
@@ -598,7 +630,6 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
 
     // Assembles the system for half-edge weights ww and solves it into result.uv.
     SymbolicCache symbolic;
-    CholeskyCache cholesky;
     // One solve, by Cholesky when `spd` and the weights allow it; false when the Cholesky
     // factorization failed (nothing is changed then).
     auto solve_once = [&](const std::vector<double>& ww, bool spd) {
