@@ -128,7 +128,19 @@ class MeshDissector {
   GeodesicLoop straighten(const SeedLoop& loop) const;
   /// The four seed curves as seed() cut them into the mesh: 3D points along each path.
   const std::array<std::vector<Vec3>, 4>& seed_curves() const { return seed_curves_; }
-  Param parameterize(const Node& node);
+  /// The node's patch extracted (edges that would give border faces zero uv area split first) and
+  /// mapped with the options' weights; its stretch and features filled in. With `own_weights`
+  /// this mesh chooses alone: a map that folds is solved again with mean-value weights when they
+  /// fold fewer faces, and a squeezed map that holds features is spread. Without, the caller
+  /// chooses (SetDissector::evaluate, for meshes of one surface).
+  Param parameterize(const Node& node, bool own_weights = true);
+  /// p's patch mapped with mean-value weights.
+  param::SquareParam mean_value_map(const Param& p) const;
+  /// p's map replaced by its mean-value map `mv` (p.weights, p.plain_uv and p.st follow).
+  void use_mean_value(Param& p, param::SquareParam mv) const;
+  /// p's map stretch-minimized (kRepairRounds, p's weights), kept when it folds less, or, both
+  /// bijective, when it is less stretched.
+  void spread(Param& p) const;
   std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
   /// The same split with its four inner corners given (counter-clockwise from the one of corner
   /// 0): DissectOptions::same_pose places them per mesh. \pre a convex quad whose 8 cuts cross
@@ -262,6 +274,18 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
 /// inner corner i to i + 1) crossing (split_choice.cpp).
 bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin);
 
+/// Whether one mesh's node map asks for mean-value weights when the set chooses them together
+/// (meshes of one surface): its cotangent map `cot` folds, and the mean-value map `mv` folds fewer
+/// faces and either `cot` flips a triangle (not only squeezes faces to zero area) or `mv` is
+/// bijective. A squeeze that both weights leave does not ask.
+bool wants_mean_value(const param::SquareParam& cot, const param::SquareParam& mv);
+
+/// The meshes whose node maps choose their weights together (1) rather than each alone (0):
+/// mesh 0 and every mesh whose landmarks' geodesic distances differ from mesh 0's by at most
+/// kIntrinsicLoopIsometry of their sum (`discrepancy`, route_intrinsic), when there are two or
+/// more such meshes; all 0 when `discrepancy` is empty (not measured).
+std::vector<char> joint_weights(const std::vector<double>& discrepancy);
+
 /// The inner corners of a split at (peak, w): (1 - w) p_i + w peak for the square's corners p_i.
 inline std::array<Vec2, 4> inner_corners(const Vec2& peak, double w) {
   std::array<Vec2, 4> inner;
@@ -327,6 +351,7 @@ class SetDissector {
   const Context& ctx_;
   std::vector<std::string> feature_names_;
   std::vector<MeshDissector> meshes_;
+  std::vector<char> joint_weights_;    // per mesh: node weights chosen with the set (joint_weights)
   std::vector<Eigen::Matrix4d> pose_;  // same_pose: mesh 0 -> mesh i (landmarks' similarity)
   std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
 };

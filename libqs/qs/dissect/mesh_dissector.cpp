@@ -223,7 +223,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
   return roots;
 }
 
-Param MeshDissector::parameterize(const Node& node) {
+Param MeshDissector::parameterize(const Node& node, bool own_weights) {
   Param p;
   for (int round = 0;; ++round) {
     p.ex = extract(node);
@@ -239,10 +239,10 @@ Param MeshDissector::parameterize(const Node& node) {
   base.weights = p.weights;
   p.sp = param::parameterize_square(p.ex.pm, base, ctx_.without_progress());
   p.weights = p.sp.weights;  // mean-value where the Delaunay flips ran past their budget
-  if (p.weights != param::InteriorWeights::MeanValue && !p.sp.bijective()) {
+  if (own_weights && p.weights != param::InteriorWeights::MeanValue && !p.sp.bijective()) {
     // Cotangent weights guarantee a bijection of the intrinsic Delaunay triangulation only: where
     // the patch's own triangles fold (slivers of the cuts), this patch keeps mean-value weights.
-    param::SquareParam mv = param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
+    param::SquareParam mv = mean_value_map(p);
     if (mv.flipped_faces + mv.zero_area_faces < p.sp.flipped_faces + p.sp.zero_area_faces) {
       p.sp = std::move(mv);
       p.weights = param::InteriorWeights::MeanValue;
@@ -254,34 +254,46 @@ Param MeshDissector::parameterize(const Node& node) {
   // A map squeezed to zero area (a long protrusion) that holds features is spread out by stretch
   // minimization, so that the features can be aligned (measured: it changes the tree of a mesh
   // without features for the worse as often as for the better).
-  const bool squeezed = !p.sp.bijective() && !p.features.empty();
-  if (squeezed) {
-    param::SquareParamOptions po;
-    po.weights = p.weights;
-    po.stretch_iterations = kRepairRounds;
-    po.first_solve = &p.plain_uv;
-    try {
-      param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
-      // Kept when it folds less, or, both bijective, when it is less stretched.
-      const int bad = sp.flipped_faces + sp.zero_area_faces;
-      const int old_bad = p.sp.flipped_faces + p.sp.zero_area_faces;
-      if (bad < old_bad || (bad == 0 && old_bad == 0)) {
-        param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, sp.uv);
-        if (bad < old_bad || st.patch < p.st.patch) {
-          p.sp = std::move(sp);
-          p.st = std::move(st);
-        }
-      }
-    } catch (const SolverError&) {
-      // keep the mean-value map
-    }
-  }
+  if (own_weights && !p.sp.bijective() && !p.features.empty()) spread(p);
   for (int b : p.ex.pm.boundary)
     for (const auto& [k, local] : p.features)
       if (local == b)
         throw InternalError(name_ + ": feature vertex " + std::to_string(p.ex.verts[b]) + " is on the border of patch " +
                             node.name);
   return p;
+}
+
+param::SquareParam MeshDissector::mean_value_map(const Param& p) const {
+  return param::parameterize_square(p.ex.pm, {}, ctx_.without_progress());
+}
+
+void MeshDissector::use_mean_value(Param& p, param::SquareParam mv) const {
+  p.sp = std::move(mv);
+  p.weights = param::InteriorWeights::MeanValue;
+  p.plain_uv = p.sp.uv;
+  p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
+}
+
+void MeshDissector::spread(Param& p) const {
+  param::SquareParamOptions po;
+  po.weights = p.weights;
+  po.stretch_iterations = kRepairRounds;
+  po.first_solve = &p.plain_uv;
+  try {
+    param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
+    // Kept when it folds less, or, both bijective, when it is less stretched.
+    const int bad = sp.flipped_faces + sp.zero_area_faces;
+    const int old_bad = p.sp.flipped_faces + p.sp.zero_area_faces;
+    if (bad < old_bad || (bad == 0 && old_bad == 0)) {
+      param::Stretch st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, sp.uv);
+      if (bad < old_bad || st.patch < p.st.patch) {
+        p.sp = std::move(sp);
+        p.st = std::move(st);
+      }
+    }
+  } catch (const SolverError&) {
+    // keep the map
+  }
 }
 
 void MeshDissector::restore(const Node& node, size_t first_new_label) {
