@@ -134,8 +134,7 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   // bijective, its own triangles need not be) and they fold less, or where it squeezes faces to
   // zero uv area (a long protrusion) and the mean-value map is bijective (wants_mean_value).
   // Meshes of other shapes keep choosing alone: there the fallback is what holds a squeezed node
-  // (measured on the examples' spot, cat and koala: the joint rule gives 74 patches instead of 54
-  // and max stretch 10.4 instead of 6.8).
+  // (docs/pose-pairs.md has the measurements).
   std::vector<param::SquareParam> mv(ps.size());
   std::vector<char> wants(ps.size(), 0);
   parallel_for(ps.size(), par, ctx_, [&](size_t i) {
