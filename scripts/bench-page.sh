@@ -15,8 +15,9 @@
 #   --page-only write the page from the outputs of the last run (out/bench-page/) without running.
 #
 # Each benchmark's full output is kept in out/bench-page/<name>.txt; the page shows every line that
-# states a target, and each output in full. A benchmark that fails is listed as failed, with the
-# tail of its output, and the script exits 1 after writing the page.
+# states a target, and each output in full, followed by docs/bench-notes/<name>.md where there is
+# one (figures measured by hand). A benchmark that fails is listed as failed, with the tail of its
+# output, and the script exits 1 after writing the page.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
@@ -171,6 +172,12 @@ fi
         echo
         grep '^|' "$out/$name.txt"
       fi
+    fi
+    # Figures measured by hand beside a benchmark (runs too long for the page, profiles) live in
+    # docs/bench-notes/<name>.md and follow its output.
+    if [ -f "docs/bench-notes/$name.md" ]; then
+      echo
+      cat "docs/bench-notes/$name.md"
     fi
   done
 } > "$page.tmp" && mv "$page.tmp" "$page"
