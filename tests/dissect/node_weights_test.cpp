@@ -24,13 +24,17 @@ qs::param::SquareParam map(int flipped, int zero) {
 // Meshes of one surface decide together: mean-value weights where they unfold a triangle or make
 // a squeezed map bijective; a squeeze that both weights leave keeps the cotangent map.
 TEST(NodeWeights, MeanValueOnlyWhereItUnfoldsOrMakesBijective) {
-  EXPECT_FALSE(wants_mean_value(map(0, 0), map(0, 0)));    // bijective already
-  EXPECT_TRUE(wants_mean_value(map(1, 0), map(0, 0)));     // a folded triangle, unfolded
-  EXPECT_TRUE(wants_mean_value(map(2, 30), map(0, 10)));   // folded triangles, fewer folds
-  EXPECT_FALSE(wants_mean_value(map(1, 0), map(1, 0)));    // no fewer folds
-  EXPECT_FALSE(wants_mean_value(map(1, 0), map(0, 3)));    // more folds
-  EXPECT_TRUE(wants_mean_value(map(0, 1672), map(0, 0)));  // a squeeze made bijective
-  EXPECT_FALSE(wants_mean_value(map(0, 28), map(0, 4)));   // a squeeze both weights leave
+  EXPECT_FALSE(wants_mean_value(map(0, 0), map(0, 0), false));    // bijective already
+  EXPECT_TRUE(wants_mean_value(map(1, 0), map(0, 0), false));     // a folded triangle, unfolded
+  EXPECT_TRUE(wants_mean_value(map(2, 30), map(0, 10), false));   // folded triangles, fewer folds
+  EXPECT_FALSE(wants_mean_value(map(1, 0), map(1, 0), false));    // no fewer folds
+  EXPECT_FALSE(wants_mean_value(map(1, 0), map(0, 3), false));    // more folds
+  EXPECT_TRUE(wants_mean_value(map(0, 1672), map(0, 0), false));  // a squeeze made bijective
+  EXPECT_FALSE(wants_mean_value(map(0, 28), map(0, 4), false));   // a squeeze both weights leave
+  // One tessellation (a pose of the same face list): mean-value wherever it folds fewer faces.
+  EXPECT_TRUE(wants_mean_value(map(0, 28), map(0, 4), true));
+  EXPECT_FALSE(wants_mean_value(map(0, 28), map(0, 28), true));
+  EXPECT_FALSE(wants_mean_value(map(0, 0), map(0, 0), true));
 }
 
 // Together: mesh 0 and the meshes whose landmarks' geodesic distances are within

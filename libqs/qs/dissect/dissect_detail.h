@@ -277,8 +277,9 @@ bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin);
 /// Whether one mesh's node map asks for mean-value weights when the set chooses them together
 /// (meshes of one surface): its cotangent map `cot` folds, and the mean-value map `mv` folds fewer
 /// faces and either `cot` flips a triangle (not only squeezes faces to zero area) or `mv` is
-/// bijective. A squeeze that both weights leave does not ask.
-bool wants_mean_value(const param::SquareParam& cot, const param::SquareParam& mv);
+/// bijective. A squeeze that both weights leave does not ask, unless the meshes share one
+/// tessellation (`one_tessellation`: mean-value maps then differ only as the surfaces do).
+bool wants_mean_value(const param::SquareParam& cot, const param::SquareParam& mv, bool one_tessellation);
 
 /// The meshes whose node maps choose their weights together (1) rather than each alone (0):
 /// mesh 0 and every mesh whose landmarks' geodesic distances differ from mesh 0's by at most
@@ -352,6 +353,7 @@ class SetDissector {
   std::vector<std::string> feature_names_;
   std::vector<MeshDissector> meshes_;
   std::vector<char> joint_weights_;    // per mesh: node weights chosen with the set (joint_weights)
+  bool one_tessellation_ = false;      // the meshes choosing together share one face list
   std::vector<Eigen::Matrix4d> pose_;  // same_pose: mesh 0 -> mesh i (landmarks' similarity)
   std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
 };

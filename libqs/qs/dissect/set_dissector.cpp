@@ -66,10 +66,10 @@ void replace_node_maps(const DissectOptions& opt, std::vector<Param>& ps, bool b
   }
 }
 
-bool wants_mean_value(const param::SquareParam& cot, const param::SquareParam& mv) {
+bool wants_mean_value(const param::SquareParam& cot, const param::SquareParam& mv, bool one_tessellation) {
   if (cot.bijective()) return false;
   const bool fewer = mv.flipped_faces + mv.zero_area_faces < cot.flipped_faces + cot.zero_area_faces;
-  return fewer && (cot.flipped_faces > 0 || mv.bijective());
+  return fewer && (one_tessellation || cot.flipped_faces > 0 || mv.bijective());
 }
 
 std::vector<char> joint_weights(const std::vector<double>& discrepancy) {
@@ -132,7 +132,8 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   // re-tessellation by another rule than its source. They take mean-value weights, all of them,
   // only where some mesh's cotangent map folds a triangle (its intrinsic Delaunay map is
   // bijective, its own triangles need not be) and they fold less, or where it squeezes faces to
-  // zero uv area (a long protrusion) and the mean-value map is bijective (wants_mean_value).
+  // zero uv area (a long protrusion) and the mean-value map is bijective; where they share one
+  // tessellation, wherever the mean-value map folds fewer faces (wants_mean_value).
   // Meshes of other shapes keep choosing alone: there the fallback is what holds a squeezed node
   // (docs/pose-pairs.md has the measurements).
   std::vector<param::SquareParam> mv(ps.size());
@@ -140,7 +141,7 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   parallel_for(ps.size(), par, ctx_, [&](size_t i) {
     if (!joint(i) || ps[i].weights == param::InteriorWeights::MeanValue || ps[i].sp.bijective()) return;
     mv[i] = meshes_[i].mean_value_map(ps[i]);
-    wants[i] = wants_mean_value(ps[i].sp, mv[i]);
+    wants[i] = wants_mean_value(ps[i].sp, mv[i], one_tessellation_);
   });
   const bool mean_value = std::find(wants.begin(), wants.end(), 1) != wants.end();
   parallel_for(ps.size(), par, ctx_, [&](size_t i) {
@@ -503,6 +504,9 @@ DissectionSet SetDissector::run() {
   if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops)
     out.intrinsic_loops = route_intrinsic(loops, out.landmark_discrepancy);
   joint_weights_ = joint_weights(out.landmark_discrepancy);
+  one_tessellation_ = true;
+  for (size_t i = 1; i < joint_weights_.size(); ++i)
+    if (joint_weights_[i]) one_tessellation_ = one_tessellation_ && in_[i].mesh->faces == in_[0].mesh->faces;
   std::vector<std::optional<GeodesicLoop>> straightened(nm);
   if (opt_.replace_seed_loops) {
     std::vector<GeodesicLoop> g(nm);
