@@ -129,11 +129,9 @@ class MeshDissector {
   /// The four seed curves as seed() cut them into the mesh: 3D points along each path.
   const std::array<std::vector<Vec3>, 4>& seed_curves() const { return seed_curves_; }
   /// The node's patch extracted (edges that would give border faces zero uv area split first) and
-  /// mapped with the options' weights; its stretch and features filled in. With `own_weights`
-  /// this mesh chooses alone: a map that folds is solved again with mean-value weights when they
-  /// fold fewer faces, and a squeezed map that holds features is spread. Without, the caller
-  /// chooses (SetDissector::evaluate, for meshes of one surface).
-  Param parameterize(const Node& node, bool own_weights = true);
+  /// mapped with the options' weights; its stretch and features filled in. Whether a map that
+  /// folds takes mean-value weights instead is the set's choice (SetDissector::evaluate).
+  Param parameterize(const Node& node);
   /// p's patch mapped with mean-value weights.
   param::SquareParam mean_value_map(const Param& p) const;
   /// p's map replaced by its mean-value map `mv` (p.weights, p.plain_uv and p.st follow).
@@ -274,11 +272,12 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
 /// inner corner i to i + 1) crossing (split_choice.cpp).
 bool inner_quad_ok(const std::array<Vec2, 4>& inner, double margin);
 
-/// Whether one mesh's node map asks for mean-value weights when the set chooses them together
-/// (meshes of one surface): its cotangent map `cot` folds, and the mean-value map `mv` folds fewer
-/// faces and either `cot` flips a triangle (not only squeezes faces to zero area) or `mv` is
-/// bijective. A squeeze that both weights leave does not ask, unless the meshes share one
-/// tessellation (`one_tessellation`: mean-value maps then differ only as the surfaces do).
+/// Whether one mesh's node map asks for mean-value weights: its cotangent map `cot` folds, and the
+/// mean-value map `mv` folds fewer faces and either `cot` flips a triangle (not only squeezes
+/// faces to zero area) or `mv` is bijective. A squeeze that both weights leave does not ask,
+/// unless the map's tessellation is the only one it must agree with (`one_tessellation`: a mesh
+/// choosing alone, or meshes of one surface sharing one face list, whose mean-value maps then
+/// differ only as the surfaces do).
 bool wants_mean_value(const param::SquareParam& cot, const param::SquareParam& mv, bool one_tessellation);
 
 /// The meshes whose node maps choose their weights together (1) rather than each alone (0):

@@ -223,7 +223,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
   return roots;
 }
 
-Param MeshDissector::parameterize(const Node& node, bool own_weights) {
+Param MeshDissector::parameterize(const Node& node) {
   Param p;
   for (int round = 0;; ++round) {
     p.ex = extract(node);
@@ -239,22 +239,9 @@ Param MeshDissector::parameterize(const Node& node, bool own_weights) {
   base.weights = p.weights;
   p.sp = param::parameterize_square(p.ex.pm, base, ctx_.without_progress());
   p.weights = p.sp.weights;  // mean-value where the Delaunay flips ran past their budget
-  if (own_weights && p.weights != param::InteriorWeights::MeanValue && !p.sp.bijective()) {
-    // Cotangent weights guarantee a bijection of the intrinsic Delaunay triangulation only: where
-    // the patch's own triangles fold (slivers of the cuts), this patch keeps mean-value weights.
-    param::SquareParam mv = mean_value_map(p);
-    if (mv.flipped_faces + mv.zero_area_faces < p.sp.flipped_faces + p.sp.zero_area_faces) {
-      p.sp = std::move(mv);
-      p.weights = param::InteriorWeights::MeanValue;
-    }
-  }
   p.plain_uv = p.sp.uv;
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
   collect_features(p);
-  // A map squeezed to zero area (a long protrusion) that holds features is spread out by stretch
-  // minimization, so that the features can be aligned (measured: it changes the tree of a mesh
-  // without features for the worse as often as for the better).
-  if (own_weights && !p.sp.bijective() && !p.features.empty()) spread(p);
   for (int b : p.ex.pm.boundary)
     for (const auto& [k, local] : p.features)
       if (local == b)

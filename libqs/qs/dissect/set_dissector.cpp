@@ -125,30 +125,30 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
   size_t faces = 0;
   for (size_t i = 0; i < meshes_.size(); ++i) faces += meshes_[i].node_faces(nodes[i]);
   const int par = faces >= kParallelFaces ? 0 : 1;
+  parallel_for(meshes_.size(), par, ctx_, [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i]); });
+  // Cotangent weights guarantee a bijection of the intrinsic Delaunay triangulation only: where a
+  // patch's own triangles fold (slivers of the cuts) or a protrusion is squeezed to zero uv area,
+  // the node may take mean-value weights instead (wants_mean_value). Those depend on the
+  // tessellation, so meshes of one surface (other poses, other tessellations) choose together,
+  // mean-value for all of them or for none: a mesh falling back alone would map a re-tessellation
+  // by another rule than its source. Meshes of other shapes choose alone, where the fallback is
+  // what holds a squeezed node (docs/pose-pairs.md has the measurements).
   auto joint = [&](size_t i) { return i < joint_weights_.size() && joint_weights_[i]; };
-  parallel_for(meshes_.size(), par, ctx_, [&](size_t i) { ps[i] = meshes_[i].parameterize(nodes[i], !joint(i)); });
-  // Meshes of one surface (other poses, other tessellations) choose the node's weights together:
-  // mean-value weights depend on the tessellation, so a mesh falling back to them alone maps a
-  // re-tessellation by another rule than its source. They take mean-value weights, all of them,
-  // only where some mesh's cotangent map folds a triangle (its intrinsic Delaunay map is
-  // bijective, its own triangles need not be) and they fold less, or where it squeezes faces to
-  // zero uv area (a long protrusion) and the mean-value map is bijective; where they share one
-  // tessellation, wherever the mean-value map folds fewer faces (wants_mean_value).
-  // Meshes of other shapes keep choosing alone: there the fallback is what holds a squeezed node
-  // (docs/pose-pairs.md has the measurements).
   std::vector<param::SquareParam> mv(ps.size());
   std::vector<char> wants(ps.size(), 0);
   parallel_for(ps.size(), par, ctx_, [&](size_t i) {
-    if (!joint(i) || ps[i].weights == param::InteriorWeights::MeanValue || ps[i].sp.bijective()) return;
+    if (ps[i].weights == param::InteriorWeights::MeanValue || ps[i].sp.bijective()) return;
     mv[i] = meshes_[i].mean_value_map(ps[i]);
-    wants[i] = wants_mean_value(ps[i].sp, mv[i], one_tessellation_);
+    wants[i] = wants_mean_value(ps[i].sp, mv[i], !joint(i) || one_tessellation_);
   });
-  const bool mean_value = std::find(wants.begin(), wants.end(), 1) != wants.end();
+  bool together = false;
+  for (size_t i = 0; i < ps.size(); ++i) together = together || (joint(i) && wants[i]);
   parallel_for(ps.size(), par, ctx_, [&](size_t i) {
-    if (!joint(i)) return;
-    if (mean_value && ps[i].weights != param::InteriorWeights::MeanValue)
+    if ((joint(i) ? together : wants[i]) && ps[i].weights != param::InteriorWeights::MeanValue)
       meshes_[i].use_mean_value(ps[i], mv[i].uv.empty() ? meshes_[i].mean_value_map(ps[i]) : std::move(mv[i]));
-    // As parameterize() does alone: a squeezed map that holds features is spread.
+    // A map squeezed to zero area (a long protrusion) that holds features is spread out by
+    // stretch minimization, so that the features can be aligned (measured: it changes the tree of
+    // a mesh without features for the worse as often as for the better).
     if (!ps[i].sp.bijective() && !ps[i].features.empty()) meshes_[i].spread(ps[i]);
   });
   replace_node_maps(opt_, ps, false);
