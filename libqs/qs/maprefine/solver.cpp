@@ -307,7 +307,7 @@ class PatchSolver {
     for (int attempt = 0; attempt < 6; ++attempt, mu *= 100) {
       for (int i = 0; i < n; ++i) h_.valuePtr()[diag_slot_[i]] = plain[i] + mu;
       if (!llt_.factorize(h_, threads_)) continue;  // not positive definite: more regularization
-      d = llt_.solve(-g);
+      d = llt_.solve(-g, threads_);
       if (d.allFinite() && g.dot(d) < 0) break;
       d.resize(0);
     }

@@ -266,6 +266,55 @@ void nested_dissection(const Eigen::SparseMatrix<double>& lower, const Eigen::Ma
 /// multiply-adds) run on one thread: a few milliseconds, less than starting threads is worth.
 constexpr double kParallelWork = 2e7;
 
+/// Fronts of at least this many rows are eliminated by blocks of kBlock columns (eliminate()).
+constexpr int kBlockedFront = 384;
+constexpr int kBlock = 128;
+
+/// Eliminates the first k columns of the dense symmetric matrix f (its lower triangle is read and
+/// written): L11 and L21 of f = [L11 0; L21 I] [I 0; 0 S] [L11^T L21^T; 0 I] over f's first k
+/// columns, the Schur complement S over its lower right block. Fronts of kBlockedFront rows or
+/// more go by right-looking blocks of kBlock columns, their row and column tasks on up to
+/// `threads` threads; each task's arithmetic is the same on any thread count, and so are the
+/// bits. False when a pivot is not positive.
+bool eliminate(Eigen::Map<Eigen::MatrixXd>& f, int k, int threads) {
+  const int m = static_cast<int>(f.rows());
+  if (m < kBlockedFront) {
+    Eigen::Ref<Eigen::MatrixXd> diagonal_block = f.topLeftCorner(k, k);
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(diagonal_block);  // in place: L11 in the lower triangle
+    if (llt.info() != Eigen::Success) return false;
+    if (m > k) {
+      auto l21 = f.bottomLeftCorner(m - k, k);
+      f.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(l21);
+      f.bottomRightCorner(m - k, m - k).selfadjointView<Eigen::Lower>().rankUpdate(l21, -1.0);
+    }
+    return true;
+  }
+  Context pool;
+  pool.threads = threads;
+  for (int j0 = 0; j0 < k; j0 += kBlock) {
+    const int jb = std::min(kBlock, k - j0);
+    Eigen::Ref<Eigen::MatrixXd> diagonal_block = f.block(j0, j0, jb, jb);
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(diagonal_block);
+    if (llt.info() != Eigen::Success) return false;
+    const int r0 = j0 + jb;
+    if (r0 >= m) break;
+    const int tasks = (m - r0 + kBlock - 1) / kBlock;
+    parallel_for(tasks, threads, pool, [&](int t) {  // L21 of this block column, kBlock rows a task
+      const int a = r0 + t * kBlock;
+      auto rows = f.block(a, j0, std::min(kBlock, m - a), jb);
+      f.block(j0, j0, jb, jb).triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(rows);
+    });
+    parallel_for(tasks, threads, pool, [&](int t) {  // the trailing matrix, kBlock columns a task
+      const int c0 = r0 + t * kBlock, cb = std::min(kBlock, m - c0);
+      f.block(c0, c0, cb, cb).selfadjointView<Eigen::Lower>().rankUpdate(f.block(c0, j0, cb, jb), -1.0);
+      if (c0 + cb < m)
+        f.block(c0 + cb, c0, m - c0 - cb, cb).noalias() -=
+            f.block(c0 + cb, j0, m - c0 - cb, jb) * f.block(c0, j0, cb, jb).transpose();
+    });
+  }
+  return true;
+}
+
 void require_compressed(const Eigen::SparseMatrix<double>& a) {
   if (!a.isCompressed() || a.rows() != a.cols())
     throw InternalError("SupernodalCholesky: the matrix must be square and compressed");
@@ -381,13 +430,61 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
   panel_.assign(ns, Eigen::MatrixXd());
 }
 
+SupernodalCholesky::Plan SupernodalCholesky::plan(int count) const {
+  // Subtrees (consecutive in the postorder: [lowest[s], s]) handed to the threads: the roots'
+  // subtrees, the heaviest split into its children's while it exceeds a quarter of a thread's
+  // share; the supernodes split off (the top of the tree) run afterwards, in order, their dense
+  // work on all threads. A factorization of little work (k m^2 summed over the supernodes) runs on
+  // one thread.
+  const int ns = static_cast<int>(parent_.size());
+  Plan p;
+  if (count <= 1 || ns < 2) return p;
+  p.lowest.resize(ns);
+  std::vector<double> work(ns, 0.0);
+  double total = 0;
+  for (int s = 0; s < ns; ++s) p.lowest[s] = s;
+  for (int s = 0; s < ns; ++s) {
+    const double m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
+    work[s] += k * m * m;
+    if (parent_[s] >= 0) {
+      p.lowest[parent_[s]] = std::min(p.lowest[parent_[s]], p.lowest[s]);
+      work[parent_[s]] += work[s];
+    } else {
+      total += work[s];
+    }
+  }
+  if (total < kParallelWork) return p;
+  std::vector<int> head(ns, -1), next(ns, -1);
+  for (int s = ns - 1; s >= 0; --s)
+    if (parent_[s] >= 0) {
+      next[s] = head[parent_[s]];
+      head[parent_[s]] = s;
+    }
+  for (int s = 0; s < ns; ++s)
+    if (parent_[s] < 0) p.tasks.push_back(s);
+  const double limit = total / (4.0 * count);
+  for (;;) {
+    auto heaviest = std::max_element(p.tasks.begin(), p.tasks.end(), [&](int a, int b) { return work[a] < work[b]; });
+    if (heaviest == p.tasks.end() || work[*heaviest] <= limit || head[*heaviest] == -1) break;
+    const int s = *heaviest;
+    p.tasks.erase(heaviest);
+    p.top.push_back(s);
+    for (int t = head[s]; t != -1; t = next[t]) p.tasks.push_back(t);
+  }
+  std::sort(p.tasks.begin(), p.tasks.end(),
+            [&](int a, int b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
+  std::sort(p.top.begin(), p.top.end());
+  p.parallel = true;
+  return p;
+}
+
 bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int threads) {
   require_compressed(lower);
   if (lower.cols() != n_) throw InternalError("SupernodalCholesky: factorize() with another size than analyze()");
   const double* value = lower.valuePtr();
   const int ns = static_cast<int>(panel_.size());
   // Per supernode: the update to its parent's front, its lower triangle packed by columns.
-  std::vector<std::vector<double>> update(ns);
+  std::vector<std::unique_ptr<double[]>> update(ns);
   std::vector<int> head(ns, -1), next(ns, -1);
   for (int s = ns - 1; s >= 0; --s)
     if (parent_[s] >= 0) {
@@ -395,9 +492,10 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
       head[parent_[s]] = s;
     }
   // Supernode s's front: its entries of the matrix and its children's updates (in child order),
-  // factorized; its columns of L go to panel_[s], its update to update[s]. relpos: a workspace of
-  // n_ entries; buffer: room for the front (m^2). False when a pivot is not positive.
-  auto process = [&](int s, std::vector<int>& relpos, std::vector<int>& at, double* buffer) {
+  // its first k columns eliminated (on up to dense_threads threads); its columns of L go to
+  // panel_[s], its update to update[s]. relpos: a workspace of n_ entries; buffer: room for the
+  // front (m^2). False when a pivot is not positive.
+  auto process = [&](int s, std::vector<int>& relpos, std::vector<int>& at, double* buffer, int dense_threads) {
     const int* rs = rows_.data() + row_start_[s];
     const int m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
     for (int a = 0; a < m; ++a) relpos[rs[a]] = a;
@@ -412,27 +510,18 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
       const int mt = row_start_[t + 1] - row_start_[t] - kt;
       at.resize(mt);
       for (int a = 0; a < mt; ++a) at[a] = relpos[rt[a]];
-      const double* u = update[t].data();
+      const double* u = update[t].get();
       for (int b = 0; b < mt; ++b) {
         double* column = &front(0, at[b]);
         for (int a = b; a < mt; ++a) column[at[a]] += *u++;
       }
-      std::vector<double>().swap(update[t]);
+      update[t].reset();
     }
-    Eigen::Ref<Eigen::MatrixXd> diagonal_block = front.topLeftCorner(k, k);
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(diagonal_block);  // in place: L11 in the lower triangle
-    if (llt.info() != Eigen::Success) return false;
-    const auto l11 = front.topLeftCorner(k, k).triangularView<Eigen::Lower>();
+    if (!eliminate(front, k, dense_threads)) return false;
     if (m > k) {
-      auto l21 = front.bottomLeftCorner(m - k, k);
-      l11.transpose().solveInPlace<Eigen::OnTheRight>(l21);
-      auto u = front.bottomRightCorner(m - k, m - k);
-      u.selfadjointView<Eigen::Lower>().rankUpdate(l21, -1.0);
-      std::vector<double>& packed = update[s];
-      packed.resize(static_cast<std::size_t>(m - k) * (m - k + 1) / 2);
-      double* out = packed.data();
-      for (int b = 0; b < m - k; ++b)
-        for (int a = b; a < m - k; ++a) *out++ = u(a, b);
+      update[s].reset(new double[static_cast<std::size_t>(m - k) * (m - k + 1) / 2]);
+      double* out = update[s].get();
+      for (int b = k; b < m; ++b) out = std::copy(&front(b, b), &front(0, b) + m, out);
     }
     panel_[s].resize(m, k);  // the size of the last factorization's: no allocation
     panel_[s] = front.leftCols(k);
@@ -447,95 +536,108 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
     }
     return most;
   };
-  // Every supernode's computation is the same whichever thread runs it and in whatever order
-  // independent subtrees run, so the factor does not depend on the thread count.
+  // Every supernode's computation is the same whichever thread runs it, in whatever order
+  // independent subtrees run and on however many threads its dense work is split, so the factor
+  // does not depend on the thread count.
   const int count = inside_parallel_loop() ? 1 : thread_count(threads, Context{});
   std::vector<int> relpos(n_, 0), at;
-  // Subtrees (consecutive in the postorder: [lowest[s], s]) handed to the threads: the roots'
-  // subtrees, the heaviest split into its children's while it exceeds a quarter of a thread's
-  // share; the supernodes split off run afterwards, in order, on this thread. A factorization of
-  // little work (k m^2 summed over the supernodes) runs on this thread alone.
-  std::vector<int> lowest(ns);
-  std::vector<double> work(ns, 0.0);
-  double total = 0;
-  if (count > 1) {
-    for (int s = 0; s < ns; ++s) lowest[s] = s;
-    for (int s = 0; s < ns; ++s) {
-      const double m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
-      work[s] += k * m * m;
-      if (parent_[s] >= 0) {
-        lowest[parent_[s]] = std::min(lowest[parent_[s]], lowest[s]);
-        work[parent_[s]] += work[s];
-      } else {
-        total += work[s];
-      }
-    }
-  }
   // The calling thread's front buffer is kept from one factorization to the next (no fresh pages).
   front_buffer_.resize(std::max(front_buffer_.size(), largest_front(0, ns - 1)));
-  if (count <= 1 || ns < 2 || total < kParallelWork) {
+  const Plan p = plan(count);
+  if (!p.parallel) {
     for (int s = 0; s < ns; ++s)
-      if (!process(s, relpos, at, front_buffer_.data())) return false;
+      if (!process(s, relpos, at, front_buffer_.data(), 1)) return false;
     return true;
   }
-  std::vector<int> tasks, top;
-  for (int s = 0; s < ns; ++s)
-    if (parent_[s] < 0) tasks.push_back(s);
-  const double limit = total / (4.0 * count);
-  for (;;) {
-    auto heaviest = std::max_element(tasks.begin(), tasks.end(), [&](int a, int b) { return work[a] < work[b]; });
-    if (heaviest == tasks.end() || work[*heaviest] <= limit || head[*heaviest] == -1) break;
-    const int s = *heaviest;
-    tasks.erase(heaviest);
-    top.push_back(s);
-    for (int t = head[s]; t != -1; t = next[t]) tasks.push_back(t);
-  }
-  std::sort(tasks.begin(), tasks.end(),
-            [&](int a, int b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
-  std::vector<char> ok(tasks.size(), 1);
+  std::vector<char> ok(p.tasks.size(), 1);
   Context threads_only;
   threads_only.threads = count;
-  parallel_for(static_cast<int>(tasks.size()), count, threads_only, [&](int i) {
+  parallel_for(static_cast<int>(p.tasks.size()), count, threads_only, [&](int i) {
+    const int root = p.tasks[i];
     std::vector<int> rel(n_, 0), at_i;
-    const std::unique_ptr<double[]> buffer(new double[largest_front(lowest[tasks[i]], tasks[i])]);
-    for (int s = lowest[tasks[i]]; s <= tasks[i] && ok[i]; ++s) ok[i] = process(s, rel, at_i, buffer.get());
+    const std::unique_ptr<double[]> buffer(new double[largest_front(p.lowest[root], root)]);
+    for (int s = p.lowest[root]; s <= root && ok[i]; ++s) ok[i] = process(s, rel, at_i, buffer.get(), 1);
   });
   if (std::find(ok.begin(), ok.end(), 0) != ok.end()) return false;
-  std::sort(top.begin(), top.end());
-  for (int s : top)
-    if (!process(s, relpos, at, front_buffer_.data())) return false;
+  for (int s : p.top)
+    if (!process(s, relpos, at, front_buffer_.data(), count)) return false;
   return true;
 }
 
-Eigen::MatrixXd SupernodalCholesky::solve(const Eigen::MatrixXd& b) const {
+Eigen::MatrixXd SupernodalCholesky::solve(const Eigen::MatrixXd& b, int threads) const {
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const int ns = static_cast<int>(panel_.size());
-  Eigen::MatrixXd y(n_, b.cols());
+  const Eigen::Index nc = b.cols();
+  Rows y(n_, nc);
   for (int i = 0; i < n_; ++i) y.row(new_index_[i]) = b.row(i);
-  Eigen::MatrixXd g;
-  for (int s = 0; s < ns; ++s) {  // L z = y
-    const int m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
-    const Eigen::MatrixXd& l = panel_[s];
-    auto ys = y.middleRows(first_[s], k);
-    l.topRows(k).triangularView<Eigen::Lower>().solveInPlace(ys);
-    if (m > k) {
-      g.noalias() = l.bottomRows(m - k) * ys;
-      const int* r = rows_.data() + row_start_[s] + k;
-      for (int a = 0; a < m - k; ++a) y.row(r[a]) -= g.row(a);
+  std::vector<int> head(ns, -1), next(ns, -1);
+  for (int s = ns - 1; s >= 0; --s)
+    if (parent_[s] >= 0) {
+      next[s] = head[parent_[s]];
+      head[parent_[s]] = s;
     }
-  }
-  for (int s = ns - 1; s >= 0; --s) {  // L^T x = z
+  // L z = y, as the factorization goes: supernode s takes its children's contributions to its rows
+  // (in child order), solves its diagonal block, and hands L21 z_s, with the children's
+  // contributions to rows below its own, to its parent. So no two subtrees write the same row, and
+  // the sums do not depend on the order in which subtrees run.
+  std::vector<Rows> carry(ns);
+  auto forward = [&](int s, std::vector<int>& relpos) {
+    const int* rs = rows_.data() + row_start_[s];
+    const int m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
+    const Eigen::MatrixXd& l = panel_[s];
+    auto ys = y.middleRows(first_[s], k);
+    Rows below = Rows::Zero(m - k, nc);
+    for (int a = 0; a < m; ++a) relpos[rs[a]] = a;
+    for (int t = head[s]; t != -1; t = next[t]) {
+      const int kt = first_[t + 1] - first_[t];
+      const int* rt = rows_.data() + row_start_[t] + kt;
+      for (Eigen::Index a = 0; a < carry[t].rows(); ++a) {
+        const int r = relpos[rt[a]];
+        if (r < k) ys.row(r) -= carry[t].row(a);
+        else below.row(r - k) += carry[t].row(a);
+      }
+      Rows().swap(carry[t]);
+    }
+    l.topRows(k).triangularView<Eigen::Lower>().solveInPlace(ys);
+    if (m > k) below.noalias() += l.bottomRows(m - k) * ys;
+    carry[s] = std::move(below);
+  };
+  // L^T x = z: supernode s needs x at its rows below, its ancestors' columns, only.
+  auto backward = [&](int s, Rows& g) {
     const int m = row_start_[s + 1] - row_start_[s], k = first_[s + 1] - first_[s];
     const Eigen::MatrixXd& l = panel_[s];
     auto ys = y.middleRows(first_[s], k);
     if (m > k) {
       const int* r = rows_.data() + row_start_[s] + k;
-      g.resize(m - k, y.cols());
+      g.resize(m - k, nc);
       for (int a = 0; a < m - k; ++a) g.row(a) = y.row(r[a]);
       ys.noalias() -= l.bottomRows(m - k).transpose() * g;
     }
     l.topRows(k).triangularView<Eigen::Lower>().transpose().solveInPlace(ys);
+  };
+  const int count = inside_parallel_loop() ? 1 : thread_count(threads, Context{});
+  const Plan p = plan(count);
+  std::vector<int> relpos(n_, 0);
+  Rows g;
+  if (!p.parallel) {
+    for (int s = 0; s < ns; ++s) forward(s, relpos);
+    for (int s = ns - 1; s >= 0; --s) backward(s, g);
+  } else {
+    Context threads_only;
+    threads_only.threads = count;
+    const int nt = static_cast<int>(p.tasks.size());
+    parallel_for(nt, count, threads_only, [&](int i) {
+      std::vector<int> rel(n_, 0);
+      for (int s = p.lowest[p.tasks[i]]; s <= p.tasks[i]; ++s) forward(s, rel);
+    });
+    for (int s : p.top) forward(s, relpos);
+    for (auto s = p.top.rbegin(); s != p.top.rend(); ++s) backward(*s, g);
+    parallel_for(nt, count, threads_only, [&](int i) {
+      Rows g_i;
+      for (int s = p.tasks[i]; s >= p.lowest[p.tasks[i]]; --s) backward(s, g_i);
+    });
   }
-  Eigen::MatrixXd x(n_, b.cols());
+  Eigen::MatrixXd x(n_, nc);
   for (int i = 0; i < n_; ++i) x.row(i) = y.row(new_index_[i]);
   return x;
 }

@@ -26,12 +26,21 @@ class SupernodalCholesky {
   /// Independent subtrees of the elimination tree run on up to `threads` threads (0: one per
   /// hardware thread; one inside another parallel_for's body); the factor does not depend on it.
   bool factorize(const Eigen::SparseMatrix<double>& lower, int threads = 1);
-  /// x with A x = b, for every column of b. \pre factorize() returned true.
-  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
+  /// x with A x = b, for every column of b, independent subtrees on up to `threads` threads as in
+  /// factorize() (the result does not depend on it). \pre factorize() returned true.
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b, int threads = 1) const;
   /// Entries of the factor L (the diagonal included).
   long factor_entries() const;
 
  private:
+  /// How the threads share the tree: the subtrees [lowest[t], t] of `tasks` (heaviest first) run
+  /// concurrently, then the supernodes of `top` in order. Not `parallel`: one thread, in order.
+  struct Plan {
+    bool parallel = false;
+    std::vector<int> lowest, tasks, top;
+  };
+  Plan plan(int count) const;
+
   int n_ = 0;
   std::vector<int> new_index_;    ///< row of the permuted matrix for each original row
   std::vector<int> first_;        ///< supernode s holds columns first_[s] .. first_[s + 1] - 1

@@ -348,7 +348,7 @@ bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d
   }
   if (!llt.factorize(A, context.threads)) return false;
   context.report("parameterize: solve", 0.9);
-  x = llt.solve(rhs);
+  x = llt.solve(rhs, context.threads);
   return x.allFinite();
 }
 
