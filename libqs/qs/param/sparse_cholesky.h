@@ -23,8 +23,9 @@ class SupernodalCholesky {
   void analyze(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd* points = nullptr);
   /// Factorizes `lower` (the pattern given to analyze()). False when a pivot is not positive
   /// (the matrix is not positive definite in floating point); the factor is then unusable.
-  /// Independent subtrees of the elimination tree run on up to `threads` threads (0: one per
-  /// hardware thread; one inside another parallel_for's body); the factor does not depend on it.
+  /// Independent subtrees of the elimination tree, then the dense blocks of the fronts above them,
+  /// run on up to `threads` threads (0: one per hardware thread; one inside another parallel_for's
+  /// body); the factor does not depend on it.
   bool factorize(const Eigen::SparseMatrix<double>& lower, int threads = 1);
   /// x with A x = b, for every column of b, independent subtrees on up to `threads` threads as in
   /// factorize() (the result does not depend on it). \pre factorize() returned true.
