@@ -427,6 +427,13 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
     const int last = first_[s + 1] - 1;
     if (parent[last] >= 0) parent_[s] = super_of[parent[last]];
   }
+  first_child_.assign(ns, -1);
+  next_sibling_.assign(ns, -1);
+  for (int s = ns - 1; s >= 0; --s)
+    if (parent_[s] >= 0) {
+      next_sibling_[s] = first_child_[parent_[s]];
+      first_child_[parent_[s]] = s;
+    }
   panel_.assign(ns, Eigen::MatrixXd());
 }
 
@@ -454,27 +461,20 @@ SupernodalCholesky::Plan SupernodalCholesky::plan(int count) const {
     }
   }
   if (total < kParallelWork) return p;
-  std::vector<int> head(ns, -1), next(ns, -1);
-  for (int s = ns - 1; s >= 0; --s)
-    if (parent_[s] >= 0) {
-      next[s] = head[parent_[s]];
-      head[parent_[s]] = s;
-    }
   for (int s = 0; s < ns; ++s)
     if (parent_[s] < 0) p.tasks.push_back(s);
   const double limit = total / (4.0 * count);
   for (;;) {
     auto heaviest = std::max_element(p.tasks.begin(), p.tasks.end(), [&](int a, int b) { return work[a] < work[b]; });
-    if (heaviest == p.tasks.end() || work[*heaviest] <= limit || head[*heaviest] == -1) break;
+    if (heaviest == p.tasks.end() || work[*heaviest] <= limit || first_child_[*heaviest] == -1) break;
     const int s = *heaviest;
     p.tasks.erase(heaviest);
     p.top.push_back(s);
-    for (int t = head[s]; t != -1; t = next[t]) p.tasks.push_back(t);
+    for (int t = first_child_[s]; t != -1; t = next_sibling_[t]) p.tasks.push_back(t);
   }
   std::sort(p.tasks.begin(), p.tasks.end(),
             [&](int a, int b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
   std::sort(p.top.begin(), p.top.end());
-  p.parallel = true;
   return p;
 }
 
@@ -485,12 +485,6 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
   const int ns = static_cast<int>(panel_.size());
   // Per supernode: the update to its parent's front, its lower triangle packed by columns.
   std::vector<std::unique_ptr<double[]>> update(ns);
-  std::vector<int> head(ns, -1), next(ns, -1);
-  for (int s = ns - 1; s >= 0; --s)
-    if (parent_[s] >= 0) {
-      next[s] = head[parent_[s]];
-      head[parent_[s]] = s;
-    }
   // Supernode s's front: its entries of the matrix and its children's updates (in child order),
   // its first k columns eliminated (on up to dense_threads threads); its columns of L go to
   // panel_[s], its update to update[s]. relpos: a workspace of n_ entries; buffer: room for the
@@ -504,7 +498,7 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
     for (int c = first_[s]; c < first_[s + 1]; ++c)
       for (int q = col_start_[c]; q < col_start_[c + 1]; ++q)
         front(relpos[row_index_[q]], c - first_[s]) += value[source_[q]];
-    for (int t = head[s]; t != -1; t = next[t]) {
+    for (int t = first_child_[s]; t != -1; t = next_sibling_[t]) {
       const int kt = first_[t + 1] - first_[t];
       const int* rt = rows_.data() + row_start_[t] + kt;
       const int mt = row_start_[t + 1] - row_start_[t] - kt;
@@ -544,7 +538,7 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
   // The calling thread's front buffer is kept from one factorization to the next (no fresh pages).
   front_buffer_.resize(std::max(front_buffer_.size(), largest_front(0, ns - 1)));
   const Plan p = plan(count);
-  if (!p.parallel) {
+  if (p.tasks.empty()) {
     for (int s = 0; s < ns; ++s)
       if (!process(s, relpos, at, front_buffer_.data(), 1)) return false;
     return true;
@@ -570,12 +564,6 @@ Eigen::MatrixXd SupernodalCholesky::solve(const Eigen::MatrixXd& b, int threads)
   const Eigen::Index nc = b.cols();
   Rows y(n_, nc);
   for (int i = 0; i < n_; ++i) y.row(new_index_[i]) = b.row(i);
-  std::vector<int> head(ns, -1), next(ns, -1);
-  for (int s = ns - 1; s >= 0; --s)
-    if (parent_[s] >= 0) {
-      next[s] = head[parent_[s]];
-      head[parent_[s]] = s;
-    }
   // L z = y, as the factorization goes: supernode s takes its children's contributions to its rows
   // (in child order), solves its diagonal block, and hands L21 z_s, with the children's
   // contributions to rows below its own, to its parent. So no two subtrees write the same row, and
@@ -588,7 +576,7 @@ Eigen::MatrixXd SupernodalCholesky::solve(const Eigen::MatrixXd& b, int threads)
     auto ys = y.middleRows(first_[s], k);
     Rows below = Rows::Zero(m - k, nc);
     for (int a = 0; a < m; ++a) relpos[rs[a]] = a;
-    for (int t = head[s]; t != -1; t = next[t]) {
+    for (int t = first_child_[s]; t != -1; t = next_sibling_[t]) {
       const int kt = first_[t + 1] - first_[t];
       const int* rt = rows_.data() + row_start_[t] + kt;
       for (Eigen::Index a = 0; a < carry[t].rows(); ++a) {
@@ -619,7 +607,7 @@ Eigen::MatrixXd SupernodalCholesky::solve(const Eigen::MatrixXd& b, int threads)
   const Plan p = plan(count);
   std::vector<int> relpos(n_, 0);
   Rows g;
-  if (!p.parallel) {
+  if (p.tasks.empty()) {
     for (int s = 0; s < ns; ++s) forward(s, relpos);
     for (int s = ns - 1; s >= 0; --s) backward(s, g);
   } else {

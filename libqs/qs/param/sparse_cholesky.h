@@ -35,9 +35,8 @@ class SupernodalCholesky {
 
  private:
   /// How the threads share the tree: the subtrees [lowest[t], t] of `tasks` (heaviest first) run
-  /// concurrently, then the supernodes of `top` in order. Not `parallel`: one thread, in order.
+  /// concurrently, then the supernodes of `top` in order. No tasks: one thread, in order.
   struct Plan {
-    bool parallel = false;
     std::vector<int> lowest, tasks, top;
   };
   Plan plan(int count) const;
@@ -48,6 +47,7 @@ class SupernodalCholesky {
   std::vector<int> row_start_;    ///< supernode s's rows: rows_[row_start_[s] .. row_start_[s + 1])
   std::vector<int> rows_;         ///< its own columns first, then the rows below (ascending)
   std::vector<int> parent_;       ///< the supernode its update goes to, or -1
+  std::vector<int> first_child_, next_sibling_;  ///< each supernode's children, in order (-1 ends)
   // The permuted lower triangle (CSC) and where each entry of the input goes in it.
   std::vector<int> col_start_, row_index_;
   std::vector<long> source_;      ///< per permuted entry: its index in the input's value array
