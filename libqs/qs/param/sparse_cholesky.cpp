@@ -4,7 +4,6 @@
 
 #include "qs/param/sparse_cholesky.h"
 
-#include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
 #include <algorithm>
 #include <limits>
@@ -13,6 +12,7 @@
 
 #include "qs/core/error.h"
 #include "qs/core/parallel.h"
+#include "qs/param/dense_kernels.h"
 
 namespace qs::param {
 namespace {
@@ -270,46 +270,40 @@ constexpr double kParallelWork = 2e7;
 constexpr int kBlockedFront = 384;
 constexpr int kBlock = 128;
 
-/// Eliminates the first k columns of the dense symmetric matrix f (its lower triangle is read and
-/// written): L11 and L21 of f = [L11 0; L21 I] [I 0; 0 S] [L11^T L21^T; 0 I] over f's first k
-/// columns, the Schur complement S over its lower right block. Fronts of kBlockedFront rows or
-/// more go by right-looking blocks of kBlock columns, their row and column tasks on up to
-/// `threads` threads; each task's arithmetic is the same on any thread count, and so are the
-/// bits. False when a pivot is not positive.
-bool eliminate(Eigen::Map<Eigen::MatrixXd>& f, int k, int threads) {
-  const int m = static_cast<int>(f.rows());
+/// Eliminates the first k columns of the dense symmetric m x m matrix f, column-major (its lower
+/// triangle is read and written): L11 and L21 of f = [L11 0; L21 I] [I 0; 0 S] [L11^T L21^T; 0 I]
+/// over f's first k columns, the Schur complement S over its lower right block. Fronts of
+/// kBlockedFront rows or more go by right-looking blocks of kBlock columns, their row and column
+/// tasks on up to `threads` threads; each task's arithmetic is the same on any thread count, and so
+/// are the bits. False when a pivot is not positive.
+bool eliminate(double* f, int m, int k, int threads) {
+  const dense::Kernels& kernel = dense::kernels();
   if (m < kBlockedFront) {
-    Eigen::Ref<Eigen::MatrixXd> diagonal_block = f.topLeftCorner(k, k);
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(diagonal_block);  // in place: L11 in the lower triangle
-    if (llt.info() != Eigen::Success) return false;
+    if (!kernel.cholesky(f, k, m)) return false;  // L11 in the lower triangle
     if (m > k) {
-      auto l21 = f.bottomLeftCorner(m - k, k);
-      f.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(l21);
-      f.bottomRightCorner(m - k, m - k).selfadjointView<Eigen::Lower>().rankUpdate(l21, -1.0);
+      kernel.solve_right_lower_transposed(f, k, m, f + k, m - k, m);
+      kernel.rank_update(f + k + static_cast<std::ptrdiff_t>(k) * m, m - k, m, f + k, k, m);
     }
     return true;
   }
+  auto at = [&](int row, int column) { return f + row + static_cast<std::ptrdiff_t>(column) * m; };
   Context pool;
   pool.threads = threads;
   for (int j0 = 0; j0 < k; j0 += kBlock) {
     const int jb = std::min(kBlock, k - j0);
-    Eigen::Ref<Eigen::MatrixXd> diagonal_block = f.block(j0, j0, jb, jb);
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(diagonal_block);
-    if (llt.info() != Eigen::Success) return false;
+    if (!kernel.cholesky(at(j0, j0), jb, m)) return false;
     const int r0 = j0 + jb;
     if (r0 >= m) break;
     const int tasks = (m - r0 + kBlock - 1) / kBlock;
     parallel_for(tasks, threads, pool, [&](int t) {  // L21 of this block column, kBlock rows a task
       const int a = r0 + t * kBlock;
-      auto rows = f.block(a, j0, std::min(kBlock, m - a), jb);
-      f.block(j0, j0, jb, jb).triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(rows);
+      kernel.solve_right_lower_transposed(at(j0, j0), jb, m, at(a, j0), std::min(kBlock, m - a), m);
     });
     parallel_for(tasks, threads, pool, [&](int t) {  // the trailing matrix, kBlock columns a task
       const int c0 = r0 + t * kBlock, cb = std::min(kBlock, m - c0);
-      f.block(c0, c0, cb, cb).selfadjointView<Eigen::Lower>().rankUpdate(f.block(c0, j0, cb, jb), -1.0);
+      kernel.rank_update(at(c0, c0), cb, m, at(c0, j0), jb, m);
       if (c0 + cb < m)
-        f.block(c0 + cb, c0, m - c0 - cb, cb).noalias() -=
-            f.block(c0 + cb, j0, m - c0 - cb, jb) * f.block(c0, j0, cb, jb).transpose();
+        kernel.multiply_subtract(at(c0 + cb, c0), m - c0 - cb, cb, m, at(c0 + cb, j0), m, at(c0, j0), m, jb);
     });
   }
   return true;
@@ -511,7 +505,7 @@ bool SupernodalCholesky::factorize(const Eigen::SparseMatrix<double>& lower, int
       }
       update[t].reset();
     }
-    if (!eliminate(front, k, dense_threads)) return false;
+    if (!eliminate(buffer, m, k, dense_threads)) return false;
     if (m > k) {
       update[s].reset(new double[static_cast<std::size_t>(m - k) * (m - k + 1) / 2]);
       double* out = update[s].get();
