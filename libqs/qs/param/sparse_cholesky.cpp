@@ -52,15 +52,25 @@ void permuted_lower(const Eigen::SparseMatrix<double>& a, const std::vector<int>
   }
 }
 
-/// Elimination tree of the permuted lower triangle (Liu's algorithm with path compression).
-std::vector<int> elimination_tree(int n, const std::vector<int>& col_start, const std::vector<int>& row_index) {
-  // Row k's columns j < k: the lower triangle read by rows.
-  std::vector<int> row_start(n + 1, 0), cols(row_index.size());
-  for (int r : row_index) ++row_start[r + 1];
-  for (int k = 0; k < n; ++k) row_start[k + 1] += row_start[k];
-  std::vector<int> fill(row_start.begin(), row_start.end() - 1);
+/// Elimination tree of P A P^T, from A's lower triangle and P (new_index[row] = its position):
+/// Liu's algorithm with path compression.
+std::vector<int> elimination_tree(const Eigen::SparseMatrix<double>& a, const std::vector<int>& new_index) {
+  const int n = static_cast<int>(a.cols());
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  // Row k's columns j < k of the permuted lower triangle (in any order: the tree is the same).
+  std::vector<int> row_start(n + 1, 0);
   for (int j = 0; j < n; ++j)
-    for (int q = col_start[j]; q < col_start[j + 1]; ++q) cols[fill[row_index[q]]++] = j;
+    for (int p = outer[j]; p < outer[j + 1]; ++p)
+      if (inner[p] > j) ++row_start[std::max(new_index[inner[p]], new_index[j]) + 1];
+  for (int k = 0; k < n; ++k) row_start[k + 1] += row_start[k];
+  std::vector<int> cols(row_start[n]), fill(row_start.begin(), row_start.end() - 1);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p)
+      if (inner[p] > j) {
+        const int r = new_index[inner[p]], c = new_index[j];
+        cols[fill[std::max(r, c)]++] = std::min(r, c);
+      }
   std::vector<int> parent(n, -1), ancestor(n, -1);
   for (int k = 0; k < n; ++k)
     for (int q = row_start[k]; q < row_start[k + 1]; ++q)
@@ -71,6 +81,35 @@ std::vector<int> elimination_tree(int n, const std::vector<int>& col_start, cons
         i = next;
       }
   return parent;
+}
+
+/// A^T + A for a lower triangle A, its pattern only (values zero), rows ascending in each column:
+/// what Eigen's AMDOrdering builds for its minimum degree ordering, without a sparse transpose
+/// and sum.
+Eigen::SparseMatrix<double> symmetric_pattern(const Eigen::SparseMatrix<double>& a) {
+  const int n = static_cast<int>(a.cols());
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  // Column j: A's row j left of the diagonal (transposed), then A's column j.
+  std::vector<int> start(n + 1, 0);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p) {
+      ++start[j + 1];
+      if (inner[p] > j) ++start[inner[p] + 1];
+    }
+  for (int j = 0; j < n; ++j) start[j + 1] += start[j];
+  Eigen::SparseMatrix<double> c(n, n);
+  c.resizeNonZeros(start[n]);
+  std::copy(start.begin(), start.end(), c.outerIndexPtr());
+  int* rows = c.innerIndexPtr();
+  std::fill(c.valuePtr(), c.valuePtr() + start[n], 0.0);
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p)
+      if (inner[p] > j) rows[fill[inner[p]]++] = j;
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p) rows[fill[j]++] = inner[p];
+  return c;
 }
 
 /// The symmetric adjacency (CSR, no diagonal) of a lower triangle's pattern.
@@ -328,25 +367,26 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
   } else {
     // AMD on the symmetric pattern; Eigen's permutation maps new positions to old rows.
     Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
-    Eigen::AMDOrdering<int> amd;
-    amd(lower, pinv);
+    Eigen::SparseMatrix<double> symmetric = symmetric_pattern(lower);
+    Eigen::internal::minimum_degree_ordering(symmetric, pinv);
     new_index_.assign(n, 0);
     for (int k = 0; k < n; ++k) new_index_[pinv.indices()[k]] = k;
   }
-  permuted_lower(lower, new_index_, col_start_, row_index_, source_);
-  // Postorder of the elimination tree: every subtree's columns consecutive, children first.
+  // Postorder of the elimination tree: every subtree's columns consecutive, children first. The
+  // tree itself is the same, relabelled.
+  std::vector<int> parent(n, -1);
   {
-    const std::vector<int> parent = elimination_tree(n, col_start_, row_index_);
+    const std::vector<int> tree = elimination_tree(lower, new_index_);
     std::vector<int> head(n, -1), next(n, -1);
     for (int j = n - 1; j >= 0; --j)
-      if (parent[j] >= 0) {
-        next[j] = head[parent[j]];
-        head[parent[j]] = j;
+      if (tree[j] >= 0) {
+        next[j] = head[tree[j]];
+        head[tree[j]] = j;
       }
     std::vector<int> post(n), stack;
     int k = 0;
     for (int root = 0; root < n; ++root) {
-      if (parent[root] != -1) continue;
+      if (tree[root] != -1) continue;
       stack.push_back(root);
       while (!stack.empty()) {
         const int p = stack.back();
@@ -361,9 +401,9 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
       }
     }
     for (int& x : new_index_) x = post[x];
-    permuted_lower(lower, new_index_, col_start_, row_index_, source_);
+    for (int j = 0; j < n; ++j) parent[post[j]] = tree[j] < 0 ? -1 : post[tree[j]];
   }
-  const std::vector<int> parent = elimination_tree(n, col_start_, row_index_);
+  permuted_lower(lower, new_index_, col_start_, row_index_, source_);
   // Column structures (rows below the diagonal), merged up the tree; each is kept until its
   // parent has merged it. Column j joins the supernode of j - 1 when it is j - 1's parent and the
   // supernode's dense panel would hold few explicit zeros (relaxed supernodes, with CHOLMOD's
@@ -392,11 +432,10 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
       if (row_index_[q] > j) s.push_back(row_index_[q]);
     for (int c = child_head[j]; c != -1; c = child_next[c]) {
       merged.clear();
-      std::set_union(s.begin(), s.end(), below[c].begin(), below[c].end(), std::back_inserter(merged));
+      // A child's structure starts with j itself (its parent, its first row below the diagonal).
+      std::set_union(s.begin(), s.end(), below[c].begin() + 1, below[c].end(), std::back_inserter(merged));
       s.swap(merged);
     }
-    // A child's structure holds j itself (its parent): drop it.
-    if (!s.empty() && s.front() == j) s.erase(s.begin());
     bool extend = false;
     if (j > 0 && parent[j - 1] == j) {
       const long k = j - first_.back() + 1, m = k + static_cast<long>(s.size());
