@@ -150,6 +150,12 @@ TEST(GeodesicLoop, AvoidedVerticesKeepTheirSideAndAreNeverOnTheLoop) {
       EXPECT_FALSE(g.why[i].empty());
     }
   }
+  // The faces' seed patches come with the refined mesh, as seed_patch_of_faces() gives them.
+  ASSERT_TRUE(g.any_straightened());
+  EXPECT_EQ(g.face_patches, qs::dissect::seed_patch_of_faces(g.mesh, g.loop));
+  EXPECT_EQ(qs::dissect::sides_of_vertices(g.mesh, g.face_patches, o.avoid), before);
+  ASSERT_GT(g.inserted_vertices, 0);  // so the input has fewer faces than the labels
+  EXPECT_THROW(qs::dissect::sides_of_vertices(m, g.face_patches, o.avoid), qs::InvalidInput);
 }
 
 TEST(GeodesicLoop, BadOptionsAreRejected) {

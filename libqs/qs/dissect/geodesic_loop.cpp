@@ -5,12 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <future>
 #include <optional>
 #include <string>
 #include <utility>
 
 #include "qs/core/error.h"
 #include "qs/core/geometry2d.h"
+#include "qs/core/parallel.h"
 #include "qs/dissect/cut_mesh.h"
 
 namespace qs::dissect {
@@ -400,14 +403,26 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
   for (int v : options.avoid)
     if (v < 0 || v >= mesh.num_vertices())
       throw InvalidInput("straighten_seed_loop: vertex to avoid " + std::to_string(v) + " is out of range");
-  const std::vector<int> sides_before = sides_of_vertices(mesh, loop, options.avoid);  // checks the loop
+  // The loop's check and the cut mesh are independent: on two threads where the context allows.
+  auto check = [&] { return sides_of_vertices(mesh, loop, options.avoid); };
+  const bool two = thread_count(0, context) > 1 && !inside_parallel_loop();
+  std::future<std::vector<int>> checked;
+  if (two) checked = std::async(std::launch::async, check);
+  std::optional<CutMesh> built;
+  std::exception_ptr build_error;
+  try {
+    built.emplace(mesh);
+  } catch (...) {
+    build_error = std::current_exception();
+  }
+  const std::vector<int> sides_before = two ? checked.get() : check();  // checks the loop (its error first)
+  if (build_error) std::rethrow_exception(build_error);
+  CutMesh& cm = *built;
 
   GeodesicLoop result;
   result.mesh = mesh;
   result.loop = loop;
   for (int i = 0; i < 4; ++i) result.length_before[i] = result.length_after[i] = path_length_of(mesh.positions, loop.paths[i]);
-
-  CutMesh cm(mesh);
   SeedLoop cur = loop;
   for (int i = 0; i < 4; ++i) {
     context.check_cancel();
@@ -443,8 +458,10 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
   TriMesh refined = cm.to_trimesh();
   // The loop must still cut the mesh in two with every avoided vertex on its old side.
   std::string why;
+  std::vector<int> face_patches;
   try {
-    const std::vector<int> sides_after = sides_of_vertices(refined, cur, options.avoid);
+    face_patches = seed_patch_of_faces(refined, cur);
+    const std::vector<int> sides_after = sides_of_vertices(refined, face_patches, options.avoid);
     if (sides_after != sides_before) why = "a feature changed sides";
   } catch (const InvalidInput& e) {
     why = e.what();
@@ -459,6 +476,7 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
   result.inserted_vertices = refined.num_vertices() - mesh.num_vertices();
   result.mesh = std::move(refined);
   result.loop = std::move(cur);
+  if (result.any_straightened()) result.face_patches = std::move(face_patches);
   for (int i = 0; i < 4; ++i) result.length_after[i] = path_length_of(result.mesh.positions, result.loop.paths[i]);
   return result;
 }

@@ -34,6 +34,8 @@ struct GeodesicLoop {
   std::array<std::string, 4> why;        ///< when not straightened: a sentence saying why
   std::array<double, 4> length_before{}, length_after{};  ///< 3D lengths
   int inserted_vertices = 0;
+  /// seed_patch_of_faces(mesh, loop) where a curve was straightened (empty otherwise).
+  std::vector<int> face_patches;
   /// Whether any curve was straightened (else `mesh` and `loop` are the input's).
   bool any_straightened() const { return straightened[0] || straightened[1] || straightened[2] || straightened[3]; }
 };

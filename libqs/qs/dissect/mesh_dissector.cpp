@@ -225,6 +225,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
   const std::array<int, 4> seeds = loop.seeds;
   seeds_ = seeds;
   TriMesh tm = cm_.to_trimesh();
+  std::vector<int> side;  // the seed patch of each face of tm
   if (opt_.geodesic_seed_curves) {
     // The four curves become geodesics cut into the mesh, the same curves on the surface
     // for any tessellation. New vertices are appended, so input and feature ids stay valid.
@@ -235,6 +236,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
     if (g.any_straightened()) {
       tm = std::move(g.mesh);
       loop = std::move(g.loop);
+      side = std::move(g.face_patches);
       cm_ = CutMesh(tm);
       grow();
       feature_of_.resize(cm_.num_vertices(), -1);
@@ -248,7 +250,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
   std::array<Node, 2> roots;
   roots[0] = {"0", 0, new_label(), {seeds[0], seeds[1], seeds[2], seeds[3]}};
   roots[1] = {"1", 0, new_label(), {seeds[0], seeds[3], seeds[2], seeds[1]}};
-  const std::vector<int> side = seed_patch_of_faces(tm, loop);
+  if (side.size() != tm.faces.size()) side = seed_patch_of_faces(tm, loop);
   for (int f = 0; f < cm_.num_faces(); ++f) {
     cm_.set_patch(f, roots[side[f]].label);
     patch_faces_[roots[side[f]].label].push_back(f);

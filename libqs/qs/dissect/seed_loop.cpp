@@ -85,6 +85,17 @@ std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, co
   return vertex_sides(mesh, seed_patch_of_faces(mesh, loop), vertices);
 }
 
+std::vector<int> sides_of_vertices(const TriMesh& mesh, const std::vector<int>& face_patches,
+                                   const std::vector<int>& vertices) {
+  if (face_patches.size() != mesh.faces.size())
+    throw InvalidInput("sides_of_vertices: " + std::to_string(face_patches.size()) + " face patches for " +
+                       std::to_string(mesh.faces.size()) + " faces");
+  for (int v : vertices)
+    if (v < 0 || v >= mesh.num_vertices())
+      throw InvalidInput("sides_of_vertices: vertex " + std::to_string(v) + " is out of range");
+  return vertex_sides(mesh, face_patches, vertices);
+}
+
 SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& avoid,
                            const std::vector<SideConstraint>& sides, const Context& context) {
   check_seeds(mesh, loop.seeds);

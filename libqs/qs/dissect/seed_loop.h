@@ -77,6 +77,9 @@ SeedLoop trace_weighted_loop(const TriMesh& mesh, const std::array<int, 4>& seed
 
 /// The side of the loop each vertex in `vertices` lies on (0 or 1); -1 for a vertex on the loop.
 std::vector<int> sides_of_vertices(const TriMesh& mesh, const SeedLoop& loop, const std::vector<int>& vertices);
+/// The same from the faces' seed patches (seed_patch_of_faces() of the loop).
+std::vector<int> sides_of_vertices(const TriMesh& mesh, const std::vector<int>& face_patches,
+                                   const std::vector<int>& vertices);
 
 /// Which seed patch each face lies in: #F labels, 0 for the faces left of the loop
 /// s0 -> s1 -> s2 -> s3 -> s0 (the loop runs counter-clockwise around patch 0 seen from outside,
