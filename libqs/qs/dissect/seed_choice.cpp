@@ -7,6 +7,7 @@
 #include <cmath>
 #include <exception>
 #include <functional>
+#include <future>
 #include <optional>
 #include <set>
 #include <string>
@@ -332,10 +333,16 @@ std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
 }
 
 std::array<int, 4> choose_seeds(const TriMesh& mesh, const Context& context) {
+  // The routing graph is built beside the axes and the face areas on large meshes (the axes'
+  // error, when both fail, is the one thrown, as in one thread).
+  const bool beside =
+      mesh.num_faces() >= kParallelRouteFaces && thread_count(0, context) > 1 && !inside_parallel_loop();
+  std::future<Graph> graph;
+  if (beside) graph = std::async(std::launch::async, [&] { return build_graph(mesh); });
   std::vector<char> used;
   const Axes axes = checked_axes(mesh, used);
-  const Graph g = build_graph(mesh);
   const std::vector<double> area = face_areas(mesh);
+  const Graph g = beside ? graph.get() : build_graph(mesh);
   // Candidates: ray belts in the three principal planes, each also turned by 45 degrees about the
   // plane's normal, then the principal-axis extremes and the geodesically farthest vertices. The
   // loop with the best area fraction per length wins among those enclosing at least 5% of the
