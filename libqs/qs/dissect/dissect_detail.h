@@ -208,8 +208,8 @@ class MeshDissector {
   /// Inserts a vertex at a point of the input surface (or returns the vertex it lies on).
   int insert_surface_point(const landmarks::SurfacePoint& where, bool* inserted = nullptr);
   Extracted extract(const Node& node);
-  /// param::border_degeneracies() of an extracted patch of `label`, read off the cut mesh's
-  /// adjacency instead of validating the patch again (parameterize_square() does).
+  /// param::border_degeneracies() of an extracted patch of `label`, its interior edges read off
+  /// the cut mesh instead of validating the patch twice (parameterize_square() does).
   std::vector<std::array<int, 2>> border_degeneracies(const Extracted& ex, int label) const;
   /// p.features from p.ex: (feature index, local vertex), sorted.
   void collect_features(Param& p) const {

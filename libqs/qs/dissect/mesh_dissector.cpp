@@ -81,36 +81,13 @@ Extracted MeshDissector::extract(const Node& node) {
 }
 
 std::vector<std::array<int, 2>> MeshDissector::border_degeneracies(const Extracted& ex, int label) const {
-  const param::PatchMesh& pm = ex.pm;
-  // The sides (bits 0-3) each border vertex lies on: corners on two.
-  std::vector<unsigned> mask(pm.positions.size(), 0u);
-  const int nb = static_cast<int>(pm.boundary.size());
-  for (int s = 0; s < 4; ++s) {
-    const int end = s < 3 ? pm.corner_index[s + 1] : nb;
-    for (int i = pm.corner_index[s]; i <= end; ++i) mask[pm.boundary[i % nb]] |= 1u << s;
-  }
-  std::vector<std::array<int, 2>> result;
-  for (size_t lf = 0; lf < ex.faces.size(); ++lf) {
-    const Tri& t = pm.faces[lf];
-    const bool one_side = (mask[t[0]] & mask[t[1]] & mask[t[2]]) != 0;
-    bool listed = false;
-    for (int c = 0; c < 3; ++c) {
-      // Half-edge 3 f + c of the cut mesh runs from t[c] to t[c + 1]; it is interior when the face
-      // across it is in the patch too.
-      if (cm_.patch(CutMesh::face_of(cm_.opposite(3 * ex.faces[lf] + c))) != label) continue;
-      const int a = t[c], b = t[(c + 1) % 3];
-      // Interior edges joining two vertices of one side; and a face with all three vertices on one
-      // side by its first interior edge (already listed as such, kept explicit as in param).
-      if (a < b && (mask[a] & mask[b]) != 0) result.push_back({a, b});
-      if (one_side && !listed) {
-        result.push_back({std::min(a, b), std::max(a, b)});
-        listed = true;
-      }
-    }
-  }
-  std::sort(result.begin(), result.end());
-  result.erase(std::unique(result.begin(), result.end()), result.end());
-  return result;
+  // Half-edge 3 f + c of the cut mesh is the patch's local half-edge 3 lf + c; it is interior
+  // when the face across it is in the patch too.
+  std::vector<char> interior(3 * ex.faces.size());
+  for (size_t lf = 0; lf < ex.faces.size(); ++lf)
+    for (int c = 0; c < 3; ++c)
+      interior[3 * lf + c] = cm_.patch(CutMesh::face_of(cm_.opposite(3 * ex.faces[lf] + c))) == label;
+  return param::border_degeneracies(ex.pm, interior);
 }
 
 MeshDissector::MeshDissector(const MeshToDissect& in, int index, const std::vector<std::string>& feature_names,

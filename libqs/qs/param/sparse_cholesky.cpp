@@ -83,6 +83,19 @@ std::vector<int> elimination_tree(const Eigen::SparseMatrix<double>& a, const st
   return parent;
 }
 
+/// Each node's children in a forest given by its parents (-1: a root), in increasing order:
+/// first_child[p], then next_sibling[c] until -1.
+void child_lists(const std::vector<int>& parent, std::vector<int>& first_child, std::vector<int>& next_sibling) {
+  const int n = static_cast<int>(parent.size());
+  first_child.assign(n, -1);
+  next_sibling.assign(n, -1);
+  for (int j = n - 1; j >= 0; --j)
+    if (parent[j] >= 0) {
+      next_sibling[j] = first_child[parent[j]];
+      first_child[parent[j]] = j;
+    }
+}
+
 /// A^T + A for a lower triangle A, its pattern only (values zero), rows ascending in each column:
 /// what Eigen's AMDOrdering builds for its minimum degree ordering, without a sparse transpose
 /// and sum.
@@ -377,12 +390,8 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
   std::vector<int> parent(n, -1);
   {
     const std::vector<int> tree = elimination_tree(lower, new_index_);
-    std::vector<int> head(n, -1), next(n, -1);
-    for (int j = n - 1; j >= 0; --j)
-      if (tree[j] >= 0) {
-        next[j] = head[tree[j]];
-        head[tree[j]] = j;
-      }
+    std::vector<int> head, next;
+    child_lists(tree, head, next);
     std::vector<int> post(n), stack;
     int k = 0;
     for (int root = 0; root < n; ++root) {
@@ -410,12 +419,8 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
   // default thresholds: up to 4 columns always, 16 with under 80% zeros, 48 with under 10%, any
   // with under 5%): the supernode's rows are then its columns and the last one's structure.
   std::vector<std::vector<int>> below(n);
-  std::vector<int> child_head(n, -1), child_next(n, -1);
-  for (int j = n - 1; j >= 0; --j)
-    if (parent[j] >= 0) {
-      child_next[j] = child_head[parent[j]];
-      child_head[parent[j]] = j;
-    }
+  std::vector<int> child_head, child_next;
+  child_lists(parent, child_head, child_next);
   first_.clear();
   row_start_.assign(1, 0);
   rows_.clear();
@@ -460,13 +465,7 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
     const int last = first_[s + 1] - 1;
     if (parent[last] >= 0) parent_[s] = super_of[parent[last]];
   }
-  first_child_.assign(ns, -1);
-  next_sibling_.assign(ns, -1);
-  for (int s = ns - 1; s >= 0; --s)
-    if (parent_[s] >= 0) {
-      next_sibling_[s] = first_child_[parent_[s]];
-      first_child_[parent_[s]] = s;
-    }
+  child_lists(parent_, first_child_, next_sibling_);
   panel_.assign(ns, Eigen::MatrixXd());
 }
 

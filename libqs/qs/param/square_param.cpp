@@ -474,14 +474,20 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
 }  // namespace
 
 std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch) {
-  HalfEdges he = validate_patch(patch, {});
+  const HalfEdges he = validate_patch(patch, {});
+  std::vector<char> interior(he.twin.size());
+  for (size_t h = 0; h < he.twin.size(); ++h) interior[h] = he.twin[h] >= 0;
+  return border_degeneracies(patch, interior);
+}
+
+std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch, const std::vector<char>& interior) {
   const std::vector<unsigned> mask = side_masks(patch);
   const auto& faces = patch.faces;
   std::vector<std::array<int, 2>> result;
   // Interior edges (both half-edges present: each visited once, from the lower id) joining two
   // vertices of one side.
   for (int h = 0; h < 3 * static_cast<int>(faces.size()); ++h) {
-    if (he.twin[h] < 0) continue;
+    if (!interior[h]) continue;
     const int a = he_from(faces, h), b = he_to(faces, h);
     if (a < b && (mask[a] & mask[b]) != 0) result.push_back({a, b});
   }
@@ -492,7 +498,7 @@ std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch) {
     const Tri& t = faces[f];
     if ((mask[t[0]] & mask[t[1]] & mask[t[2]]) == 0) continue;
     for (int c = 0; c < 3; ++c) {
-      if (he.twin[3 * f + c] < 0) continue;
+      if (!interior[3 * f + c]) continue;
       const int a = t[c], b = t[(c + 1) % 3];
       result.push_back({std::min(a, b), std::max(a, b)});
       break;

@@ -95,6 +95,10 @@ struct SquareParam {
 /// edge joins two same-side vertices and the mean-value map is bijective in exact arithmetic.
 /// \pre the same as parameterize_square (checked: InvalidInput).
 std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch);
+/// The same for a patch the caller knows to be valid, which also knows its interior half-edges:
+/// interior[3 f + c] (half-edge faces[f][c] -> faces[f][c + 1]) is nonzero where the opposite
+/// half-edge is in the patch too. Nothing is checked.
+std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch, const std::vector<char>& interior);
 
 /// Counts flipped and zero-area UV faces and sums the signed UV areas of `faces` under sp.uv into
 /// sp (the counts parameterize_square reports), e.g. after the map was changed by a warp.
