@@ -66,6 +66,41 @@ TEST(SupernodalCholesky, SolvesLikeTheSimplicialFactorOnGridSystems) {
   }
 }
 
+// An ordering given back (ordering()) skips the ordering and gives the same factor, bit for bit;
+// another permutation solves the system too; what is not a permutation of the rows is refused.
+TEST(SupernodalCholesky, AGivenOrderingGivesTheSameFactor) {
+  const Eigen::SparseMatrix<double> a = grid_system(30, 5);
+  const Eigen::MatrixXd rhs = Eigen::MatrixXd::Random(a.rows(), 2);
+  SupernodalCholesky amd;
+  amd.analyze(a);
+  ASSERT_TRUE(amd.factorize(a));
+  const Eigen::MatrixXd x = amd.solve(rhs);
+  SupernodalCholesky given;
+  given.analyze(a, amd.ordering());
+  EXPECT_EQ(given.ordering(), amd.ordering());
+  ASSERT_TRUE(given.factorize(a));
+  EXPECT_EQ(given.solve(rhs), x);
+  EXPECT_EQ(given.factor_entries(), amd.factor_entries());
+
+  std::vector<int> identity(a.rows());
+  for (int i = 0; i < a.rows(); ++i) identity[i] = i;
+  SupernodalCholesky natural;
+  natural.analyze(a, identity);
+  ASSERT_TRUE(natural.factorize(a));
+  EXPECT_LT((natural.solve(rhs) - x).norm(), 1e-9 * x.norm());
+  EXPECT_GT(natural.factor_entries(), amd.factor_entries());  // a band: more fill than AMD's
+
+  std::vector<int> repeated = identity;
+  repeated[1] = 0;
+  const std::vector<int> short_order(identity.begin(), identity.end() - 1);
+  std::vector<int> out_of_range = identity;
+  out_of_range[0] = static_cast<int>(a.rows());
+  for (const std::vector<int>* bad : std::vector<const std::vector<int>*>{&repeated, &short_order, &out_of_range}) {
+    SupernodalCholesky llt;
+    EXPECT_THROW(llt.analyze(a, *bad), InternalError);
+  }
+}
+
 /// The grid's vertex positions, one row per unknown (`per_vertex` unknowns of a vertex at its point).
 Eigen::MatrixXd grid_points(int n, int per_vertex) {
   Eigen::MatrixXd p(n * n * per_vertex, 2);

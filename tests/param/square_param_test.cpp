@@ -687,6 +687,33 @@ TEST(SquareParamTest, StretchMinimizationFromAGivenFirstSolveGivesTheSameBits) {
   }
 }
 
+// The cotangent solves report their ordering; given back for the same patch it gives the same
+// bits; one that is not a permutation of the interior vertices is ignored.
+TEST(SquareParamTest, AGivenCholeskyOrderingGivesTheSameBits) {
+  const PatchMesh p = hemisphere_patch(4);
+  SquareParamOptions plain_options;
+  plain_options.weights = InteriorWeights::IntrinsicCotan;
+  const SquareParam plain = parameterize_square(p, plain_options);
+  ASSERT_EQ(plain.weights, InteriorWeights::IntrinsicCotan);
+  ASSERT_EQ(plain.cholesky_ordering.size(), p.positions.size() - p.boundary.size());
+  EXPECT_TRUE(parameterize_square(p, {}).cholesky_ordering.empty());  // mean-value: LU
+  SquareParamOptions o = plain_options;
+  o.stretch_iterations = 4;
+  o.first_solve = &plain.uv;
+  const SquareParam solved = parameterize_square(p, o);
+  o.cholesky_ordering = &plain.cholesky_ordering;
+  const SquareParam given = parameterize_square(p, o);
+  EXPECT_EQ(given.uv, solved.uv);
+  EXPECT_EQ(given.cholesky_ordering, plain.cholesky_ordering);
+  std::vector<int> bad = plain.cholesky_ordering;
+  bad[0] = bad[1];
+  o.cholesky_ordering = &bad;
+  EXPECT_EQ(parameterize_square(p, o).uv, solved.uv);
+  const std::vector<int> short_order(plain.cholesky_ordering.begin(), plain.cholesky_ordering.end() - 1);
+  o.cholesky_ordering = &short_order;
+  EXPECT_EQ(parameterize_square(p, o).uv, solved.uv);
+}
+
 // A large cotangent system is ordered on a second thread while its weights are computed: the same
 // map, bit for bit, as on one thread (a hemisphere patch of over 20000 interior vertices).
 TEST(SquareParamTest, LargeCotangentSystemGivesTheSameBitsOnOneAndTwoThreads) {

@@ -91,6 +91,7 @@ struct Param {
   // The map of one plain solve of ex with `weights` (no pins, no rounds), or empty: where stretch
   // minimization starts without solving it again.
   std::vector<Vec2> plain_uv;
+  std::vector<int> plain_ordering;  // that solve's Cholesky ordering (cotangent weights), or empty
 };
 
 // 1 at the local vertices of p's features, 0 elsewhere (the vertices a node map must keep).

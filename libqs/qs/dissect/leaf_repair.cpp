@@ -76,6 +76,7 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
   po.stretch_iterations = rounds;
   po.weights = p.weights;
   po.first_solve = &p.plain_uv;
+  po.cholesky_ordering = &p.plain_ordering;
   param::SquareParam min_sp;
   try {
     min_sp = param::parameterize_square(p.ex.pm, po, context);
@@ -108,6 +109,7 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
     Param mv = p;  // cotangent weights folded: try mean-value weights before giving up
     mv.weights = param::InteriorWeights::MeanValue;
     mv.plain_uv.clear();  // solved with the other weights
+    mv.plain_ordering.clear();
     return minimized_leaf(mv, rounds, context);
   }
   return min_sp;

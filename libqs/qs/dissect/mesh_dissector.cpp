@@ -252,6 +252,7 @@ Param MeshDissector::parameterize(const Node& node) {
   p.sp = param::parameterize_square(p.ex.pm, base, ctx_.without_progress());
   p.weights = p.sp.weights;  // mean-value where the Delaunay flips ran past their budget
   p.plain_uv = p.sp.uv;
+  p.plain_ordering = std::move(p.sp.cholesky_ordering);
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
   collect_features(p);
   for (int b : p.ex.pm.boundary)
@@ -270,6 +271,7 @@ void MeshDissector::use_mean_value(Param& p, param::SquareParam mv) const {
   p.sp = std::move(mv);
   p.weights = param::InteriorWeights::MeanValue;
   p.plain_uv = p.sp.uv;
+  p.plain_ordering.clear();
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
 }
 
@@ -278,6 +280,7 @@ void MeshDissector::spread(Param& p) const {
   po.weights = p.weights;
   po.stretch_iterations = kRepairRounds;
   po.first_solve = &p.plain_uv;
+  po.cholesky_ordering = &p.plain_ordering;
   try {
     param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
     // Kept when it folds less, or, both bijective, when it is less stretched.

@@ -55,6 +55,9 @@ std::vector<std::array<int, 4>> routing_orders(const std::array<double, 4>& leng
 
 }  // namespace
 
+/// Rows up to this long are scanned for each slot (O(d^2)); longer ones are sorted (O(d log d)).
+constexpr int kScanValence = 16;
+
 Graph build_graph(const TriMesh& mesh) {
   const int nv = mesh.num_vertices();
   const int nf = mesh.num_faces();
@@ -104,12 +107,35 @@ Graph build_graph(const TriMesh& mesh) {
   }
   // Everything about edge v-w is in v's row: the face with v->w is the slot's face, the face with
   // w->v is the one whose corner before v is w.
-  // Per row, the neighbours and the corners before v sorted (with their slots): O(d log d) per
-  // vertex of valence d, not O(d^2) (fans of 100k faces around one vertex occur in CAD files).
+  // A long row has its neighbours and its corners before v sorted (with their slots): O(d log d)
+  // per vertex of valence d, not O(d^2) (fans of 100k faces around one vertex occur in CAD files).
   g.across.assign(slots, -1);
   std::vector<std::pair<int, int>> by_neighbor, by_before;
+  auto check = [&](int v, int w, std::ptrdiff_t same, int back) {
+    if (same > 1)
+      throw InvalidInput("seed loop: edge " + edge_name(v, w) +
+                         " has more than two faces or two faces running the same way; the "
+                         "seed loop needs a validated closed manifold mesh");
+    if (back < 0)
+      throw InvalidInput("seed loop: edge " + edge_name(v, w) +
+                         " has a single face (the mesh is open); the seed loop needs a "
+                         "validated closed mesh");
+  };
   for (int v = 0; v < nv; ++v) {
     const int first = g.start[v], last = g.start[v + 1];
+    if (last - first <= kScanValence) {  // a plain scan of the row costs less than sorting it
+      for (int s = first; s < last; ++s) {
+        const int w = g.neighbor[s];
+        int same = 0, back = -1;
+        for (int r = first; r < last; ++r) {
+          same += g.neighbor[r] == w;
+          if (before[r] == w) back = r;
+        }
+        check(v, w, same, back);
+        g.across[halfedge[s]] = g.left[back];
+      }
+      continue;
+    }
     by_neighbor.clear();
     by_before.clear();
     for (int r = first; r < last; ++r) {
@@ -126,14 +152,7 @@ Graph build_graph(const TriMesh& mesh) {
       // The last slot whose corner before v is w (what a scan in slot order would keep).
       const auto bb = std::upper_bound(by_before.begin(), by_before.end(), hi);
       const int back = bb != by_before.begin() && std::prev(bb)->first == w ? std::prev(bb)->second : -1;
-      if (same > 1)
-        throw InvalidInput("seed loop: edge " + edge_name(v, w) +
-                           " has more than two faces or two faces running the same way; the "
-                           "seed loop needs a validated closed manifold mesh");
-      if (back < 0)
-        throw InvalidInput("seed loop: edge " + edge_name(v, w) +
-                           " has a single face (the mesh is open); the seed loop needs a "
-                           "validated closed mesh");
+      check(v, w, same, back);
       g.across[halfedge[s]] = g.left[back];
     }
   }

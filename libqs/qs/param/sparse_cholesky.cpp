@@ -370,21 +370,44 @@ void require_compressed(const Eigen::SparseMatrix<double>& a) {
 
 void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd* points) {
   require_compressed(lower);
-  n_ = static_cast<int>(lower.cols());
-  const int n = n_;
+  const int n = static_cast<int>(lower.cols());
   if (points && points->rows() != n)
     throw InternalError("SupernodalCholesky: " + std::to_string(points->rows()) + " points for " + std::to_string(n) +
                         " rows");
+  std::vector<int> order;
   if (points && points->cols() > 0 && n > 0 && points->allFinite()) {
-    nested_dissection(lower, *points, new_index_);
+    nested_dissection(lower, *points, order);
   } else {
     // AMD on the symmetric pattern; Eigen's permutation maps new positions to old rows.
     Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
     Eigen::SparseMatrix<double> symmetric = symmetric_pattern(lower);
     Eigen::internal::minimum_degree_ordering(symmetric, pinv);
-    new_index_.assign(n, 0);
-    for (int k = 0; k < n; ++k) new_index_[pinv.indices()[k]] = k;
+    order.assign(n, 0);
+    for (int k = 0; k < n; ++k) order[pinv.indices()[k]] = k;
   }
+  analyze_ordered(lower, std::move(order));
+}
+
+void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const std::vector<int>& ordering) {
+  require_compressed(lower);
+  const int n = static_cast<int>(lower.cols());
+  bool permutation = static_cast<int>(ordering.size()) == n;
+  std::vector<char> seen(permutation ? n : 0, 0);
+  for (size_t k = 0; k < ordering.size() && permutation; ++k) {
+    const int r = ordering[k];
+    permutation = r >= 0 && r < n && !seen[r];
+    if (permutation) seen[r] = 1;
+  }
+  if (!permutation)
+    throw InternalError("SupernodalCholesky: the ordering given is not a permutation of the " + std::to_string(n) +
+                        " rows");
+  analyze_ordered(lower, ordering);
+}
+
+void SupernodalCholesky::analyze_ordered(const Eigen::SparseMatrix<double>& lower, std::vector<int> order) {
+  n_ = static_cast<int>(lower.cols());
+  const int n = n_;
+  new_index_ = std::move(order);
   // Postorder of the elimination tree: every subtree's columns consecutive, children first. The
   // tree itself is the same, relabelled.
   std::vector<int> parent(n, -1);

@@ -21,6 +21,13 @@ class SupernodalCholesky {
   /// crossing edges per balance), each separator ordered after its two sides; on meshes its factor takes
   /// fewer operations than AMD's. \throws InternalError when points has another row count.
   void analyze(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd* points = nullptr);
+  /// The same with the ordering given: `ordering` from an earlier analysis of the same pattern
+  /// (ordering()) gives the same supernodes and factor without ordering again. Any other
+  /// permutation of the rows works too, with its own fill. \throws InternalError when it is not
+  /// a permutation of the rows.
+  void analyze(const Eigen::SparseMatrix<double>& lower, const std::vector<int>& ordering);
+  /// The analysis's ordering: the row of the permuted matrix for each original row.
+  const std::vector<int>& ordering() const { return new_index_; }
   /// Factorizes `lower` (the pattern given to analyze()). False when a pivot is not positive
   /// (the matrix is not positive definite in floating point); the factor is then unusable.
   /// Independent subtrees of the elimination tree, then the dense blocks of the fronts above them,
@@ -34,6 +41,8 @@ class SupernodalCholesky {
   long factor_entries() const;
 
  private:
+  /// analyze() after the ordering: `order` is postordered, then the supernodes and the structures.
+  void analyze_ordered(const Eigen::SparseMatrix<double>& lower, std::vector<int> order);
   /// How the threads share the tree: the subtrees [lowest[t], t] of `tasks` (heaviest first) run
   /// concurrently, then the supernodes of `top` in order. No tasks: one thread, in order.
   struct Plan {

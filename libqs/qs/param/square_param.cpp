@@ -69,7 +69,8 @@ std::string pair_str(int a, int b) {
 }
 
 /// Half-edge h = 3 f + c runs from faces[f][c] to faces[f][(c+1)%3]. Out-going half-edges are
-/// bucketed per vertex (CSR), and every half-edge knows its opposite (-1 on the border).
+/// bucketed per vertex (CSR), and every half-edge knows its opposite (-1 on the border; twin and
+/// by_target are left empty by out_half_edges).
 struct HalfEdges {
   std::vector<int> out_offset;  ///< #V + 1
   std::vector<int> out;         ///< half-edge ids grouped by source vertex
@@ -89,8 +90,9 @@ int find_half_edge(const HalfEdges& he, const std::vector<Tri>&, int a, int b) {
   return it != last && it->first == b ? it->second : -1;
 }
 
+/// The out-going half-edges only (out_offset, out), for a triangulation whose twins are known.
 /// \pre face ids are in range.
-HalfEdges build_half_edges(int num_vertices, const std::vector<Tri>& faces) {
+HalfEdges out_half_edges(int num_vertices, const std::vector<Tri>& faces) {
   HalfEdges he;
   const int nh = 3 * static_cast<int>(faces.size());
   he.out_offset.assign(num_vertices + 1, 0);
@@ -100,6 +102,13 @@ HalfEdges build_half_edges(int num_vertices, const std::vector<Tri>& faces) {
   he.out.resize(nh);
   std::vector<int> fill(he.out_offset.begin(), he.out_offset.end() - 1);
   for (int h = 0; h < nh; ++h) he.out[fill[he_from(faces, h)]++] = h;
+  return he;
+}
+
+/// \pre face ids are in range.
+HalfEdges build_half_edges(int num_vertices, const std::vector<Tri>& faces) {
+  HalfEdges he = out_half_edges(num_vertices, faces);
+  const int nh = 3 * static_cast<int>(faces.size());
   he.by_target.resize(nh);
   for (int k = 0; k < nh; ++k) he.by_target[k] = {he_to(faces, he.out[k]), he.out[k]};
   for (int v = 0; v < num_vertices; ++v)
@@ -320,11 +329,23 @@ Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const
   return cache.perm * y;
 }
 
+/// Whether `order` holds each of 0 .. n-1 once.
+bool is_permutation_of(const std::vector<int>& order, int n) {
+  if (static_cast<int>(order.size()) != n) return false;
+  std::vector<char> seen(n, 0);
+  for (const int r : order) {
+    if (r < 0 || r >= n || seen[r]) return false;
+    seen[r] = 1;
+  }
+  return true;
+}
+
 /// What a repeated symmetric solve keeps: the Cholesky factor's ordering and supernodes.
 struct CholeskyCache {
   bool ready = false;
   SupernodalCholesky llt;
-  std::future<void> pending;  // llt.analyze() running on another thread
+  std::future<void> pending;                 // llt.analyze() running on another thread
+  const std::vector<int>* ordering = nullptr;  // given by the caller: no ordering to find
 };
 
 /// Large cotangent systems are ordered (the analysis depends on the pattern only) on another
@@ -343,7 +364,8 @@ bool solve_cholesky(const Eigen::SparseMatrix<double>& A, const Eigen::MatrixX2d
     cache.ready = true;
   }
   if (!cache.ready) {
-    llt.analyze(A);
+    if (cache.ordering) llt.analyze(A, *cache.ordering);
+    else llt.analyze(A);
     cache.ready = true;
   }
   if (!llt.factorize(A, context.threads)) return false;
@@ -584,11 +606,14 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     if (result.weights == InteriorWeights::IntrinsicCotan) {
       // Cotangent weight of edge ij: (cot a + cot b) / 2 over the two corners opposite it in the
       // intrinsic Delaunay triangulation, where both sum to at most pi: non-negative.
-      idt_he = build_half_edges(nv, idt.faces);
+      idt_he = out_half_edges(nv, idt.faces);  // its twins are idt.twin
       lap_faces = &idt.faces;
       lap_he = &idt_he;
       const bool solves = !options.first_solve || options.stretch_iterations > 0;
-      if (solves && ni >= kEarlyAnalysisRows && !inside_parallel_loop() && thread_count(0, context) > 1) {
+      if (options.cholesky_ordering && is_permutation_of(*options.cholesky_ordering, ni))
+        cholesky.ordering = options.cholesky_ordering;
+      if (solves && !cholesky.ordering && ni >= kEarlyAnalysisRows && !inside_parallel_loop() &&
+          thread_count(0, context) > 1) {
         // The lower triangle's pattern as the assembly below makes it (same entries, same order).
         cholesky.pending = std::async(std::launch::async, [&] {
           std::vector<Eigen::Triplet<double>> pattern;
@@ -607,11 +632,10 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
           cholesky.llt.analyze(lower);
         });
       }
-      for (int h = 0; h < 3 * nf; ++h) {
-        double x = cot_at(idt, h);
-        if (idt.twin[h] >= 0) x += cot_at(idt, idt.twin[h]);
-        w[h] = std::max(0.0, 0.5 * x);
-      }
+      std::vector<double> cot(3 * nf);  // each corner's once, for both of its edge's half-edges
+      for (int h = 0; h < 3 * nf; ++h) cot[h] = cot_at(idt, h);
+      for (int h = 0; h < 3 * nf; ++h)
+        w[h] = std::max(0.0, 0.5 * (idt.twin[h] >= 0 ? cot[h] + cot[idt.twin[h]] : cot[h]));
     } else {
       // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
       // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
@@ -694,6 +718,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       Eigen::MatrixX2d x;
       if (spd) {
         if (!solve_cholesky(A, rhs, context, cholesky, x)) return false;
+        if (result.cholesky_ordering.empty()) result.cholesky_ordering = cholesky.llt.ordering();
       } else {
         x = options.ordering == LuOrdering::SymmetricAmd ? solve_symmetric_amd(A, rhs, context, symbolic)
                                                          : solve_colamd(A, rhs, context);

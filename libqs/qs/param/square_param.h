@@ -67,6 +67,10 @@ struct SquareParamOptions {
   /// patch with the same weights, without pins or rounds. With one uv per vertex and no pins it
   /// is taken instead of solving again (stretch minimization starts from it); otherwise ignored.
   const std::vector<Vec2>* first_solve = nullptr;
+  /// The Cholesky ordering of a previous call on the same patch with the same weights
+  /// (SquareParam::cholesky_ordering): the analysis takes it instead of ordering the system again
+  /// (the same factor). Ignored unless it is a permutation of the interior vertices.
+  const std::vector<int>* cholesky_ordering = nullptr;
 };
 
 /// A UV face with |signed area| <= this counts as zero-area (and neither as flipped).
@@ -80,6 +84,9 @@ struct SquareParam {
   double uv_area_sum = 0;   ///< sum of signed UV areas; 1 for a valid map
   int intrinsic_flips = 0;  ///< edge flips to the intrinsic Delaunay triangulation (IntrinsicCotan)
   InteriorWeights weights = InteriorWeights::MeanValue;  ///< the weights the map was solved with
+  /// The ordering of the Cholesky factorizations (cotangent weights), for a later call on the
+  /// same patch (SquareParamOptions::cholesky_ordering); empty when none ran.
+  std::vector<int> cholesky_ordering;
   bool bijective() const { return flipped_faces == 0 && zero_area_faces == 0; }
 };
 
