@@ -533,6 +533,14 @@ TEST(SquareParamPreconditionTest, BoundaryReversed) {
   expect_invalid([&] { parameterize_square(p); }, {"reversed", "(0,5)", "counter-clockwise"});
 }
 
+TEST(SquareParamPreconditionTest, InteriorFaceReversed) {
+  PatchMesh p = grid_patch(5, 5);
+  Tri& t = p.faces[10];  // an interior face, turned over: its edges now run as its neighbours' do
+  std::swap(t[1], t[2]);
+  const std::string pair = "(" + std::to_string(t[0]) + "," + std::to_string(t[1]) + ")";
+  expect_invalid([&] { parameterize_square(p); }, {"used twice in the same direction", pair.c_str()});
+}
+
 TEST(SquareParamPreconditionTest, UnusedVertex) {
   PatchMesh p = grid_patch(5, 5);
   p.positions.emplace_back(9, 9, 9);

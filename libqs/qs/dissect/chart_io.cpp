@@ -1,5 +1,6 @@
 #include "qs/dissect/chart_io.h"
 
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -7,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
@@ -16,11 +18,31 @@
 namespace qs::dissect {
 namespace {
 
-template <class T>
-void put(std::ostream& out, T value) {
-  static_assert(std::is_arithmetic_v<T>);
-  out.write(reinterpret_cast<const char*>(&value), sizeof(T));  // x86-64 and aarch64: little endian
-}
+/// Binary records gathered in memory and written to the stream in large blocks.
+class BlockWriter {
+ public:
+  explicit BlockWriter(std::ostream& out) : out_(out) { buf_.reserve(kBlock + 256); }
+  ~BlockWriter() { flush(); }
+  template <class T>
+  void put(T value) {
+    static_assert(std::is_arithmetic_v<T>);
+    const char* b = reinterpret_cast<const char*>(&value);  // x86-64 and aarch64: little endian
+    buf_.insert(buf_.end(), b, b + sizeof(T));
+  }
+  /// Writes the block once it is full (call between records).
+  void maybe_flush() {
+    if (buf_.size() >= kBlock) flush();
+  }
+  void flush() {
+    out_.write(buf_.data(), static_cast<std::streamsize>(buf_.size()));
+    buf_.clear();
+  }
+
+ private:
+  static constexpr size_t kBlock = 1 << 20;
+  std::ostream& out_;
+  std::vector<char> buf_;
+};
 
 // Version 2 (written): texcoords as float64. Version 1 (still read): float32.
 const char* kHeaderTail =
@@ -63,16 +85,26 @@ void write_chart_ply(const std::filesystem::path& path, const Chart& chart) {
       << "\nproperty double x\nproperty double y\nproperty double z\n"
       << "element face " << chart.mesh.faces.size() << "\n"
       << kHeaderTail;
-  for (const Vec3& p : chart.mesh.positions)
-    for (int k = 0; k < 3; ++k) put<double>(out, p[k]);
-  for (size_t f = 0; f < chart.mesh.faces.size(); ++f) {
-    put<std::uint8_t>(out, 3);
-    for (int k = 0; k < 3; ++k) put<std::int32_t>(out, chart.mesh.faces[f][k]);
-    put<std::uint8_t>(out, 6);
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 2; ++d) put<double>(out, chart.face_uv[f][k][d]);
-    put<std::int32_t>(out, chart.face_patch[f]);
-    for (unsigned char c : patch_colour(chart.face_patch[f])) put<std::uint8_t>(out, c);
+  std::vector<std::array<unsigned char, 3>> colour(chart.patches.size());
+  for (size_t q = 0; q < colour.size(); ++q) colour[q] = patch_colour(static_cast<int>(q));
+  {
+    BlockWriter w(out);
+    for (const Vec3& p : chart.mesh.positions) {
+      for (int k = 0; k < 3; ++k) w.put<double>(p[k]);
+      w.maybe_flush();
+    }
+    for (size_t f = 0; f < chart.mesh.faces.size(); ++f) {
+      w.put<std::uint8_t>(3);
+      for (int k = 0; k < 3; ++k) w.put<std::int32_t>(chart.mesh.faces[f][k]);
+      w.put<std::uint8_t>(6);
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 2; ++d) w.put<double>(chart.face_uv[f][k][d]);
+      const int patch = chart.face_patch[f];
+      w.put<std::int32_t>(patch);
+      const auto c = patch >= 0 && patch < static_cast<int>(colour.size()) ? colour[patch] : patch_colour(patch);
+      for (unsigned char x : c) w.put<std::uint8_t>(x);
+      w.maybe_flush();
+    }
   }
   file.commit();
 }
