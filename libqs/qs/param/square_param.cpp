@@ -388,6 +388,7 @@ struct IntrinsicMesh {
   std::vector<Tri> faces;
   std::vector<double> len;
   std::vector<int> twin;
+  std::vector<double> cot;  ///< per half-edge: cot of the corner opposite it in its face (cot_at)
   int flips = 0;
   bool complete = true;  ///< every interior edge is Delaunay
 };
@@ -434,6 +435,8 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
   // Symmetric lengths: both half-edges of an edge get the same value.
   for (int h = 0; h < nh; ++h)
     if (m.twin[h] > h) m.len[m.twin[h]] = m.len[h];
+  m.cot.resize(nh);
+  for (int h = 0; h < nh; ++h) m.cot[h] = cot_at(m, h);
   std::vector<int> stack;
   std::vector<char> queued(nh, 0);
   for (int h = 0; h < nh; ++h)
@@ -456,7 +459,7 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
     queued[h] = 0;
     const int t = m.twin[h];
     if (t < 0) continue;
-    if (cot_at(m, h) + cot_at(m, t) >= -1e-12) continue;
+    if (m.cot[h] + m.cot[t] >= -1e-12) continue;
     const int f = h / 3, c = h % 3, g = t / 3, d = t % 3;
     const int i = m.faces[f][c], j = m.faces[f][(c + 1) % 3], k = m.faces[f][(c + 2) % 3];
     const int l = m.faces[g][(d + 2) % 3];
@@ -492,6 +495,10 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
     link(ng_lj, o_lj);
     link(ng_jk, o_jk);
     link(nf_lk, ng_kl);
+    for (int x = 0; x < 3; ++x) {  // the two faces' corners changed
+      m.cot[3 * f + x] = cot_at(m, 3 * f + x);
+      m.cot[3 * g + x] = cot_at(m, 3 * g + x);
+    }
     ++m.flips;
     for (int x : {nf_ki, nf_il, ng_lj, ng_jk}) push(x);
   }
@@ -638,10 +645,8 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
           cholesky.llt.analyze(lower);
         });
       }
-      std::vector<double> cot(3 * nf);  // each corner's once, for both of its edge's half-edges
-      for (int h = 0; h < 3 * nf; ++h) cot[h] = cot_at(idt, h);
       for (int h = 0; h < 3 * nf; ++h)
-        w[h] = std::max(0.0, 0.5 * (idt.twin[h] >= 0 ? cot[h] + cot[idt.twin[h]] : cot[h]));
+        w[h] = std::max(0.0, 0.5 * (idt.twin[h] >= 0 ? idt.cot[h] + idt.cot[idt.twin[h]] : idt.cot[h]));
     } else {
       // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
       // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
