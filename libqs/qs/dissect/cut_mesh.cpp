@@ -19,24 +19,24 @@ CutMesh::CutMesh(const TriMesh& mesh) : positions_(mesh.positions), faces_(mesh.
     for (int v : t)
       if (v < 0 || v >= nv)
         throw InvalidInput("cut mesh: a face refers to vertex " + std::to_string(v) + " of " + std::to_string(nv));
-  std::vector<int> start(nv + 1), by_max(nh), order(nh);
-  auto counting_sort = [&](const std::vector<int>& in, std::vector<int>& out, bool by_larger) {
+  std::vector<int> start(nv + 1), by_max(nh), order(nh), lo(nh), hi(nh);
+  for (int h = 0; h < nh; ++h) {
+    lo[h] = std::min(tail(h), head(h));
+    hi[h] = std::max(tail(h), head(h));
+  }
+  auto counting_sort = [&](const std::vector<int>& in, std::vector<int>& out, const std::vector<int>& key) {
     std::fill(start.begin(), start.end(), 0);
-    auto key = [&](int h) { return by_larger ? std::max(tail(h), head(h)) : std::min(tail(h), head(h)); };
-    for (int h = 0; h < nh; ++h) ++start[key(h) + 1];
+    for (int h = 0; h < nh; ++h) ++start[key[h] + 1];
     for (int v = 0; v < nv; ++v) start[v + 1] += start[v];
-    for (int h : in) out[start[key(h)]++] = h;
+    for (int h : in) out[start[key[h]]++] = h;
   };
   for (int h = 0; h < nh; ++h) {
     order[h] = h;
     vertex_halfedge_[tail(h)] = h;
   }
-  counting_sort(order, by_max, true);
-  counting_sort(by_max, order, false);
-  auto same_edge = [&](int a, int b) {
-    return std::min(tail(a), head(a)) == std::min(tail(b), head(b)) &&
-           std::max(tail(a), head(a)) == std::max(tail(b), head(b));
-  };
+  counting_sort(order, by_max, hi);
+  counting_sort(by_max, order, lo);
+  auto same_edge = [&](int a, int b) { return lo[a] == lo[b] && hi[a] == hi[b]; };
   for (int i = 0; i < nh;) {
     int j = i;
     while (j < nh && same_edge(order[j], order[i])) ++j;
