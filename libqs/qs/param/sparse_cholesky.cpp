@@ -368,6 +368,16 @@ void require_compressed(const Eigen::SparseMatrix<double>& a) {
 
 }  // namespace
 
+bool is_permutation_of(const std::vector<int>& order, int n) {
+  if (static_cast<int>(order.size()) != n) return false;
+  std::vector<char> seen(n, 0);
+  for (const int r : order) {
+    if (r < 0 || r >= n || seen[r]) return false;
+    seen[r] = 1;
+  }
+  return true;
+}
+
 void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const Eigen::MatrixXd* points) {
   require_compressed(lower);
   const int n = static_cast<int>(lower.cols());
@@ -391,14 +401,7 @@ void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const
 void SupernodalCholesky::analyze(const Eigen::SparseMatrix<double>& lower, const std::vector<int>& ordering) {
   require_compressed(lower);
   const int n = static_cast<int>(lower.cols());
-  bool permutation = static_cast<int>(ordering.size()) == n;
-  std::vector<char> seen(permutation ? n : 0, 0);
-  for (size_t k = 0; k < ordering.size() && permutation; ++k) {
-    const int r = ordering[k];
-    permutation = r >= 0 && r < n && !seen[r];
-    if (permutation) seen[r] = 1;
-  }
-  if (!permutation)
+  if (!is_permutation_of(ordering, n))
     throw InternalError("SupernodalCholesky: the ordering given is not a permutation of the " + std::to_string(n) +
                         " rows");
   analyze_ordered(lower, ordering);

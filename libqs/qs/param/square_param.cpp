@@ -335,17 +335,6 @@ Eigen::MatrixX2d solve_symmetric_amd(const Eigen::SparseMatrix<double>& A, const
   return cache.perm * y;
 }
 
-/// Whether `order` holds each of 0 .. n-1 once.
-bool is_permutation_of(const std::vector<int>& order, int n) {
-  if (static_cast<int>(order.size()) != n) return false;
-  std::vector<char> seen(n, 0);
-  for (const int r : order) {
-    if (r < 0 || r >= n || seen[r]) return false;
-    seen[r] = 1;
-  }
-  return true;
-}
-
 /// What a repeated symmetric solve keeps: the Cholesky factor's ordering and supernodes.
 struct CholeskyCache {
   bool ready = false;
