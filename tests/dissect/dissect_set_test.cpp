@@ -15,11 +15,14 @@
 #include "qs/landmarks/landmarks.h"
 #include "qs/mesh/validate.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 using qs::dissect::DissectionSet;
 using qs::dissect::MeshToDissect;
 using qs::testing::check_dissection;
 using ::testing::HasSubstr;
+
+using qs::test::vertex_towards;
 
 namespace {
 
@@ -32,14 +35,6 @@ qs::TriMesh deform(const qs::TriMesh& m) {
     p = qs::Vec3(1.3 * x + 0.2 * std::sin(2 * p.z()), 0.8 * y, p.z() + 0.25 * x * x);
   }
   return out;
-}
-
-// The vertex whose direction from the origin is closest to d.
-int vertex_towards(const qs::TriMesh& m, const qs::Vec3& d) {
-  int best = 0;
-  for (int v = 0; v < m.num_vertices(); ++v)
-    if (m.positions[v].normalized().dot(d.normalized()) > m.positions[best].normalized().dot(d.normalized())) best = v;
-  return best;
 }
 
 std::array<int, 4> equator_seeds(const qs::TriMesh& m) {

@@ -20,6 +20,9 @@
 #include "qs/dissect/seed_loop.h"
 #include "qs/family/family.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
+
+using qs::test::vertex_towards;
 
 namespace {
 
@@ -30,19 +33,12 @@ using qs::dissect::GeodesicLoopOptions;
 using qs::dissect::SeedLoop;
 using ::testing::HasSubstr;
 
-int nearest_vertex(const TriMesh& m, const Vec3& d) {
-  int best = 0;
-  for (int v = 1; v < m.num_vertices(); ++v)
-    if (m.positions[v].normalized().dot(d.normalized()) > m.positions[best].normalized().dot(d.normalized())) best = v;
-  return best;
-}
-
 /// Four seeds on a tilted great circle of the unit sphere.
 std::array<int, 4> tilted_seeds(const TriMesh& m) {
   const Vec3 n = Vec3(0.3, 0.2, 1).normalized();
   const Vec3 a = n.cross(Vec3(1, 0, 0)).normalized(), b = n.cross(a);
   std::array<int, 4> s{};
-  for (int k = 0; k < 4; ++k) s[k] = nearest_vertex(m, std::cos(k * M_PI / 2 + 0.1) * a + std::sin(k * M_PI / 2 + 0.1) * b);
+  for (int k = 0; k < 4; ++k) s[k] = vertex_towards(m, std::cos(k * M_PI / 2 + 0.1) * a + std::sin(k * M_PI / 2 + 0.1) * b);
   return s;
 }
 

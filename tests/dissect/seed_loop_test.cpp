@@ -27,6 +27,9 @@
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
+
+using qs::test::vertex_towards;
 
 namespace {
 
@@ -79,15 +82,6 @@ double path_length(const TriMesh& m, const std::vector<int>& p) {
   for (std::size_t k = 1; k < p.size(); ++k)
     sum += (m.positions[p[k]] - m.positions[p[k - 1]]).norm();
   return sum;
-}
-
-int nearest_vertex(const TriMesh& m, const Vec3& direction) {
-  int best = 0;
-  for (int v = 1; v < m.num_vertices(); ++v)
-    if (m.positions[v].normalized().dot(direction.normalized()) >
-        m.positions[best].normalized().dot(direction.normalized()))
-      best = v;
-  return best;
 }
 
 /// Checks every documented property of a seed loop; returns the two part sizes.
@@ -233,7 +227,7 @@ TEST(SeedLoop, HandPickedSeedsGiveAValidLoopOnEveryShape) {
     for (std::size_t l = 0; l < layouts.size(); ++l) {
       SCOPED_TRACE(s.name + " layout " + std::to_string(l));
       Seeds seeds{};
-      for (int i = 0; i < 4; ++i) seeds[i] = nearest_vertex(s.mesh, layouts[l][i]);
+      for (int i = 0; i < 4; ++i) seeds[i] = vertex_towards(s.mesh, layouts[l][i]);
       ASSERT_EQ(std::set<int>(seeds.begin(), seeds.end()).size(), 4u);
       const SeedLoop loop = qs::dissect::trace_seed_loop(s.mesh, seeds);
       check_loop(s.mesh, seeds, loop);
@@ -262,8 +256,8 @@ TEST(SeedLoop, ShortestPairIsAShortestPath) {
 
 TEST(SeedLoop, SeedsAtEllipsoidAxisEndsGiveFourShortestPaths) {
   const TriMesh m = qs::shapes::ellipsoid(3, 2, 1, 4);
-  const Seeds seeds{nearest_vertex(m, Vec3(1, 0, 0)), nearest_vertex(m, Vec3(0, 1, 0)),
-                    nearest_vertex(m, Vec3(-1, 0, 0)), nearest_vertex(m, Vec3(0, -1, 0))};
+  const Seeds seeds{vertex_towards(m, Vec3(1, 0, 0)), vertex_towards(m, Vec3(0, 1, 0)),
+                    vertex_towards(m, Vec3(-1, 0, 0)), vertex_towards(m, Vec3(0, -1, 0))};
   const SeedLoop loop = qs::dissect::trace_seed_loop(m, seeds);
   check_loop(m, seeds, loop);
   for (int i = 0; i < 4; ++i) {

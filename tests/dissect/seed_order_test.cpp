@@ -8,17 +8,13 @@
 #include "qs/dissect/seed_order.h"
 #include "qs/mesh/validate.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 using qs::dissect::MeshToDissect;
 
-namespace {
+using qs::test::vertex_towards;
 
-int vertex_towards(const qs::TriMesh& m, const qs::Vec3& d) {
-  int best = 0;
-  for (int v = 0; v < m.num_vertices(); ++v)
-    if (m.positions[v].normalized().dot(d.normalized()) > m.positions[best].normalized().dot(d.normalized())) best = v;
-  return best;
-}
+namespace {
 
 // Four seeds around the waist of an elongated ellipsoid, given in the order +x, -x, +y, -y: the
 // loop through them in that order crosses the waist twice; the belt order is +x, +y, -x, -y.

@@ -16,12 +16,15 @@
 #include "qs/dissect/dissection.h"
 #include "qs/merge/merge.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 using qs::Vec2;
 using qs::Vec3;
 using qs::dissect::Chart;
 using qs::merge::Merged;
 using ::testing::HasSubstr;
+
+using qs::test::vertex_towards;
 
 namespace {
 
@@ -359,13 +362,6 @@ TEST(Merge, SidePointsThatTheTwoPatchesPlaceDifferentlyAreReconciled) {
 }
 
 namespace {
-
-int vertex_towards(const qs::TriMesh& m, const Vec3& d) {
-  int best = 0;
-  for (int v = 0; v < m.num_vertices(); ++v)
-    if (m.positions[v].normalized().dot(d.normalized()) > m.positions[best].normalized().dot(d.normalized())) best = v;
-  return best;
-}
 
 }  // namespace
 

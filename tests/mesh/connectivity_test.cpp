@@ -10,16 +10,12 @@
 
 #include "qs/core/error.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 namespace qs::mesh {
 namespace {
 
-TriMesh tetrahedron() {
-  TriMesh m;
-  m.positions = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-  m.faces = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
-  return m;
-}
+using qs::test::tetrahedron;
 
 /// Every face as its three rotations, to look up "is (a, b, c) a face, in this orientation".
 std::set<std::array<int, 3>> oriented_faces(const TriMesh& m) {

@@ -13,20 +13,14 @@
 #include <vector>
 
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 namespace qs::mesh {
 namespace {
 
-using Ids = std::vector<long long>;
+using qs::test::tetrahedron;
 
-/// A regular tetrahedron, outward, vertices 0-3 (faces 0-3).
-TriMesh tetrahedron(const Vec3& offset = Vec3::Zero()) {
-  TriMesh m;
-  m.positions = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-  for (Vec3& p : m.positions) p += offset;
-  m.faces = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
-  return m;
-}
+using Ids = std::vector<long long>;
 
 /// Appends b to a, shifting b's vertex ids.
 void append(TriMesh& a, const TriMesh& b) {

@@ -16,8 +16,11 @@
 #include "qs/dissect/dissection.h"
 #include "qs/mesh/validate.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 namespace qs::remesh_test {
+
+using qs::test::vertex_towards;
 
 /// Every directed edge once and its reverse once (so every edge has exactly two faces, oppositely
 /// oriented: closed, manifold, no T-junction), one fan per vertex, no unused vertex. Returns V-E+F.
@@ -89,13 +92,6 @@ inline void expect_valid_sphere(const TriMesh& m, const std::string& what) {
 }
 
 // ---- Shared inputs (each computed once per test binary) ----
-
-inline int vertex_towards(const qs::TriMesh& m, const qs::Vec3& d) {
-  int best = 0;
-  for (int v = 0; v < m.num_vertices(); ++v)
-    if (m.positions[v].normalized().dot(d.normalized()) > m.positions[best].normalized().dot(d.normalized())) best = v;
-  return best;
-}
 
 inline std::array<int, 4> equator_seeds(const qs::TriMesh& m) {
   return {vertex_towards(m, {1, 0, 0}), vertex_towards(m, {0, 1, 0}), vertex_towards(m, {-1, 0, 0}),

@@ -26,6 +26,7 @@
 #include "qs/shapes/shapes.h"
 #include "qs/studio/server.h"
 #include "qs/studio/studio.h"
+#include "studio_requests.h"
 
 // After Eigen (through qs/core/mesh.h): httplib pulls in <resolv.h>, whose `_res` macro breaks
 // Eigen's headers.
@@ -34,6 +35,9 @@
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace qs::studio;
+using qs::studio::test::error_of;
+using qs::studio::test::get;
+using qs::studio::test::post;
 using namespace std::chrono_literals;
 
 namespace {
@@ -73,13 +77,6 @@ struct Folder {
   }
 };
 
-Request post(const std::string& path, std::map<std::string, std::string> query, std::string body) {
-  return Request{"POST", path, std::move(query), std::move(body), {}, {}};
-}
-Request get(const std::string& path, std::map<std::string, std::string> query = {}) {
-  return Request{"GET", path, std::move(query), "", {}, {}};
-}
-std::string error_of(const Response& r) { return json::parse(r.body).value("error", std::string()); }
 
 std::string nested(int depth) { return std::string(depth, '[') + std::string(depth, ']'); }
 
@@ -203,7 +200,7 @@ TEST(StudioHostile, NumbersBeyondADoubleAre400) {
 TEST(StudioHostile, RunOptionsOutOfRangeAreRefusedNotWrapped) {
   Folder f;
   Studio studio(f.options());
-  for (const std::string& opt : {R"("level": 4294967299)", R"("level": -4294967293)", R"("bake_size": 4294967312)",
+  for (const std::string opt : {R"("level": 4294967299)", R"("level": -4294967293)", R"("bake_size": 4294967312)",
                                  R"("level": 18446744073709551615)", R"("level": 3.0)", R"("bake_size": 1e3)",
                                  R"("max_area": -0.0001)", R"("level": true)"}) {
     const Response res = studio.handle(post("/api/run", {}, "{\"meshes\": [\"sphere.obj\"], " + opt + "}"));
@@ -292,7 +289,9 @@ TEST(StudioHostile, CoordinatesBeyondSinglePrecisionAreServedExactly) {
       for (const auto& p : m["problems"]) note |= p["kind"] == "viewer_range";
       EXPECT_TRUE(note) << m.dump();
     }
-    if (m["name"] == "tet101.obj") EXPECT_FALSE(m["accepted"].get<bool>()) << m.dump();  // as the tools refuse it
+    if (m["name"] == "tet101.obj") {  // as the tools refuse it
+      EXPECT_FALSE(m["accepted"].get<bool>()) << m.dump();
+    }
   }
   // ordinary coordinates go out as the shortest text of the float the page draws with
   const Response sphere = studio.handle(get("/api/mesh", {{"path", "sphere.obj"}}));
@@ -304,7 +303,7 @@ TEST(StudioServer, BodyOverTheRouteLimitIsRefusedFromItsHeaders) {
   Folder f;
   Running s(f.options());
   // 255 MB declared, none sent: the answer comes without the body (it is never read)
-  for (const std::string& path : {"/api/run", "/api/landmarks?name=sphere.obj", "/api/upload?name=x.obj", "/api/meshes"}) {
+  for (const std::string path : {"/api/run", "/api/landmarks?name=sphere.obj", "/api/upload?name=x.obj", "/api/meshes"}) {
     const std::string declared = path == "/api/upload?name=x.obj" ? "1073741824" : "267386880";
     const std::string method = path == "/api/meshes" ? "GET" : "POST";
     const auto t0 = std::chrono::steady_clock::now();
@@ -344,7 +343,7 @@ TEST(StudioServer, ChunkedBodiesAreCappedWhileTheyStream) {
   std::snprintf(size_line, sizeof size_line, "%zx\r\n", piece.size());
   for (int i = 0; i < 40; ++i) chunks += size_line + piece + "\r\n";  // 2.5 MiB, more than 1 MiB
   chunks += "0\r\n\r\n";
-  for (const std::string& path : {"/api/run", "/api/upload?name=big.obj"}) {
+  for (const std::string path : {"/api/run", "/api/upload?name=big.obj"}) {
     const std::string got =
         raw_exchange(s.port, "POST " + path + " HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n", "", chunks);
     EXPECT_EQ(got.substr(0, 12), "HTTP/1.1 413") << path << "\n" << got.substr(0, 400);

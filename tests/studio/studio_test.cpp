@@ -22,6 +22,7 @@
 #include "qs/studio/paths.h"
 #include "qs/studio/server.h"
 #include "qs/studio/studio.h"
+#include "studio_requests.h"
 
 // After Eigen (through qs/core/mesh.h): httplib pulls in <resolv.h>, whose `_res` macro breaks
 // Eigen's headers.
@@ -30,6 +31,9 @@
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace qs::studio;
+using qs::studio::test::error_of;
+using qs::studio::test::get;
+using qs::studio::test::post;
 
 namespace {
 
@@ -70,19 +74,6 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   return out;
 }
 
-Request get(const std::string& path, std::map<std::string, std::string> query = {}) {
-  return Request{"GET", path, std::move(query), ""};
-}
-Request post(const std::string& path, std::map<std::string, std::string> query, std::string body) {
-  return Request{"POST", path, std::move(query), std::move(body)};
-}
-std::string error_of(const Response& r) {
-  try {
-    return json::parse(r.body).value("error", std::string());
-  } catch (...) {
-    return "";
-  }
-}
 
 /// A folder with a sphere, a web folder with a page, and a secret outside both.
 struct Fixture {

@@ -18,10 +18,14 @@
 #include "qs/core/mesh.h"
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+
+using qs::test::read_bytes;
+using qs::test::scaled;
 
 namespace {
 
@@ -196,16 +200,6 @@ TEST_F(DfiTool, PartWarpGivesTheSameBytesOnOneOrTwoThreads) {
 
 namespace {
 
-qs::TriMesh scaled(qs::TriMesh m, double s) {
-  for (qs::Vec3& p : m.positions) p *= s;
-  return m;
-}
-
-std::string bytes_of(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
 // The vertices of an OBJ frame, as written.
 std::vector<qs::Vec3> obj_vertices(const fs::path& p) {
   std::vector<qs::Vec3> v;
@@ -264,7 +258,7 @@ TEST_F(DfiTool, RefusesOutputsThatAreItsInputs) {
   fs::create_directories(dir_ / "in");
   const std::string src = write("in/frame_0000.obj", qs::shapes::icosphere(2));
   const std::string tgt = write("in/t.obj", qs::shapes::torus(32, 12));
-  const std::string before_src = bytes_of(src), before_tgt = bytes_of(tgt);
+  const std::string before_src = read_bytes(src), before_tgt = read_bytes(tgt);
   fs::create_directory_symlink(dir_ / "in", dir_ / "link");
   const std::string base = src + " " + tgt + " --no-warp --frames 3 --grid 16 -q";
   for (const std::string& extra :
@@ -278,8 +272,8 @@ TEST_F(DfiTool, RefusesOutputsThatAreItsInputs) {
   // The GLB onto a file the run writes into -o.
   const RunResult r = run_tool("qs-dfi", base + " -o " + (dir_ / "o").string() + " --glb " + (dir_ / "o" / "dfi.json").string());
   EXPECT_EQ(r.exit, 1) << r.out;
-  EXPECT_EQ(bytes_of(src), before_src);
-  EXPECT_EQ(bytes_of(tgt), before_tgt);
+  EXPECT_EQ(read_bytes(src), before_src);
+  EXPECT_EQ(read_bytes(tgt), before_tgt);
   EXPECT_FALSE(fs::exists(dir_ / "o"));
 }
 
@@ -325,7 +319,9 @@ TEST_F(DfiTool, BadOptionsAndFailuresLeaveNothingBehind) {
     EXPECT_TRUE(fs::exists(fs::path(out.string() + fps + "x") / "dfi.json"));
     std::string validator_out;
     const int rc = qs::testing::run_gltf_validator(glb, &validator_out);
-    if (rc != 3) EXPECT_EQ(rc, 0) << validator_out;
+    if (rc != 3) {
+      EXPECT_EQ(rc, 0) << validator_out;
+    }
   }
 }
 

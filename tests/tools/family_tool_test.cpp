@@ -18,30 +18,16 @@
 
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
+using qs::test::read_bytes;
+using qs::test::snapshot;
+
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Every file under `dir` (relative name -> bytes; folders as "<dir>").
-std::map<std::string, std::string> snapshot(const fs::path& dir) {
-  std::map<std::string, std::string> out;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    const std::string rel = fs::relative(e.path(), dir).string();
-    out[rel] = e.is_directory() ? "<dir>" : slurp(e.path());
-  }
-  return out;
-}
-
 // A shell word for `s` (names with any bytes).
 std::string quoted(const fs::path& p) {
   std::string q = "'";
@@ -74,10 +60,10 @@ TEST_F(FamilyTool, GeneratesMeshesLandmarksAndMapsThatQsInspectAccepts) {
     EXPECT_THAT(i.out, HasSubstr("accepted"));
     EXPECT_THAT(i.out, HasSubstr("4 seeds"));
   }
-  const auto doc = nlohmann::json::parse(slurp(dir_ / "a" / "family.json"));
+  const auto doc = nlohmann::json::parse(read_bytes(dir_ / "a" / "family.json"));
   EXPECT_EQ(doc["format"], "qs-family");
   EXPECT_EQ(doc["meshes"].size(), 3u);
-  const auto map = nlohmann::json::parse(slurp(dir_ / "a" / "shape01.map.json"));
+  const auto map = nlohmann::json::parse(read_bytes(dir_ / "a" / "shape01.map.json"));
   EXPECT_EQ(map["domain"], "sphere");
   EXPECT_EQ(map["vertices"], 602);
 }
@@ -88,11 +74,11 @@ TEST_F(FamilyTool, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   int files = 0;
   for (const auto& e : fs::directory_iterator(dir_ / "a")) {
     ++files;
-    EXPECT_EQ(slurp(e.path()), slurp(dir_ / "b" / e.path().filename())) << e.path().filename();
+    EXPECT_EQ(read_bytes(e.path()), read_bytes(dir_ / "b" / e.path().filename())) << e.path().filename();
   }
   EXPECT_EQ(files, 7);
   ASSERT_EQ(run_tool("qs-family", "generate -n 1 --seed 4 --faces 800 --quiet -o " + (dir_ / "c").string()).exit, 0);
-  EXPECT_NE(slurp(dir_ / "a" / "shape00.obj"), slurp(dir_ / "c" / "shape00.obj"));
+  EXPECT_NE(read_bytes(dir_ / "a" / "shape00.obj"), read_bytes(dir_ / "c" / "shape00.obj"));
 }
 
 TEST_F(FamilyTool, BadOptionsGiveTheDocumentedExitCodes) {
@@ -120,7 +106,7 @@ TEST_F(FamilyTool, RetessellateWritesOriginsAndTransfersLandmarks) {
   // Chords of a convex bumpy ball: a little less area, said as a signed percentage.
   EXPECT_THAT(r.out, ::testing::ContainsRegex(" faces, area -0\\.[0-9]{2}% against the input"));
   EXPECT_THAT(r.out, ::testing::ContainsRegex("surfaces at most 0\\.[0-9]{3}% of the diagonal apart"));
-  const auto map = nlohmann::json::parse(slurp(dir_ / "out" / "ball_r.map.json"));
+  const auto map = nlohmann::json::parse(read_bytes(dir_ / "out" / "ball_r.map.json"));
   EXPECT_EQ(map["domain"], "surface");
   EXPECT_EQ(map["reference"], "../ball.obj");
   EXPECT_EQ(map["reference_faces"], 5120);
@@ -168,7 +154,7 @@ TEST_F(FamilyToolInputs, AnOutputThatIsAnInputIsRefusedUnderAnySpelling) {
       (dir_ / "link_dir" / "m.obj").string(),
       (sub / "m.off").string(),  // would write m.landmarks.json, the input's landmarks
   };
-  for (const std::string& sub_command : {"retessellate", "pose"}) {
+  for (const char* sub_command : {"retessellate", "pose"}) {
     for (const std::string& out : outputs) {
       const RunResult r = run_tool("qs-family", std::string(sub_command) + " " + (sub / "m.obj").string() + " -o " + out);
       EXPECT_EQ(r.exit, 1) << sub_command << " -o " << out << ": " << r.out;
@@ -215,7 +201,7 @@ TEST_F(FamilyToolInputs, RetessellateAndPoseWriteAllTheirFilesOrNone) {
                                 (dir_ / "new" / "deeper" / "r.obj").string());
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_EQ(snapshot(dir_ / "new" / "deeper").size(), 3u);
-  const auto map = nlohmann::json::parse(slurp(dir_ / "new" / "deeper" / "r.map.json"));
+  const auto map = nlohmann::json::parse(read_bytes(dir_ / "new" / "deeper" / "r.map.json"));
   EXPECT_EQ(map["reference"], "../../sub/m.obj");  // from the final folder, not the staging one
 }
 
@@ -282,11 +268,11 @@ TEST_F(FamilyToolInputs, NamesThatAreNotUtf8GiveAMessageOrWork) {
   // A folder that is not UTF-8 around a map whose path within it is: works.
   r = run_tool("qs-family", "retessellate " + quoted(odd / "m.obj") + " -q -o " + quoted(odd / "r\xfd.obj"));
   EXPECT_EQ(r.exit, 0) << r.out;
-  EXPECT_EQ(nlohmann::json::parse(slurp(odd / "r\xfd.map.json"))["reference"], "m.obj");
+  EXPECT_EQ(nlohmann::json::parse(read_bytes(odd / "r\xfd.map.json"))["reference"], "m.obj");
   // pose records its input's name escaped; its re-tessellation's map would hold "p\xfd.obj": refused.
   r = run_tool("qs-family", "pose " + quoted(odd / "m\xfe.obj") + " -q -o " + quoted(odd / "p\xfd.obj"));
   EXPECT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(slurp(odd / "p\xfd.pose.json"), HasSubstr("m\\\\xfe.obj"));
+  EXPECT_THAT(read_bytes(odd / "p\xfd.pose.json"), HasSubstr("m\\\\xfe.obj"));
   r = run_tool("qs-family", "pose " + quoted(odd / "m\xfe.obj") + " --retessellate -o " + quoted(odd / "q\xfd.obj"));
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_FALSE(fs::exists(odd / "q\xfd.obj"));
@@ -331,7 +317,7 @@ TEST_F(FamilyTool, NumericOptionsAreCheckedBeforeAnyWork) {
   }
   // The largest seed is a seed.
   EXPECT_EQ(run_tool("qs-family", "generate -n 1 --faces 400 -q --seed 18446744073709551615 -o " + (dir_ / "s").string()).exit, 0);
-  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "s" / "family.json"))["seed"], 18446744073709551615ull);
+  EXPECT_EQ(nlohmann::json::parse(read_bytes(dir_ / "s" / "family.json"))["seed"], 18446744073709551615ull);
 }
 
 TEST_F(FamilyTool, LargeRequestsAreRefusedUpFrontWithTheirSize) {

@@ -14,19 +14,16 @@
 #include "qs/io/read_mesh.h"
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
+using qs::test::read_bytes;
+
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 class MergeTool : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -56,7 +53,7 @@ TEST_F(MergeTool, MergesAPairThatQsMorphAndQsInspectRead) {
   const RunResult r = run_tool("qs-merge", (dir_ / "ab").string() + " -o " + out.string() + " --threads 1");
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("slivers"));
-  const nlohmann::json doc = nlohmann::json::parse(slurp(out / "remesh.json"));
+  const nlohmann::json doc = nlohmann::json::parse(read_bytes(out / "remesh.json"));
   EXPECT_EQ(doc["mode"], "merge");
   EXPECT_EQ(doc["meshes"].size(), 2u);
   EXPECT_LE(doc["merge"]["faces_over_inputs"].get<double>(), 8.0);
@@ -101,7 +98,7 @@ TEST_F(MergeTool, SameBytesOnOneAndTwoThreads) {
     EXPECT_EQ(r.out, "");
   }
   for (const char* f : {"a.ply", "b.ply", "remesh.json"})
-    EXPECT_EQ(slurp(dir_ / "t1" / f), slurp(dir_ / "t2" / f)) << f;
+    EXPECT_EQ(read_bytes(dir_ / "t1" / f), read_bytes(dir_ / "t2" / f)) << f;
 }
 
 TEST_F(MergeTool, BadInputGivesDocumentedExitCodes) {
@@ -126,14 +123,14 @@ TEST_F(MergeTool, BadInputGivesDocumentedExitCodes) {
   // Two of three: c at t = 0, a at t = 1.
   const RunResult ca = run_tool("qs-merge", (dir_ / "abc").string() + " --pair c,a -q -o " + (dir_ / "ca").string());
   ASSERT_EQ(ca.exit, 0) << ca.out;
-  const nlohmann::json doc = nlohmann::json::parse(slurp(dir_ / "ca" / "remesh.json"));
+  const nlohmann::json doc = nlohmann::json::parse(read_bytes(dir_ / "ca" / "remesh.json"));
   EXPECT_EQ(doc["meshes"][0]["output"], "c.obj");
   EXPECT_EQ(doc["meshes"][1]["output"], "a.obj");
 
   // A chart whose uv triangle was flipped by hand: exit 2 naming the file and the patch.
   fs::copy(dir_ / "ab", dir_ / "flipped", fs::copy_options::recursive);
   {
-    std::string chart = slurp(dir_ / "flipped" / "a.chart.ply");
+    std::string chart = read_bytes(dir_ / "flipped" / "a.chart.ply");
     const size_t body = chart.find("end_header\n") + 11;
     const auto nv = qs::io::read_mesh(dir_ / "a.obj").mesh.num_vertices();
     // The chart has more vertices than the input (cut vertices): read the count from its header.
@@ -156,8 +153,8 @@ TEST_F(MergeTool, BadInputGivesDocumentedExitCodes) {
 // spelling or through a link, is refused before any work; the inputs stay as they were.
 TEST_F(MergeTool, RefusesAnOutputThatReplacesAnInput) {
   ASSERT_EQ(dissect_.exit, 0) << dissect_.out;
-  const std::string a_before = slurp(dir_ / "a.obj"), b_before = slurp(dir_ / "b.obj");
-  const std::string json_before = slurp(dir_ / "ab" / "dissection.json");
+  const std::string a_before = read_bytes(dir_ / "a.obj"), b_before = read_bytes(dir_ / "b.obj");
+  const std::string json_before = read_bytes(dir_ / "ab" / "dissection.json");
   std::error_code ec;
   fs::create_directory_symlink(dir_, dir_ / "link", ec);
   ASSERT_FALSE(ec) << ec.message();
@@ -181,15 +178,15 @@ TEST_F(MergeTool, RefusesAnOutputThatReplacesAnInput) {
   for (size_t at; (at = json.find("\"a.chart.ply\"")) != std::string::npos;) json.replace(at, 13, "\"a.obj\"");
   std::ofstream(dir_ / "c2" / "dissection.json", std::ios::binary) << json;
   fs::rename(dir_ / "c2" / "a.chart.ply", dir_ / "c2" / "a.obj");
-  const std::string chart_before = slurp(dir_ / "c2" / "a.obj");
+  const std::string chart_before = read_bytes(dir_ / "c2" / "a.obj");
   const RunResult chart = run_tool("qs-merge", (dir_ / "c2").string() + " -o " + (dir_ / "c2").string());
   EXPECT_EQ(chart.exit, 1) << chart.out;
   EXPECT_THAT(chart.out, HasSubstr("is an input of this run"));
-  EXPECT_EQ(slurp(dir_ / "c2" / "a.obj"), chart_before);
+  EXPECT_EQ(read_bytes(dir_ / "c2" / "a.obj"), chart_before);
 
-  EXPECT_EQ(slurp(dir_ / "a.obj"), a_before);
-  EXPECT_EQ(slurp(dir_ / "b.obj"), b_before);
-  EXPECT_EQ(slurp(dir_ / "ab" / "dissection.json"), json_before);
+  EXPECT_EQ(read_bytes(dir_ / "a.obj"), a_before);
+  EXPECT_EQ(read_bytes(dir_ / "b.obj"), b_before);
+  EXPECT_EQ(read_bytes(dir_ / "ab" / "dissection.json"), json_before);
   EXPECT_FALSE(fs::exists(dir_ / "remesh.json"));
   fs::remove(dir_ / "link");
   fs::remove_all(dir_ / "c2");
@@ -205,7 +202,7 @@ TEST_F(MergeTool, AFailedRunLeavesTheOutputFolderAsItWas) {
   const RunResult r = run_tool("qs-merge", (dir_ / "ab").string() + " -q -o " + out.string());
   EXPECT_EQ(r.exit, 3) << r.out;
   EXPECT_THAT(r.out, HasSubstr("is a folder"));
-  EXPECT_EQ(slurp(out / "a.obj"), "old");
+  EXPECT_EQ(read_bytes(out / "a.obj"), "old");
   EXPECT_FALSE(fs::exists(out / "b.obj"));
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
@@ -243,7 +240,7 @@ TEST_F(MergeTool, AMeshNameThatIsNotUtf8IsDissectedAndMerged) {
   EXPECT_EQ(r.exit, 0) << r.out;
   EXPECT_TRUE(fs::exists(dir_ / "odd_merge" / "x%FF.obj"));
   // A dissection.json that lost the name (U+FFFD for the odd byte) gets a clear message.
-  std::string json = slurp(dir_ / "odd" / "dissection.json");
+  std::string json = read_bytes(dir_ / "odd" / "dissection.json");
   const std::string escaped = "x%FF.chart.ply";
   ASSERT_NE(json.find(escaped), std::string::npos);
   json.replace(json.find(escaped), escaped.size(), "x\xEF\xBF\xBD.chart.ply");
@@ -262,7 +259,7 @@ TEST_F(MergeTool, AMeshNameThatIsNotUtf8IsDissectedAndMerged) {
   fs::copy(dir_ / "ab", folder, fs::copy_options::recursive);
   const RunResult ok = run_tool("qs-merge", "'" + folder.string() + "' -q");
   EXPECT_EQ(ok.exit, 0) << ok.out;
-  const nlohmann::json doc = nlohmann::json::parse(slurp(folder / "merge" / "remesh.json"));
+  const nlohmann::json doc = nlohmann::json::parse(read_bytes(folder / "merge" / "remesh.json"));
   EXPECT_EQ(doc["dissection"], "ab\xEF\xBF\xBD");
   EXPECT_EQ(doc["dissection_path"], "..");
   fs::remove_all(folder);

@@ -12,15 +12,18 @@
 
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
+using qs::test::scaled;
+
 namespace {
 
-RunResult run(const std::string& args) { return run_tool("qs-metro", args); }
+RunResult metro(const std::string& args) { return run_tool("qs-metro", args); }
 
 class MetroTool : public ::testing::Test {
  protected:
@@ -39,18 +42,12 @@ class MetroTool : public ::testing::Test {
   }
   fs::path dir_;
 };
-
-qs::TriMesh scaled(qs::TriMesh m, double s) {
-  for (auto& p : m.positions) p *= s;
-  return m;
-}
-
 }  // namespace
 
 TEST_F(MetroTool, PrintsBothDirectionsAndTheTwoSidedDistance) {
   const std::string a = write("a.obj", qs::shapes::icosphere(3));
   const std::string b = write("b.ply", scaled(qs::shapes::icosphere(3), 1.1));
-  const RunResult r = run(a + " " + b + " --samples 5000");
+  const RunResult r = metro(a + " " + b + " --samples 5000");
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("qs-metro: A = " + a + " (642 vertices, 1280 faces), B = " + b));
   EXPECT_THAT(r.out, HasSubstr("bounding box diagonal of A: "));
@@ -61,7 +58,7 @@ TEST_F(MetroTool, PrintsBothDirectionsAndTheTwoSidedDistance) {
   EXPECT_THAT(r.out, HasSubstr("Hausdorff (two-sided): max "));
   EXPECT_THAT(r.out, HasSubstr("%)"));
   // The same inputs give the same report, byte for byte.
-  EXPECT_EQ(run(a + " " + b + " --samples 5000").out, r.out);
+  EXPECT_EQ(metro(a + " " + b + " --samples 5000").out, r.out);
 }
 
 TEST_F(MetroTool, JsonReportHasEveryNumber) {
@@ -80,7 +77,7 @@ TEST_F(MetroTool, JsonReportHasEveryNumber) {
   }
   stl << "endsolid b\n";
   const std::string b = write_text("b.stl", stl.str());
-  const RunResult r = run("--json --samples 4000 --seed 7 " + a + " " + b);
+  const RunResult r = metro("--json --samples 4000 --seed 7 " + a + " " + b);
   ASSERT_EQ(r.exit, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["a"]["file"], a);
@@ -113,7 +110,7 @@ TEST_F(MetroTool, JsonReportHasEveryNumber) {
 TEST_F(MetroTool, WritesTheReportToAFile) {
   const std::string a = write("a.obj", qs::shapes::icosphere(2));
   const fs::path out = dir_ / "report.json";
-  const RunResult r = run(a + " " + a + " --json --samples 1000 -o " + out.string());
+  const RunResult r = metro(a + " " + a + " --json --samples 1000 -o " + out.string());
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_EQ(r.out, "");
   std::ifstream in(out);
@@ -126,49 +123,49 @@ TEST_F(MetroTool, WritesTheReportToAFile) {
 TEST_F(MetroTool, TheReportDoesNotDependOnTheThreadCount) {
   const std::string a = write("a.obj", qs::shapes::icosphere(3));
   const std::string b = write("b.obj", qs::shapes::torus(32, 12));
-  const RunResult one = run(a + " " + b + " --json --samples 20000 --threads 1");
-  const RunResult three = run(a + " " + b + " --json --samples 20000 --threads 3");
+  const RunResult one = metro(a + " " + b + " --json --samples 20000 --threads 1");
+  const RunResult three = metro(a + " " + b + " --json --samples 20000 --threads 3");
   ASSERT_EQ(one.exit, 0) << one.out;
   ASSERT_EQ(three.exit, 0) << three.out;
   EXPECT_EQ(one.out, three.out);
-  EXPECT_EQ(run(a + " " + b + " --threads -1").exit, 1);
+  EXPECT_EQ(metro(a + " " + b + " --threads -1").exit, 1);
 }
 
 TEST_F(MetroTool, OpenMeshesAreMeasuredWithANote) {
   const std::string a = write("disk.obj", qs::shapes::open_disk(4));
-  const RunResult r = run(a + " " + a + " --samples 1000");
+  const RunResult r = metro(a + " " + a + " --samples 1000");
   EXPECT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("note: A is not a closed genus-0 mesh (boundary_edges); measured anyway"));
 }
 
 TEST_F(MetroTool, ExitCodesForUsageIoAndInvalidInput) {
   const std::string ok = write("ok.obj", qs::shapes::icosphere(1));
-  EXPECT_EQ(run("").exit, 1);
-  EXPECT_EQ(run(ok).exit, 1);  // B missing
-  EXPECT_EQ(run(ok + " " + ok + " " + ok).exit, 1);
-  EXPECT_EQ(run(ok + " " + ok + " --samples 0").exit, 1);
-  EXPECT_EQ(run(ok + " " + ok + " --samples -5").exit, 1);
-  EXPECT_EQ(run(ok + " " + ok + " --bogus").exit, 1);
-  EXPECT_EQ(run("--help").exit, 0);
+  EXPECT_EQ(metro("").exit, 1);
+  EXPECT_EQ(metro(ok).exit, 1);  // B missing
+  EXPECT_EQ(metro(ok + " " + ok + " " + ok).exit, 1);
+  EXPECT_EQ(metro(ok + " " + ok + " --samples 0").exit, 1);
+  EXPECT_EQ(metro(ok + " " + ok + " --samples -5").exit, 1);
+  EXPECT_EQ(metro(ok + " " + ok + " --bogus").exit, 1);
+  EXPECT_EQ(metro("--help").exit, 0);
 
-  const RunResult missing = run(ok + " " + (dir_ / "nope.obj").string());
+  const RunResult missing = metro(ok + " " + (dir_ / "nope.obj").string());
   EXPECT_EQ(missing.exit, 3) << missing.out;
   EXPECT_THAT(missing.out, HasSubstr("nope.obj"));
-  const RunResult unwritable = run(ok + " " + ok + " -o " + (dir_ / "no_dir" / "r.txt").string());
+  const RunResult unwritable = metro(ok + " " + ok + " -o " + (dir_ / "no_dir" / "r.txt").string());
   EXPECT_EQ(unwritable.exit, 3) << unwritable.out;
 
-  const RunResult empty = run(write_text("empty.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n") + " " + ok);
+  const RunResult empty = metro(write_text("empty.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n") + " " + ok);
   EXPECT_EQ(empty.exit, 2) << empty.out;
   EXPECT_THAT(empty.out, HasSubstr("empty.off (A): cannot measure"));
   const RunResult nan =
-      run(ok + " " + write_text("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"));
+      metro(ok + " " + write_text("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"));
   EXPECT_EQ(nan.exit, 2) << nan.out;
   EXPECT_THAT(nan.out, HasSubstr("nan.off (B)"));
   EXPECT_THAT(nan.out, HasSubstr("coordinate"));
-  const RunResult parse = run(write_text("bad.off", "OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n") + " " + ok);
+  const RunResult parse = metro(write_text("bad.off", "OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n") + " " + ok);
   EXPECT_EQ(parse.exit, 2) << parse.out;
   EXPECT_THAT(parse.out, HasSubstr("bad.off:4"));
-  const RunResult flat = run(write_text("flat.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n") + " " + ok);
+  const RunResult flat = metro(write_text("flat.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n") + " " + ok);
   EXPECT_EQ(flat.exit, 2) << flat.out;
   EXPECT_THAT(flat.out, HasSubstr("A: every face has zero area"));
   EXPECT_THAT(flat.out, HasSubstr("A = " + (dir_ / "flat.off").string()));
@@ -179,12 +176,12 @@ TEST_F(MetroTool, ExitCodesForUsageIoAndInvalidInput) {
 TEST_F(MetroTool, AReportThatCannotBeWrittenFailsBeforeMeasuring) {
   const std::string a = write("a.obj", qs::shapes::icosphere(2));
   const std::string b = write("b.obj", scaled(qs::shapes::icosphere(2), 1.1));
-  RunResult r = run(a + " " + b + " -o " + dir_.string());
+  RunResult r = metro(a + " " + b + " -o " + dir_.string());
   EXPECT_EQ(r.exit, 3) << r.out;
   EXPECT_THAT(r.out, HasSubstr("is a folder"));
-  r = run(a + " " + b + " -o " + (dir_ / "nodir" / "r.txt").string());
+  r = metro(a + " " + b + " -o " + (dir_ / "nodir" / "r.txt").string());
   EXPECT_EQ(r.exit, 3) << r.out;
-  r = run(a + " " + b + " -o " + (dir_ / "." / "b.obj").string());
+  r = metro(a + " " + b + " -o " + (dir_ / "." / "b.obj").string());
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_THAT(r.out, HasSubstr("is an input of this run"));
   // Only the inputs are left.
@@ -198,11 +195,11 @@ TEST_F(MetroTool, NumericOptionsOutOfRangeAreUsageErrors) {
   for (const char* bad : {"--seed -1", "--seed 18446744073709551616", "--seed 1.5", "--seed 0x10", "--samples 0",
                           "--samples -5", "--samples 1e400", "--samples nan", "--max-samples 0", "--threads -1",
                           "--samples 20 --max-samples 10"}) {
-    const RunResult r = run(a + " " + b + " " + bad);
+    const RunResult r = metro(a + " " + b + " " + bad);
     EXPECT_EQ(r.exit, 1) << bad << ": " << r.out;
     EXPECT_THAT(r.out, Not(HasSubstr("qs-metro: A = "))) << bad;
   }
-  const RunResult top = run(a + " " + b + " --samples 100 --seed 18446744073709551615 --json");
+  const RunResult top = metro(a + " " + b + " --samples 100 --seed 18446744073709551615 --json");
   ASSERT_EQ(top.exit, 0) << top.out;
   EXPECT_EQ(nlohmann::json::parse(top.out)["seed"], 18446744073709551615ull);
 }

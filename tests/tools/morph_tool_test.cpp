@@ -17,19 +17,16 @@
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
 #include "../common/image_test_support.h"
+#include "../common/test_support.h"
 #include "tool_runner.h"
 #include "../common/gltf_test_support.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
+using qs::test::read_bytes;
+
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 int count_frames(const fs::path& dir) {
   int n = 0;
   if (!fs::exists(dir)) return 0;
@@ -40,7 +37,7 @@ int count_frames(const fs::path& dir) {
 
 // The JSON chunk of a GLB.
 nlohmann::json glb_json(const fs::path& p) {
-  const std::string b = slurp(p);
+  const std::string b = read_bytes(p);
   if (b.size() < 20 || b.compare(0, 4, "glTF") != 0) return {};
   uint32_t len;
   std::memcpy(&len, b.data() + 12, 4);
@@ -222,7 +219,7 @@ TEST_F(MorphTool, DefaultPathFramesStartAndEndOnTheShapesExactly) {
   EXPECT_EQ(f0.faces, a.faces);
   EXPECT_EQ(qs::io::read_mesh(dir_ / "frame_0010.obj").mesh.positions, shape("b"));
   EXPECT_EQ(qs::io::read_mesh(dir_ / "frame_0020.obj").mesh.positions, shape("c"));
-  EXPECT_EQ(slurp(dir_ / "frame_0000.obj"), slurp(R() / "a.obj")) << "the same text as qs-remesh writes";
+  EXPECT_EQ(read_bytes(dir_ / "frame_0000.obj"), read_bytes(R() / "a.obj")) << "the same text as qs-remesh writes";
   std::ifstream in(dir_ / "morph.json");
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["format"], "qs-morph");
@@ -236,8 +233,8 @@ TEST_F(MorphTool, DefaultPathFramesStartAndEndOnTheShapesExactly) {
   // Deterministic: a second run writes the same bytes.
   const fs::path again = dir_ / "again";
   ASSERT_EQ(morph("-q --threads 1 -o " + again.string()).exit, 0);
-  EXPECT_EQ(slurp(again / "frame_0007.obj"), slurp(dir_ / "frame_0007.obj"));
-  EXPECT_EQ(slurp(again / "morph.json"), slurp(dir_ / "morph.json"));
+  EXPECT_EQ(read_bytes(again / "frame_0007.obj"), read_bytes(dir_ / "frame_0007.obj"));
+  EXPECT_EQ(read_bytes(again / "morph.json"), read_bytes(dir_ / "morph.json"));
 }
 
 TEST_F(MorphTool, MidpointOfATwoShapePathIsTheAverage) {
@@ -390,7 +387,7 @@ TEST_F(MorphTool, MeshesThatDoNotShareAConnectivityAreRefused) {
   const fs::path copy = dir_ / "R";
   fs::copy(R(), copy);
   // Edit one face of b.obj: its first "f" line gets its corners rotated the other way.
-  std::istringstream in(slurp(copy / "b.obj"));
+  std::istringstream in(read_bytes(copy / "b.obj"));
   std::string line, out;
   bool edited = false;
   while (std::getline(in, line)) {
@@ -462,12 +459,12 @@ TEST_F(MorphTool, FrameMapsGiveEveryFrameUvsAndItsOwnNormalMap) {
   for (int f = 0; f < 3; ++f) {
     const std::string stem = "frame_000" + std::to_string(f);
     EXPECT_TRUE(fs::exists(out / (stem + "_normal.png"))) << stem;
-    EXPECT_THAT(slurp(out / (stem + ".mtl")), HasSubstr("norm " + stem + "_normal.png"));
-    EXPECT_THAT(slurp(out / (stem + ".obj")), HasSubstr("mtllib " + stem + ".mtl"));
+    EXPECT_THAT(read_bytes(out / (stem + ".mtl")), HasSubstr("norm " + stem + "_normal.png"));
+    EXPECT_THAT(read_bytes(out / (stem + ".obj")), HasSubstr("mtllib " + stem + ".mtl"));
   }
   EXPECT_EQ(qs::io::read_mesh(out / "frame_0000.obj").mesh.positions, shape("a"));
   EXPECT_EQ(qs::io::read_mesh(out / "frame_0002.obj").mesh.positions, shape("b"));
-  EXPECT_EQ(slurp(out / "frame_0000_normal.png"), slurp(bake / "a_normal.png"));
+  EXPECT_EQ(read_bytes(out / "frame_0000_normal.png"), read_bytes(bake / "a_normal.png"));
   std::ifstream in(out / "morph.json");
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["frames"]["list"][1]["normal_map"], "frame_0001_normal.png");

@@ -17,33 +17,21 @@
 
 #include "qs/io/write_mesh.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 #include "tool_runner.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
+using qs::test::read_bytes;
+using qs::test::snapshot;
+using qs::test::scaled;
+
 namespace {
-
-std::string read_bytes(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
 void write_bytes(const fs::path& p, const std::string& s) {
   std::ofstream f(p, std::ios::binary);
   f << s;
-}
-
-// Every file under `dir` (relative name -> bytes; folders as "<dir>"): the state to compare.
-std::map<std::string, std::string> snapshot(const fs::path& dir) {
-  std::map<std::string, std::string> out;
-  if (!fs::exists(dir)) return out;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    const std::string rel = fs::relative(e.path(), dir).string();
-    out[rel] = e.is_directory() ? "<dir>" : read_bytes(e.path());
-  }
-  return out;
 }
 
 // No "tmp-" staging folder is left beside `target`.
@@ -63,12 +51,6 @@ void expect_clean_failure(const RunResult& r, int code, const std::string& part)
     EXPECT_THAT(r.out, HasSubstr(part));
   }
 }
-
-qs::TriMesh scaled(qs::TriMesh m, double s) {
-  for (auto& p : m.positions) p *= s;
-  return m;
-}
-
 }  // namespace
 
 class RobustTool : public ::testing::Test {
