@@ -276,30 +276,19 @@ class PatchSolver {
   bool step(double& e_now, double tolerance) {
     const int n = prob_.unknowns;
     if (n == 0) return false;
-    // The Hessian's entries come in the same order at every step (assemble): the first step
-    // collects them as triplets, which fix the pattern (analyze); the later ones add each straight
-    // into the value where it landed (slot_).
+    // The Hessian's entries come in the same order at every step (assemble), each added straight
+    // into the value where it lands (slot_); the pattern is fixed by the faces (analyze).
     double diag = 0;  // the largest single diagonal contribution (scales the regularization)
     Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    if (!analyzed_) {
-      std::vector<Eigen::Triplet<double>> trip;
-      trip.reserve(prob_.faces.size() * 36 + prob_.pull.size() * 4);
-      if (!assemble(g, [&](int row, int col, double x) {
-            trip.emplace_back(row, col, x);
-            if (row == col) diag = std::max(diag, x);
-          }))
-        return false;
-      analyze(trip);
-    } else {
-      double* const value = h_.valuePtr();
-      std::fill(value, value + h_.nonZeros(), 0.0);
-      const std::ptrdiff_t* slot = slot_.data();
-      if (!assemble(g, [&](int row, int col, double x) {
-            value[*slot++] += x;
-            if (row == col) diag = std::max(diag, x);
-          }))
-        return false;
-    }
+    if (!analyzed_) analyze();
+    double* const value = h_.valuePtr();
+    std::fill(value, value + h_.nonZeros(), 0.0);
+    const int* slot = slot_.data();
+    if (!assemble(g, [&](int row, int col, double x) {
+          value[*slot++] += x;
+          if (row == col) diag = std::max(diag, x);
+        }))
+      return false;
     std::vector<double> plain(n);
     for (int i = 0; i < n; ++i) plain[i] = h_.valuePtr()[diag_slot_[i]];
     Eigen::VectorXd d;
@@ -445,50 +434,86 @@ class PatchSolver {
     return ncols;
   }
 
-  // The Hessian's pattern, the same at every step: the first step's entries `trip` and the whole
-  // diagonal, which takes the regularization; ordered once. slot_ is where each entry lands in
-  // the value array (entries that repeat are summed there in `trip`'s order), diag_slot_ each
-  // diagonal entry. Built by columns in linear time (a counting sort, then each column's rows
-  // scattered).
-  void analyze(const std::vector<Eigen::Triplet<double>>& trip) {
+  // The Hessian's pattern, the same at every step: each face's unknowns with each other, the pose
+  // pull's blocks and the whole diagonal, which takes the regularization; ordered once. slot_[k] is
+  // where assemble's k-th entry lands in the value array, diag_slot_ each diagonal entry. Built by
+  // columns from the faces of each unknown, in linear time.
+  void analyze() {
     const int n = prob_.unknowns;
-    const size_t visited = trip.size();
-    std::vector<int> by_col_start(n + 1, 0);
-    for (const auto& t : trip) ++by_col_start[t.col() + 1];
-    for (int j = 0; j < n; ++j) by_col_start[j + 1] += by_col_start[j];
-    std::vector<int> by_col(visited), fill(by_col_start.begin(), by_col_start.end() - 1);
-    for (size_t k = 0; k < visited; ++k) by_col[fill[trip[k].col()]++] = static_cast<int>(k);
-    std::vector<int> outer(n + 1, 0), inner, mark(n, -1), rows;
-    std::vector<std::ptrdiff_t> at(n, 0);
-    inner.reserve(visited / 2 + n);
-    slot_.resize(visited);
+    const size_t nf = prob_.faces.size();
+    // Each face's unknowns, and where its ncols^2 entries start in assemble's order.
+    std::vector<std::array<int, 6>> face_cols(nf);
+    std::vector<int> face_ncols(nf);
+    std::vector<size_t> first(nf + 1, 0);
+    std::vector<int> faces_start(n + 1, 0);
+    std::array<std::pair<int, Vec2>, 6> cols;
+    std::array<int, 6> corner{};
+    for (size_t t = 0; t < nf; ++t) {
+      const int ncols = face_columns(t, cols, corner);
+      face_ncols[t] = ncols;
+      for (int r = 0; r < ncols; ++r) {
+        face_cols[t][r] = cols[r].first;
+        ++faces_start[cols[r].first + 1];
+      }
+      first[t + 1] = first[t] + static_cast<size_t>(ncols) * ncols;
+    }
+    for (int j = 0; j < n; ++j) faces_start[j + 1] += faces_start[j];
+    std::vector<int> faces_of(faces_start[n]), fill(faces_start.begin(), faces_start.end() - 1);
+    for (size_t t = 0; t < nf; ++t)
+      for (int r = 0; r < face_ncols[t]; ++r) faces_of[fill[face_cols[t][r]]++] = static_cast<int>(t);
+    // The pull's entries follow the faces': a 2 x 2 block per free vertex of dimension 2, one entry
+    // per vertex of dimension 1.
+    std::vector<int> vertex_of(n, -1);
+    std::vector<size_t> pull_first(prob_.pull.size() + 1, first[nf]);
+    for (size_t v = 0; v < prob_.uv.size(); ++v)
+      for (int k = 0; k < prob_.dims[v]; ++k) vertex_of[prob_.var[v] + k] = static_cast<int>(v);
+    for (size_t v = 0; v < prob_.pull.size(); ++v)
+      pull_first[v + 1] = pull_first[v] + static_cast<size_t>(prob_.dims[v]) * prob_.dims[v];
+    slot_.assign(pull_first.back(), 0);
     diag_slot_.resize(n);
+    std::vector<int> outer(n + 1, 0), inner, mark(n, -1), rows, at(n, 0);
+    inner.reserve(static_cast<size_t>(n) * 8);
     for (int j = 0; j < n; ++j) {
+      const int v = vertex_of[j];
+      const bool pulled = v >= 0 && static_cast<size_t>(v) < prob_.pull.size();
       rows.assign(1, j);  // the diagonal
       mark[j] = j;
-      for (int q = by_col_start[j]; q < by_col_start[j + 1]; ++q) {
-        const int r = trip[by_col[q]].row();
+      auto add_row = [&](int r) {
         if (mark[r] != j) {
           mark[r] = j;
           rows.push_back(r);
         }
+      };
+      for (int q = faces_start[j]; q < faces_start[j + 1]; ++q) {
+        const int t = faces_of[q];
+        for (int r = 0; r < face_ncols[t]; ++r) add_row(face_cols[t][r]);
       }
+      if (pulled)
+        for (int k = 0; k < prob_.dims[v]; ++k) add_row(prob_.var[v] + k);
       std::sort(rows.begin(), rows.end());
       for (int r : rows) {
-        at[r] = static_cast<std::ptrdiff_t>(inner.size());
+        at[r] = static_cast<int>(inner.size());
         inner.push_back(r);
       }
       outer[j + 1] = static_cast<int>(inner.size());
-      for (int q = by_col_start[j]; q < by_col_start[j + 1]; ++q) slot_[by_col[q]] = at[trip[by_col[q]].row()];
+      for (int q = faces_start[j]; q < faces_start[j + 1]; ++q) {
+        const int t = faces_of[q];
+        const int ncols = face_ncols[t];
+        const int c = static_cast<int>(std::find(face_cols[t].begin(), face_cols[t].begin() + ncols, j) -
+                                       face_cols[t].begin());
+        for (int r = 0; r < ncols; ++r) slot_[first[t] + static_cast<size_t>(r) * ncols + c] = at[face_cols[t][r]];
+      }
+      if (pulled) {
+        const int d = prob_.dims[v], c = j - prob_.var[v];
+        for (int r = 0; r < d; ++r) slot_[pull_first[v] + static_cast<size_t>(r) * d + c] = at[prob_.var[v] + r];
+      }
       diag_slot_[j] = at[j];
     }
     h_.resize(n, n);
     h_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
     std::copy(outer.begin(), outer.end(), h_.outerIndexPtr());
     std::copy(inner.begin(), inner.end(), h_.innerIndexPtr());
-    double* const value = h_.valuePtr();
-    std::fill(value, value + inner.size(), 0.0);
-    for (size_t k = 0; k < visited; ++k) value[slot_[k]] += trip[k].value();
+    std::fill(h_.valuePtr(), h_.valuePtr() + inner.size(), 0.0);
     // A large problem is ordered by nested dissection of the unknowns' vertices at their (u, v),
     // a small one by AMD (measured: AMD's factor is the faster below about 10^4 unknowns; nested
     // dissection analyzes and factorizes 1.5-2 times faster at 2-7 x 10^4).
@@ -506,7 +531,7 @@ class PatchSolver {
   std::vector<Mat46> a_;
   std::vector<Eigen::Vector4d> b_;
   Eigen::SparseMatrix<double> h_;
-  std::vector<std::ptrdiff_t> slot_, diag_slot_;
+  std::vector<int> slot_, diag_slot_;  // Eigen's sparse indices are int
   param::SupernodalCholesky llt_;
   bool analyzed_ = false;
 };
