@@ -8,7 +8,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <iostream>
@@ -629,25 +628,15 @@ TEST(StretchTest, RejectsMismatchedSizes) {
 
 // ---------------------------------------------------------------- timing (printed, not asserted)
 
-TEST(SquareParamTest, SolvePerf) {
+// Larger bumpy grids: both orderings of the solve give bijective maps (their speed: qs-bench-dissect).
+TEST(SquareParamTest, LargeBumpyGridsAreBijectiveWithEitherOrdering) {
   for (int n : {73, 143, 226}) {
     PatchMesh p = grid_patch(n, n, 1, 1, 0.3);
     for (Vec3& x : p.positions) x.z() = 0.1 * std::sin(7 * x.x()) * std::cos(5 * x.y());
     SquareParamOptions colamd;
     colamd.ordering = LuOrdering::Colamd;
-    const auto t0 = std::chrono::steady_clock::now();
-    const SquareParam sp = parameterize_square(p);
-    const auto t1 = std::chrono::steady_clock::now();
-    const Stretch s = l2_stretch(p.positions, p.faces, sp.uv);
-    const auto t2 = std::chrono::steady_clock::now();
-    const SquareParam sc = parameterize_square(p, colamd);
-    const auto t3 = std::chrono::steady_clock::now();
-    EXPECT_TRUE(sp.bijective());
-    EXPECT_TRUE(sc.bijective());
-    std::cout << "[ perf     ] " << (n - 2) * (n - 2) << " interior vertices, " << p.faces.size()
-              << " faces: parameterize_square " << std::chrono::duration<double>(t1 - t0).count()
-              << " s (Colamd " << std::chrono::duration<double>(t3 - t2).count() << " s), l2_stretch "
-              << std::chrono::duration<double>(t2 - t1).count() << " s (patch " << s.patch << ")\n";
+    EXPECT_TRUE(parameterize_square(p).bijective()) << n;
+    EXPECT_TRUE(parameterize_square(p, colamd).bijective()) << n;
   }
 }
 
