@@ -668,18 +668,19 @@ TEST(SquareParamTest, StretchMinimizationFromAGivenFirstSolveGivesTheSameBits) {
     SquareParamOptions o = plain_options;
     o.stretch_iterations = 4;
     const SquareParam solved = parameterize_square(p, o);
-    o.first_solve = &plain.uv;
+    const PlainSolve first{plain.uv, {}};
+    o.plain = &first;
     const SquareParam given = parameterize_square(p, o);
     EXPECT_EQ(given.uv, solved.uv);
     // Taken as it is: a different first map changes where the minimization goes.
-    std::vector<Vec2> other = plain.uv;
-    for (Vec2& q : other) q = 0.999 * q + Vec2(0.0005, 0.0005);
-    for (int v : p.boundary) other[v] = plain.uv[v];
-    o.first_solve = &other;
+    PlainSolve other{plain.uv, {}};
+    for (Vec2& q : other.uv) q = 0.999 * q + Vec2(0.0005, 0.0005);
+    for (int v : p.boundary) other.uv[v] = plain.uv[v];
+    o.plain = &other;
     EXPECT_NE(parameterize_square(p, o).uv, solved.uv);
     // One of another size is ignored.
-    const std::vector<Vec2> short_map(plain.uv.begin(), plain.uv.end() - 1);
-    o.first_solve = &short_map;
+    const PlainSolve short_map{std::vector<Vec2>(plain.uv.begin(), plain.uv.end() - 1), {}};
+    o.plain = &short_map;
     EXPECT_EQ(parameterize_square(p, o).uv, solved.uv);
   }
 }
@@ -696,18 +697,16 @@ TEST(SquareParamTest, AGivenCholeskyOrderingGivesTheSameBits) {
   EXPECT_TRUE(parameterize_square(p, {}).cholesky_ordering.empty());  // mean-value: LU
   SquareParamOptions o = plain_options;
   o.stretch_iterations = 4;
-  o.first_solve = &plain.uv;
+  PlainSolve given_plain{plain.uv, {}};
+  o.plain = &given_plain;
   const SquareParam solved = parameterize_square(p, o);
-  o.cholesky_ordering = &plain.cholesky_ordering;
+  given_plain.cholesky_ordering = plain.cholesky_ordering;
   const SquareParam given = parameterize_square(p, o);
   EXPECT_EQ(given.uv, solved.uv);
   EXPECT_EQ(given.cholesky_ordering, plain.cholesky_ordering);
-  std::vector<int> bad = plain.cholesky_ordering;
-  bad[0] = bad[1];
-  o.cholesky_ordering = &bad;
+  given_plain.cholesky_ordering[0] = given_plain.cholesky_ordering[1];
   EXPECT_EQ(parameterize_square(p, o).uv, solved.uv);
-  const std::vector<int> short_order(plain.cholesky_ordering.begin(), plain.cholesky_ordering.end() - 1);
-  o.cholesky_ordering = &short_order;
+  given_plain.cholesky_ordering.assign(plain.cholesky_ordering.begin(), plain.cholesky_ordering.end() - 1);
   EXPECT_EQ(parameterize_square(p, o).uv, solved.uv);
 }
 

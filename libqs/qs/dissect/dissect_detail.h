@@ -88,10 +88,9 @@ struct Param {
   param::Stretch st;
   std::vector<std::pair<int, int>> features;  // (feature index, local vertex), by feature index
   param::InteriorWeights weights = param::InteriorWeights::MeanValue;  // of every solve of this patch
-  // The map of one plain solve of ex with `weights` (no pins, no rounds), or empty: where stretch
-  // minimization starts without solving it again.
-  std::vector<Vec2> plain_uv;
-  std::vector<int> plain_ordering;  // that solve's Cholesky ordering (cotangent weights), or empty
+  // One plain solve of ex with `weights` (no pins, no rounds), or empty: where stretch
+  // minimization starts without solving or ordering it again.
+  param::PlainSolve plain;
 };
 
 // 1 at the local vertices of p's features, 0 elsewhere (the vertices a node map must keep).
@@ -135,7 +134,7 @@ class MeshDissector {
   Param parameterize(const Node& node);
   /// p's patch mapped with mean-value weights.
   param::SquareParam mean_value_map(const Param& p) const;
-  /// p's map replaced by its mean-value map `mv` (p.weights, p.plain_uv and p.st follow).
+  /// p's map replaced by its mean-value map `mv` (p.weights, p.plain and p.st follow).
   void use_mean_value(Param& p, param::SquareParam mv) const;
   /// p's map stretch-minimized (kRepairRounds, p's weights), kept when it folds less, or, both
   /// bijective, when it is less stretched.

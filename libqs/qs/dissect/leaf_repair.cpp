@@ -75,8 +75,7 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
   param::SquareParamOptions po;
   po.stretch_iterations = rounds;
   po.weights = p.weights;
-  po.first_solve = &p.plain_uv;
-  po.cholesky_ordering = &p.plain_ordering;
+  po.plain = &p.plain;
   param::SquareParam min_sp;
   try {
     min_sp = param::parameterize_square(p.ex.pm, po, context);
@@ -108,8 +107,7 @@ param::SquareParam minimized_leaf(const Param& p, int rounds, const Context& con
     if (p.weights == param::InteriorWeights::MeanValue) return {};
     Param mv = p;  // cotangent weights folded: try mean-value weights before giving up
     mv.weights = param::InteriorWeights::MeanValue;
-    mv.plain_uv.clear();  // solved with the other weights
-    mv.plain_ordering.clear();
+    mv.plain = {};  // solved with the other weights
     return minimized_leaf(mv, rounds, context);
   }
   return min_sp;

@@ -251,8 +251,7 @@ Param MeshDissector::parameterize(const Node& node) {
   base.weights = p.weights;
   p.sp = param::parameterize_square(p.ex.pm, base, ctx_.without_progress());
   p.weights = p.sp.weights;  // mean-value where the Delaunay flips ran past their budget
-  p.plain_uv = p.sp.uv;
-  p.plain_ordering = std::move(p.sp.cholesky_ordering);
+  p.plain = {p.sp.uv, std::move(p.sp.cholesky_ordering)};
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
   collect_features(p);
   for (int b : p.ex.pm.boundary)
@@ -270,8 +269,7 @@ param::SquareParam MeshDissector::mean_value_map(const Param& p) const {
 void MeshDissector::use_mean_value(Param& p, param::SquareParam mv) const {
   p.sp = std::move(mv);
   p.weights = param::InteriorWeights::MeanValue;
-  p.plain_uv = p.sp.uv;
-  p.plain_ordering.clear();
+  p.plain = {p.sp.uv, {}};
   p.st = param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv);
 }
 
@@ -279,8 +277,7 @@ void MeshDissector::spread(Param& p) const {
   param::SquareParamOptions po;
   po.weights = p.weights;
   po.stretch_iterations = kRepairRounds;
-  po.first_solve = &p.plain_uv;
-  po.cholesky_ordering = &p.plain_ordering;
+  po.plain = &p.plain;
   try {
     param::SquareParam sp = param::parameterize_square(p.ex.pm, po, ctx_.without_progress());
     // Kept when it folds less, or, both bijective, when it is less stretched.

@@ -591,6 +591,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
   context.report("parameterize: weights", 0.0);
 
   result.weights = options.weights;
+  const bool plain_uv_given = options.plain && options.plain->uv.size() == pos.size() && options.pinned.empty();
   if (ni > 0) {
     // The Laplacian's triangulation: the patch itself (mean-value weights) or its intrinsic
     // Delaunay triangulation (cotangent weights).
@@ -611,9 +612,9 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       idt_he = out_half_edges(nv, idt.faces);  // its twins are idt.twin
       lap_faces = &idt.faces;
       lap_he = &idt_he;
-      const bool solves = !options.first_solve || options.stretch_iterations > 0;
-      if (options.cholesky_ordering && is_permutation_of(*options.cholesky_ordering, ni))
-        cholesky.ordering = options.cholesky_ordering;
+      const bool solves = !plain_uv_given || options.stretch_iterations > 0;
+      if (options.plain && is_permutation_of(options.plain->cholesky_ordering, ni))
+        cholesky.ordering = &options.plain->cholesky_ordering;
       if (solves && !cholesky.ordering && ni >= kEarlyAnalysisRows && !inside_parallel_loop() &&
           thread_count(0, context) > 1) {
         // The lower triangle's pattern as the assembly below makes it (same entries, same order).
@@ -736,8 +737,8 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       use_cholesky = false;
       solve_once(ww, false);
     };
-    if (options.first_solve && options.first_solve->size() == pos.size() && options.pinned.empty())
-      result.uv = *options.first_solve;
+    if (plain_uv_given)
+      result.uv = options.plain->uv;
     else
       solve_with(w);
 

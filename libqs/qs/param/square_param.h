@@ -46,6 +46,18 @@ enum class InteriorWeights {
   IntrinsicCotan,
 };
 
+/// What a plain solve of a patch (no pins, no stretch rounds) leaves for a later call on the same
+/// patch with the same weights (SquareParamOptions::plain).
+struct PlainSolve {
+  /// Its map: taken as the first solve (stretch minimization starts from it) when it has one uv
+  /// per vertex and there are no pins; otherwise ignored.
+  std::vector<Vec2> uv;
+  /// Its Cholesky ordering (SquareParam::cholesky_ordering; cotangent weights): the analysis takes
+  /// it instead of ordering the system again (the same factor). Ignored unless it is a permutation
+  /// of the interior vertices.
+  std::vector<int> cholesky_ordering;
+};
+
 struct SquareParamOptions {
   double min_edge_length = 1e-12;  ///< shorter 3D edges get this length in the weights (> 0)
   /// Border spacing floor, relative: on each side, every border edge counts as at least this
@@ -63,14 +75,9 @@ struct SquareParamOptions {
   /// bijective map is kept. 0: the plain mean-value map.
   int stretch_iterations = 0;
   InteriorWeights weights = InteriorWeights::MeanValue;
-  /// The map of the first solve when the caller has it already: a previous call's uv on the same
-  /// patch with the same weights, without pins or rounds. With one uv per vertex and no pins it
-  /// is taken instead of solving again (stretch minimization starts from it); otherwise ignored.
-  const std::vector<Vec2>* first_solve = nullptr;
-  /// The Cholesky ordering of a previous call on the same patch with the same weights
-  /// (SquareParam::cholesky_ordering): the analysis takes it instead of ordering the system again
-  /// (the same factor). Ignored unless it is a permutation of the interior vertices.
-  const std::vector<int>* cholesky_ordering = nullptr;
+  /// A previous plain solve of the same patch with the same weights, when the caller has one:
+  /// its map is taken instead of solving again and its ordering instead of ordering again.
+  const PlainSolve* plain = nullptr;
 };
 
 /// A UV face with |signed area| <= this counts as zero-area (and neither as flipped).
@@ -85,7 +92,7 @@ struct SquareParam {
   int intrinsic_flips = 0;  ///< edge flips to the intrinsic Delaunay triangulation (IntrinsicCotan)
   InteriorWeights weights = InteriorWeights::MeanValue;  ///< the weights the map was solved with
   /// The ordering of the Cholesky factorizations (cotangent weights), for a later call on the
-  /// same patch (SquareParamOptions::cholesky_ordering); empty when none ran.
+  /// same patch (PlainSolve::cholesky_ordering); empty when none ran.
   std::vector<int> cholesky_ordering;
   bool bijective() const { return flipped_faces == 0 && zero_area_faces == 0; }
 };
