@@ -28,6 +28,7 @@ using qs::test::read_bytes;
 using qs::test::snapshot;
 
 namespace {
+
 // A shell word for `s` (names with any bytes).
 std::string quoted(const fs::path& p) {
   std::string q = "'";

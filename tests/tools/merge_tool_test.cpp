@@ -24,6 +24,7 @@ using ::testing::Not;
 using qs::test::read_bytes;
 
 namespace {
+
 class MergeTool : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

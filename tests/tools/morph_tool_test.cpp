@@ -27,6 +27,7 @@ using ::testing::HasSubstr;
 using qs::test::read_bytes;
 
 namespace {
+
 int count_frames(const fs::path& dir) {
   int n = 0;
   if (!fs::exists(dir)) return 0;

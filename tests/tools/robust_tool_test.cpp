@@ -29,6 +29,7 @@ using qs::test::snapshot;
 using qs::test::scaled;
 
 namespace {
+
 void write_bytes(const fs::path& p, const std::string& s) {
   std::ofstream f(p, std::ios::binary);
   f << s;
@@ -51,6 +52,7 @@ void expect_clean_failure(const RunResult& r, int code, const std::string& part)
     EXPECT_THAT(r.out, HasSubstr(part));
   }
 }
+
 }  // namespace
 
 class RobustTool : public ::testing::Test {
