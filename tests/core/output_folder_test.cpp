@@ -10,9 +10,12 @@
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/core/output_folder.h"
+#include "../common/test_support.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+
+using qs::test::read_bytes;
 
 namespace {
 
@@ -26,10 +29,6 @@ class OutputFolderTest : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
-  static std::string read(const fs::path& p) {
-    std::ifstream f(p);
-    return std::string(std::istreambuf_iterator<char>(f), {});
-  }
   static void write(const fs::path& p, const std::string& s) { std::ofstream(p) << s; }
   int entries() const { return static_cast<int>(std::distance(fs::directory_iterator(dir_), {})); }
   fs::path dir_;
@@ -43,7 +42,7 @@ TEST_F(OutputFolderTest, NewFolderAppearsOnlyOnCommit) {
     EXPECT_FALSE(fs::exists(target));
     f.commit();
   }
-  EXPECT_EQ(read(target / "x.txt"), "x");
+  EXPECT_EQ(read_bytes(target / "x.txt"), "x");
   EXPECT_EQ(std::distance(fs::directory_iterator(target.parent_path()), {}), 1);  // no staging left
 }
 
@@ -66,11 +65,11 @@ TEST_F(OutputFolderTest, ExistingFolderKeepsOtherFilesAndGetsTheNewOnes) {
   {
     qs::OutputFolder f(target);
     qs::write_file_atomically(f.staging() / "x.txt", "new");
-    EXPECT_EQ(read(target / "x.txt"), "old");  // untouched until commit
+    EXPECT_EQ(read_bytes(target / "x.txt"), "old");  // untouched until commit
     f.commit();
   }
-  EXPECT_EQ(read(target / "x.txt"), "new");
-  EXPECT_EQ(read(target / "keep.txt"), "keep");
+  EXPECT_EQ(read_bytes(target / "x.txt"), "new");
+  EXPECT_EQ(read_bytes(target / "keep.txt"), "keep");
   EXPECT_EQ(entries(), 1);
 }
 
@@ -93,7 +92,7 @@ TEST_F(OutputFolderTest, TargetsThatCannotBeFoldersAreIoErrors) {
   write(dir_ / "file", "f");
   EXPECT_THROW(qs::OutputFolder(dir_ / "file"), qs::IoError);
   EXPECT_THROW(qs::OutputFolder(dir_ / "file" / "sub"), qs::IoError);
-  EXPECT_EQ(read(dir_ / "file"), "f");
+  EXPECT_EQ(read_bytes(dir_ / "file"), "f");
   EXPECT_EQ(entries(), 1);
 }
 

@@ -14,8 +14,11 @@
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/core/output_folder.h"
+#include "../common/test_support.h"
 
 namespace fs = std::filesystem;
+
+using qs::test::read_bytes;
 
 namespace {
 
@@ -33,10 +36,6 @@ class StagingTest : public ::testing::Test {
       ::waitpid(p, nullptr, 0);
     }
     fs::remove_all(dir_);
-  }
-  static std::string read(const fs::path& p) {
-    std::ifstream f(p);
-    return std::string(std::istreambuf_iterator<char>(f), {});
   }
   // A child process that runs until killed.
   pid_t live_child() {
@@ -98,7 +97,7 @@ TEST_F(StagingTest, AKilledRunsStagingFolderIsRemovedByTheNextRun) {
     EXPECT_FALSE(fs::exists(staged(target, child)));
     f.commit();
   }
-  EXPECT_EQ(read(target / "x.txt"), "x");
+  EXPECT_EQ(read_bytes(target / "x.txt"), "x");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), {}), 1);
 }
 
@@ -143,9 +142,9 @@ TEST_F(StagingTest, AtomicFilesRemoveTheTemporaryFilesOfGoneProcesses) {
   std::ofstream(staged(file, live)) << "being written";
   std::ofstream(staged(dir_ / "y.txt", gone)) << "another file's";
   qs::write_file_atomically(file, "whole");
-  EXPECT_EQ(read(file), "whole");
+  EXPECT_EQ(read_bytes(file), "whole");
   EXPECT_FALSE(fs::exists(staged(file, gone)));
-  EXPECT_EQ(read(staged(file, live)), "being written");
+  EXPECT_EQ(read_bytes(staged(file, live)), "being written");
   EXPECT_TRUE(fs::exists(staged(dir_ / "y.txt", gone)));
   // A folder of that name is an OutputFolder's, not a file's: left alone.
   const pid_t gone2 = dead_pid();
@@ -167,13 +166,13 @@ TEST_F(StagingTest, FilesBesideOthersAreStagedInsideTheFolder) {
     EXPECT_FALSE(fs::exists(staged(folder / "out.obj", gone)));
     qs::write_file_atomically(f.staging() / "out.obj", "new");
     qs::write_file_atomically(f.staging() / "out.map.json", "{}");
-    EXPECT_EQ(read(folder / "out.obj"), "old");
+    EXPECT_EQ(read_bytes(folder / "out.obj"), "old");
     EXPECT_FALSE(fs::exists(folder / "out.map.json"));
     f.commit();
   }
-  EXPECT_EQ(read(folder / "out.obj"), "new");
-  EXPECT_EQ(read(folder / "out.map.json"), "{}");
-  EXPECT_EQ(read(folder / "input.obj"), "input");
+  EXPECT_EQ(read_bytes(folder / "out.obj"), "new");
+  EXPECT_EQ(read_bytes(folder / "out.map.json"), "{}");
+  EXPECT_EQ(read_bytes(folder / "input.obj"), "input");
   EXPECT_EQ(std::distance(fs::directory_iterator(folder), {}), 3);
   // A failed run into a folder it had to create leaves nothing, not even the folder.
   try {

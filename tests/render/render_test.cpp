@@ -18,12 +18,15 @@
 #include "qs/render/render.h"
 #include "../tools/tool_runner.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 namespace fs = std::filesystem;
 using qs::render::Image;
 using qs::render::RenderOptions;
 using qs::render::Rgb;
 using ::testing::HasSubstr;
+
+using qs::test::read_bytes;
 
 namespace {
 
@@ -33,11 +36,6 @@ Rgb pixel(const Image& img, int x, int y) {
 }
 
 bool is_white(const Rgb& c) { return c[0] == 255 && c[1] == 255 && c[2] == 255; }
-
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 class RenderFiles : public ::testing::Test {
  protected:

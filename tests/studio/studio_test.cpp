@@ -23,6 +23,7 @@
 #include "qs/studio/server.h"
 #include "qs/studio/studio.h"
 #include "studio_requests.h"
+#include "../common/test_support.h"
 
 // After Eigen (through qs/core/mesh.h): httplib pulls in <resolv.h>, whose `_res` macro breaks
 // Eigen's headers.
@@ -34,6 +35,8 @@ using namespace qs::studio;
 using qs::studio::test::error_of;
 using qs::studio::test::get;
 using qs::studio::test::post;
+
+using qs::test::read_bytes;
 
 namespace {
 
@@ -50,12 +53,6 @@ struct TempDir {
 };
 
 void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// Every entry under dir: path -> contents (files), link target (links) or "<dir>".
 std::map<std::string, std::string> snapshot(const fs::path& dir) {
@@ -68,7 +65,7 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
     } else if (it->is_directory()) {
       out[rel] = "<dir>";
     } else {
-      out[rel] = read_text(it->path());
+      out[rel] = read_bytes(it->path());
     }
   }
   return out;
@@ -294,7 +291,7 @@ TEST(Studio, SavesLandmarksThatQsReadsBackExactly) {
   body["features"] = json::object();
   r = studio.handle(post("/api/landmarks", {{"name", "sphere.obj"}}, body.dump()));
   ASSERT_EQ(r.status, 200) << r.body;
-  EXPECT_EQ(json::parse(read_text(file))["features"].size(), 0u);
+  EXPECT_EQ(json::parse(read_bytes(file))["features"].size(), 0u);
 }
 
 TEST(Studio, LoadsMeshLabPickedPoints) {
@@ -363,10 +360,10 @@ TEST(Studio, SeedLoopPreviewJoinsTheSeeds) {
 TEST(Studio, UploadsAMesh) {
   Fixture fx;
   Studio studio(fx.options());
-  const std::string obj = read_text(fx.outside / "secret.obj");
+  const std::string obj = read_bytes(fx.outside / "secret.obj");
   const Response r = studio.handle(post("/api/upload", {{"name", "new.obj"}}, obj));
   EXPECT_EQ(r.status, 201) << r.body;
-  EXPECT_EQ(read_text(fx.root / "new.obj"), obj);
+  EXPECT_EQ(read_bytes(fx.root / "new.obj"), obj);
 }
 
 TEST(StudioRun, RunsThePipelineOneRunAtATime) {

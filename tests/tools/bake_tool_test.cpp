@@ -14,16 +14,14 @@
 #include "qs/shapes/shapes.h"
 #include "tool_runner.h"
 #include "../common/gltf_test_support.h"
+#include "../common/test_support.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-namespace {
+using qs::test::read_bytes;
 
-std::string read_all(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+namespace {
 
 int count_files(const fs::path& dir) {
   if (!fs::exists(dir)) return 0;
@@ -57,9 +55,9 @@ TEST_F(BakeTool, WritesMapsGlbAndReport) {
   EXPECT_THAT(r.out, HasSubstr("with the map"));
   for (const char* f : {"bumpy_normal.png", "bumpy_normal16.png", "bumpy_normal.exr", "bumpy.glb", "bake.json"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
-  EXPECT_EQ(read_all(out / "bumpy_normal.png").substr(1, 3), "PNG");
-  EXPECT_EQ(read_all(out / "bumpy.glb").substr(0, 4), "glTF");
-  const auto j = nlohmann::json::parse(read_all(out / "bake.json"));
+  EXPECT_EQ(read_bytes(out / "bumpy_normal.png").substr(1, 3), "PNG");
+  EXPECT_EQ(read_bytes(out / "bumpy.glb").substr(0, 4), "glTF");
+  const auto j = nlohmann::json::parse(read_bytes(out / "bake.json"));
   EXPECT_EQ(j["format"], "qs-bake");
   EXPECT_EQ(j["options"]["space"], "tangent");
   EXPECT_EQ(j["options"]["green"], "opengl");
@@ -81,8 +79,8 @@ TEST_F(BakeTool, WritesMapsGlbAndReport) {
   ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --tiles uniform -q --threads 1 -o " +
                                     again.string()).exit,
             0);
-  EXPECT_EQ(read_all(out / "bumpy_normal.png"), read_all(again / "bumpy_normal.png"));
-  EXPECT_EQ(read_all(out / "bumpy.glb"), read_all(again / "bumpy.glb"));
+  EXPECT_EQ(read_bytes(out / "bumpy_normal.png"), read_bytes(again / "bumpy_normal.png"));
+  EXPECT_EQ(read_bytes(out / "bumpy.glb"), read_bytes(again / "bumpy.glb"));
 }
 
 TEST_F(BakeTool, TilesSizedByAreaByDefault) {
@@ -90,7 +88,7 @@ TEST_F(BakeTool, TilesSizedByAreaByDefault) {
   const RunResult r = run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --samples 20000 -o " + out.string());
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("tiles sized by area"));
-  const auto j = nlohmann::json::parse(read_all(out / "bake.json"));
+  const auto j = nlohmann::json::parse(read_bytes(out / "bake.json"));
   EXPECT_EQ(j["options"]["tiles"], "area");
   const auto& a = j["atlas"];
   EXPECT_EQ(a["layout"], "shelves");
@@ -110,12 +108,12 @@ TEST_F(BakeTool, TilesSizedByAreaByDefault) {
   const auto& m = j["meshes"][0];
   EXPECT_LT(m["shading"]["mean_deg_with_map"].get<double>(), 1.5);
   ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --samples 0 --tiles uniform -q -o " + grid.string()).exit, 0);
-  const auto g = nlohmann::json::parse(read_all(grid / "bake.json"));
+  const auto g = nlohmann::json::parse(read_bytes(grid / "bake.json"));
   EXPECT_EQ(g["atlas"]["layout"], "grid");
   EXPECT_LE(m["texel_density"]["spread"].get<double>(), g["meshes"][0]["texel_density"]["spread"].get<double>());
   ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 32 --gutter 3 --samples 20000 -q -o " + again.string()).exit, 0);
-  EXPECT_EQ(read_all(out / "bumpy_normal.png"), read_all(again / "bumpy_normal.png"));
-  EXPECT_EQ(read_all(out / "bumpy.glb"), read_all(again / "bumpy.glb"));
+  EXPECT_EQ(read_bytes(out / "bumpy_normal.png"), read_bytes(again / "bumpy_normal.png"));
+  EXPECT_EQ(read_bytes(out / "bumpy.glb"), read_bytes(again / "bumpy.glb"));
   EXPECT_EQ(run_tool("qs-bake", remesh().string() + " --tiles square -q -o " + (dir_ / "bad").string()).exit, 1);
 }
 
@@ -134,14 +132,14 @@ TEST_F(BakeTool, DirectXAndObjectSpace) {
   ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 16 -q -o " + gl.string()).exit, 0);
   const RunResult r = run_tool("qs-bake", remesh().string() + " --size 16 --green directx -q -o " + dx.string());
   ASSERT_EQ(r.exit, 0) << r.out;
-  EXPECT_NE(read_all(gl / "bumpy_normal.png"), read_all(dx / "bumpy_normal.png"));
-  const auto jg = nlohmann::json::parse(read_all(gl / "bake.json")), jd = nlohmann::json::parse(read_all(dx / "bake.json"));
+  EXPECT_NE(read_bytes(gl / "bumpy_normal.png"), read_bytes(dx / "bumpy_normal.png"));
+  const auto jg = nlohmann::json::parse(read_bytes(gl / "bake.json")), jd = nlohmann::json::parse(read_bytes(dx / "bake.json"));
   EXPECT_EQ(jd["options"]["green"], "directx");
   // The check decodes each map with its own convention: both restore the detail equally well.
   EXPECT_NEAR(jd["meshes"][0]["shading"]["mean_deg_with_map"].get<double>(),
               jg["meshes"][0]["shading"]["mean_deg_with_map"].get<double>(), 0.05);
   ASSERT_EQ(run_tool("qs-bake", remesh().string() + " --size 16 --space object -q -o " + os.string()).exit, 0);
-  const auto jo = nlohmann::json::parse(read_all(os / "bake.json"));
+  const auto jo = nlohmann::json::parse(read_bytes(os / "bake.json"));
   EXPECT_EQ(jo["meshes"][0]["glb_normal_texture"], false);
   EXPECT_LT(jo["meshes"][0]["shading"]["mean_deg_with_map"].get<double>(), 1.5);
 }

@@ -14,10 +14,13 @@
 
 #include "../common/shared_meshes.h"
 #include "tool_runner.h"
+#include "../common/test_support.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
+
+using qs::test::read_bytes;
 
 namespace {
 
@@ -32,10 +35,6 @@ class CorrespondenceTool : public ::testing::Test {
   std::string d() const { return dir_.string(); }
   std::string mesh(int i) const { return d() + "/shape0" + std::to_string(i) + ".obj"; }
   static fs::path shared_meshes() { return qs::testing::shared_meshes_dir(); }
-  static std::string read_text(const std::string& path) {
-    std::ifstream in(path);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  }
   // The shared camel and its re-tessellation (written to `out`_r.obj with its map and landmarks)
   // with the seeds of the camel tests and `features` (JSON): qs-dissect's arguments for the pair.
   std::string camel_self_pair(const std::string& out, const std::string& features) const {
@@ -50,7 +49,7 @@ class CorrespondenceTool : public ::testing::Test {
     const RunResult r =
         run_tool("qs-dissect", camel_self_pair(out, features) + " -o " + out + " --report " + out + ".txt");
     EXPECT_EQ(r.exit, 0) << r.out;
-    return read_text(out + ".txt");
+    return read_bytes(out + ".txt");
   }
   // The dissection `out` of camel_self_pair against the exact map: qs-metro's "dissection" figures.
   static nlohmann::json camel_error(const std::string& out) {
@@ -333,7 +332,7 @@ TEST_F(CorrespondenceTool, SamePoseUntanglesFoldedTakeOvers) {
   if (!fs::exists(shared_meshes() / "camel_4k_fixed.obj"))
     GTEST_SKIP() << "no camel_4k_fixed.obj (the shared test meshes)";
   const std::string out = d() + "/camel", pair = camel_self_pair(out, R"({"fa": 743, "fb": 400})");
-  auto report = [&](const std::string& name) { return read_text(out + name + ".txt"); };
+  auto report = [&](const std::string& name) { return read_bytes(out + name + ".txt"); };
   // Untangled (the default): the pose holds and the map is close to the identity.
   RunResult r = run_tool("qs-dissect", pair + " -o " + out + " --report " + out + ".txt");
   ASSERT_EQ(r.exit, 0) << r.out;
@@ -393,7 +392,7 @@ TEST_F(CorrespondenceTool, SamePoseFallsBackToOldMapsBeforeGivingUpThePose) {
 // any spelling or through a link, is refused before any work, and the input is left as it was.
 TEST_F(CorrespondenceTool, RefusesAnOutputThatIsAnInput) {
   ASSERT_EQ(run_tool("qs-dissect", mesh(0) + " " + mesh(1) + " --quiet -o " + d() + "/pair").exit, 0);
-  const std::string json = read_text(d() + "/pair/dissection.json"), map = read_text(d() + "/shape01.map.json");
+  const std::string json = read_bytes(d() + "/pair/dissection.json"), map = read_bytes(d() + "/shape01.map.json");
   fs::create_symlink(dir_ / "pair" / "dissection.json", dir_ / "link.json");
   for (const std::string& out :
        {d() + "/pair/dissection.json", d() + "/pair/./dissection.json", d() + "/pair/../pair/dissection.json",
@@ -407,8 +406,8 @@ TEST_F(CorrespondenceTool, RefusesAnOutputThatIsAnInput) {
                                                 "/maps -o " + d() + "/maps/shape00_to_shape01.error.ply");
   EXPECT_EQ(em.exit, 1) << em.out;
   EXPECT_FALSE(fs::exists(d() + "/maps"));
-  EXPECT_EQ(read_text(d() + "/pair/dissection.json"), json);
-  EXPECT_EQ(read_text(d() + "/shape01.map.json"), map);
+  EXPECT_EQ(read_bytes(d() + "/pair/dissection.json"), json);
+  EXPECT_EQ(read_bytes(d() + "/shape01.map.json"), map);
 }
 
 // The error-map folder is staged and moved into place only after every pair was measured and the
@@ -427,7 +426,7 @@ TEST_F(CorrespondenceTool, ErrorMapsAreCommittedOnlyWithTheReport) {
                                                 "/maps -o " + d() + "/r.txt");
   ASSERT_EQ(ok.exit, 0) << ok.out;
   EXPECT_TRUE(fs::exists(d() + "/maps/shape00_to_shape01.error.ply"));
-  EXPECT_THAT(read_text(d() + "/r.txt"), HasSubstr("error map: "));
+  EXPECT_THAT(read_bytes(d() + "/r.txt"), HasSubstr("error map: "));
 }
 
 TEST_F(CorrespondenceTool, NonFiniteErrorScaleIsAUsageError) {
@@ -454,7 +453,7 @@ TEST_F(CorrespondenceTool, NamesThatAreNotUtf8AreReportedCleanly) {
   RunResult r = run_tool("qs-metro", "--correspondence " + q + "/pair --samples 1000 --json --worst 2 --error-map " +
                                          q + "/maps -o " + d() + "/r.json");
   ASSERT_EQ(r.exit, 0) << r.out;
-  const auto doc = nlohmann::json::parse(read_text(d() + "/r.json"));  // valid UTF-8 JSON
+  const auto doc = nlohmann::json::parse(read_bytes(d() + "/r.json"));  // valid UTF-8 JSON
   EXPECT_EQ(doc["dissection"], d() + "/f\xEF\xBF\xBD/pair");
   EXPECT_EQ(doc["pairs"][0]["b"], d() + "/f\xEF\xBF\xBD/shape01.obj");
   EXPECT_TRUE(fs::exists(odd / "maps" / "shape00_to_shape01.error.ply"));
@@ -475,11 +474,11 @@ TEST_F(CorrespondenceTool, RefusesToWriteOverTheReferenceOfSurfaceMaps) {
     ASSERT_EQ(run_tool("qs-family", "retessellate " + mesh(1) + " --faces " + (r[1] == '1' ? "1200" : "1400") +
                                         " -q -o " + d() + "/" + r + ".obj").exit, 0);
   ASSERT_EQ(run_tool("qs-dissect", d() + "/r1.obj " + d() + "/r2.obj -q -o " + d() + "/pair").exit, 0);
-  const std::string before = read_text(mesh(1));
+  const std::string before = read_bytes(mesh(1));
   const RunResult r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + mesh(1));
   EXPECT_EQ(r.exit, 1) << r.out;
   EXPECT_THAT(r.out, HasSubstr("is an input of this run"));
-  EXPECT_EQ(read_text(mesh(1)), before);
+  EXPECT_EQ(read_bytes(mesh(1)), before);
   EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 1000 -o " + d() + "/ok.txt").exit, 0);
 }
 

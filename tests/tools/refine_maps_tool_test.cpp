@@ -9,19 +9,15 @@
 #include <string>
 
 #include "tool_runner.h"
+#include "../common/test_support.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-namespace {
+using qs::test::read_bytes;
 
-std::string bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+namespace {
 
 class RefineMapsTool : public ::testing::Test {
  protected:
@@ -52,12 +48,12 @@ class RefineMapsTool : public ::testing::Test {
     // "plain": the refinement inside the patches only.
     EXPECT_EQ(run_tool("qs-dissect", pair() + inside_only() + " --quiet -o " + d() + "/plain").exit, 0);
     const fs::path out = dir_ / name;
-    EXPECT_EQ(bytes(out / "shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
+    EXPECT_EQ(read_bytes(out / "shape00.chart.ply"), read_bytes(dir_ / "plain/shape00.chart.ply"));
     // The cuts add vertices and faces to the refined mesh's chart.
-    EXPECT_GT(bytes(out / "shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
+    EXPECT_GT(read_bytes(out / "shape01.chart.ply").size(), read_bytes(dir_ / "plain/shape01.chart.ply").size());
     EXPECT_EQ(run_tool("qs-dissect", pair() + " " + flags + " --quiet -o " + d() + "/" + name + "2").exit, 0);
-    EXPECT_EQ(bytes(out / "shape01.chart.ply"), bytes(dir_ / (name + "2") / "shape01.chart.ply"));
-    EXPECT_EQ(bytes(out / "dissection.json"), bytes(dir_ / (name + "2") / "dissection.json"));
+    EXPECT_EQ(read_bytes(out / "shape01.chart.ply"), read_bytes(dir_ / (name + "2") / "shape01.chart.ply"));
+    EXPECT_EQ(read_bytes(out / "dissection.json"), read_bytes(dir_ / (name + "2") / "dissection.json"));
     r = run_tool("qs-remesh", d() + "/" + name + " --level 3 -q -o " + d() + "/" + name + "-remesh");
     EXPECT_EQ(r.exit, 0) << r.out;
     r = run_tool("qs-merge", d() + "/" + name + " -o " + d() + "/" + name + "-merge");
@@ -81,13 +77,13 @@ TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
   EXPECT_THAT(r.out, HasSubstr(", refine maps "));
   ASSERT_EQ(run_tool("qs-dissect", pair() + " --no-refine-maps --quiet -o " + d() + "/plain").exit, 0);
   // The reference's chart is the plain one; the other mesh's differs (same size: same format).
-  EXPECT_EQ(bytes(dir_ / "ref/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
-  EXPECT_NE(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "plain/shape01.chart.ply"));
-  EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply").size(), bytes(dir_ / "plain/shape01.chart.ply").size());
+  EXPECT_EQ(read_bytes(dir_ / "ref/shape00.chart.ply"), read_bytes(dir_ / "plain/shape00.chart.ply"));
+  EXPECT_NE(read_bytes(dir_ / "ref/shape01.chart.ply"), read_bytes(dir_ / "plain/shape01.chart.ply"));
+  EXPECT_EQ(read_bytes(dir_ / "ref/shape01.chart.ply").size(), read_bytes(dir_ / "plain/shape01.chart.ply").size());
   // Same input, same bytes.
   ASSERT_EQ(run_tool("qs-dissect", pair() + inside_only() + " --quiet -o " + d() + "/ref2").exit, 0);
-  EXPECT_EQ(bytes(dir_ / "ref/shape01.chart.ply"), bytes(dir_ / "ref2/shape01.chart.ply"));
-  EXPECT_EQ(bytes(dir_ / "ref/dissection.json"), bytes(dir_ / "ref2/dissection.json"));
+  EXPECT_EQ(read_bytes(dir_ / "ref/shape01.chart.ply"), read_bytes(dir_ / "ref2/shape01.chart.ply"));
+  EXPECT_EQ(read_bytes(dir_ / "ref/dissection.json"), read_bytes(dir_ / "ref2/dissection.json"));
   // The refinement across the patch borders too is the default for a set: no option is
   // refine_maps and refine_across_borders true, byte for byte, and the cuts add to the chart.
   r = run_tool("qs-dissect", pair() + " -o " + d() + "/default");
@@ -97,10 +93,10 @@ TEST_F(RefineMapsTool, RefinesWritesTheSameFormatAndIsDeterministic) {
                                        " --quiet -o " + d() + "/both")
                 .exit,
             0);
-  EXPECT_EQ(bytes(dir_ / "both/shape01.chart.ply"), bytes(dir_ / "default/shape01.chart.ply"));
-  EXPECT_EQ(bytes(dir_ / "both/dissection.json"), bytes(dir_ / "default/dissection.json"));
-  EXPECT_EQ(bytes(dir_ / "default/shape00.chart.ply"), bytes(dir_ / "plain/shape00.chart.ply"));
-  EXPECT_GT(bytes(dir_ / "default/shape01.chart.ply").size(), bytes(dir_ / "ref/shape01.chart.ply").size());
+  EXPECT_EQ(read_bytes(dir_ / "both/shape01.chart.ply"), read_bytes(dir_ / "default/shape01.chart.ply"));
+  EXPECT_EQ(read_bytes(dir_ / "both/dissection.json"), read_bytes(dir_ / "default/dissection.json"));
+  EXPECT_EQ(read_bytes(dir_ / "default/shape00.chart.ply"), read_bytes(dir_ / "plain/shape00.chart.ply"));
+  EXPECT_GT(read_bytes(dir_ / "default/shape01.chart.ply").size(), read_bytes(dir_ / "ref/shape01.chart.ply").size());
   // The later stages consume it unchanged.
   r = run_tool("qs-remesh", d() + "/ref --level 3 -q -o " + d() + "/remesh");
   EXPECT_EQ(r.exit, 0) << r.out;
@@ -152,13 +148,13 @@ TEST_F(RefineMapsTool, RefineBeforeSplitIsTheDeterministicDefaultAndCanBeTurnedO
   const std::string flags = config("rbs", R"({"refine_before_split": true})");
   EXPECT_EQ(run_tool("qs-dissect", pair() + flags + " --quiet -o " + d() + "/rbs2").exit, 0);
   for (const char* f : {"shape00.chart.ply", "shape01.chart.ply", "dissection.json"})
-    EXPECT_EQ(bytes(dir_ / "rbs" / f), bytes(dir_ / "rbs2" / f)) << f;
+    EXPECT_EQ(read_bytes(dir_ / "rbs" / f), read_bytes(dir_ / "rbs2" / f)) << f;
   r = run_tool("qs-metro", "--correspondence " + d() + "/rbs --samples 5000");
   EXPECT_EQ(r.exit, 0) << r.out;
   r = run_tool("qs-dissect", pair() + config("own", R"({"refine_before_split": false})") + " -o " + d() + "/own");
   EXPECT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, Not(HasSubstr("refine before split")));
-  EXPECT_NE(bytes(dir_ / "rbs" / "shape01.chart.ply"), bytes(dir_ / "own" / "shape01.chart.ply"));
+  EXPECT_NE(read_bytes(dir_ / "rbs" / "shape01.chart.ply"), read_bytes(dir_ / "own" / "shape01.chart.ply"));
   r = run_tool("qs-dissect", pair() + config("bad", R"({"refine_before_split_metric": "face"})") + " -o " + d() +
                                  "/bad");
   EXPECT_EQ(r.exit, 1) << r.out;

@@ -9,13 +9,13 @@
 
 namespace qs::param {
 
+/// Whether `order` holds each of 0 .. n-1 once (an ordering analyze() accepts for n rows).
+bool is_permutation_of(const std::vector<int>& order, int n);
+
 /// A = L L^T for a symmetric positive definite sparse matrix, its rows and columns ordered by AMD,
 /// or by nested dissection when each row has a point (a mesh vertex's position: rows of one
 /// vertex at one point). analyze() once per sparsity pattern, then factorize() for each set of
 /// values with that pattern, then solve(). Deterministic: the same input gives the same bits.
-/// Whether `order` holds each of 0 .. n-1 once (an ordering analyze() accepts for n rows).
-bool is_permutation_of(const std::vector<int>& order, int n);
-
 class SupernodalCholesky {
  public:
   /// The ordering and the supernodes of `lower`'s pattern. \pre square; only the lower triangle
