@@ -127,6 +127,21 @@ TEST_P(GreatCircles, StraightenedCurvesFollowTheGreatCirclesAndAreShorter) {
 
 INSTANTIATE_TEST_SUITE_P(TwoTessellations, GreatCircles, ::testing::Values(0, 1));
 
+TEST(GeodesicLoop, ItsCutMeshIsTheRefinedMeshBuiltAfresh) {
+  const TriMesh m = qs::shapes::icosphere(4);
+  const GeodesicLoop g = qs::dissect::straighten_seed_loop(m, qs::dissect::trace_seed_loop(m, tilted_seeds(m)));
+  ASSERT_TRUE(g.any_straightened());
+  ASSERT_TRUE(g.cut.has_value());
+  const qs::dissect::CutMesh fresh(g.mesh);
+  const qs::dissect::CutMesh& cut = *g.cut;
+  EXPECT_EQ(cut.positions(), fresh.positions());
+  ASSERT_EQ(cut.faces(), fresh.faces());
+  for (int h = 0; h < 3 * fresh.num_faces(); ++h) ASSERT_EQ(cut.opposite(h), fresh.opposite(h)) << "half-edge " << h;
+  // The straightening's splits leave other out-half-edges than a fresh build; reset() restores them.
+  for (int v = 0; v < fresh.num_vertices(); ++v) ASSERT_EQ(cut.out_halfedge(v), fresh.out_halfedge(v)) << "vertex " << v;
+  EXPECT_EQ(cut.face_patches(), fresh.face_patches());
+}
+
 TEST(GeodesicLoop, AvoidedVerticesKeepTheirSideAndAreNeverOnTheLoop) {
   const TriMesh m = qs::shapes::bumpy_sphere(0.2, 5, 4);
   const auto seeds = tilted_seeds(m);

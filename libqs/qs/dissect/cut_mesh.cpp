@@ -51,6 +51,13 @@ CutMesh::CutMesh(const TriMesh& mesh) : positions_(mesh.positions), faces_(mesh.
       throw InvalidInput("cut mesh: vertex " + std::to_string(v) + " is used by no face");
 }
 
+void CutMesh::reset() {
+  if (journal_.on) throw InternalError("cut mesh: reset with a checkpoint pending");
+  // The constructor's choice: the last half-edge leaving each vertex (the pairing is unique).
+  for (int h = 0; h < 3 * num_faces(); ++h) vertex_halfedge_[tail(h)] = h;
+  std::fill(face_patch_.begin(), face_patch_.end(), 0);
+}
+
 int CutMesh::find_halfedge(int a, int b) const {
   const int start = vertex_halfedge_[a];
   int h = start;

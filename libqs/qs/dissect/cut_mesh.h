@@ -46,6 +46,9 @@ class CutMesh {
   int split_face(int f, const Vec3& bary);
 
   TriMesh to_trimesh() const { return {positions_, faces_}; }
+  /// Makes the mesh what CutMesh(to_trimesh()) builds (the same out-half-edges, every patch label
+  /// 0) without pairing its half-edges again. \pre no checkpoint() pending.
+  void reset();
 
   /// Starts recording the splits, so that rollback() can undo them without a copy of the mesh.
   void checkpoint();

@@ -476,7 +476,11 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
   result.inserted_vertices = refined.num_vertices() - mesh.num_vertices();
   result.mesh = std::move(refined);
   result.loop = std::move(cur);
-  if (result.any_straightened()) result.face_patches = std::move(face_patches);
+  if (result.any_straightened()) {
+    result.face_patches = std::move(face_patches);
+    cm.reset();
+    result.cut = std::move(cm);
+  }
   for (int i = 0; i < 4; ++i) result.length_after[i] = path_length_of(result.mesh.positions, result.loop.paths[i]);
   return result;
 }

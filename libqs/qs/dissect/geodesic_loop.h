@@ -4,11 +4,13 @@
 // same curve for any tessellation of a surface, not a zig-zag along whichever edges it has.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
+#include "qs/dissect/cut_mesh.h"
 #include "qs/dissect/seed_loop.h"
 
 namespace qs::dissect {
@@ -36,6 +38,8 @@ struct GeodesicLoop {
   int inserted_vertices = 0;
   /// seed_patch_of_faces(mesh, loop) where a curve was straightened (empty otherwise).
   std::vector<int> face_patches;
+  /// `mesh` as CutMesh(mesh) builds it, where a curve was straightened (empty otherwise).
+  std::optional<CutMesh> cut;
   /// Whether any curve was straightened (else `mesh` and `loop` are the input's).
   bool any_straightened() const { return straightened[0] || straightened[1] || straightened[2] || straightened[3]; }
 };

@@ -214,7 +214,7 @@ std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoo
       tm = std::move(g.mesh);
       loop = std::move(g.loop);
       side = std::move(g.face_patches);
-      cm_ = CutMesh(tm);
+      cm_ = g.cut ? std::move(*g.cut) : CutMesh(tm);
       grow();
       feature_of_.resize(cm_.num_vertices(), -1);
     }

@@ -519,7 +519,10 @@ DissectionSet SetDissector::run() {
       }
     }
     opt_.replace_seed_loops(g);
-    for (auto& gi : g) gi.face_patches.clear();  // the hook may have changed the loops
+    for (auto& gi : g) {  // the hook may have changed the loops
+      gi.face_patches.clear();
+      gi.cut.reset();
+    }
     for (size_t i = 0; i < nm; ++i) {
       loops[i] = g[i].loop;
       if (opt_.geodesic_seed_curves) straightened[i] = std::move(g[i]);
