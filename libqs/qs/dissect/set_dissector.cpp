@@ -643,7 +643,7 @@ DissectionSet SetDissector::run() {
     } else if (any_over && node.depth < depth_limit && biggest_over >= opt_.min_faces_to_split) {
       const size_t first_new_label = meshes_[0].labels();
       const auto [peak, w] = choose_split(node, ps, tn, over);
-      // Experiment (DissectOptions::refine_before_split): the split points are taken at equal
+      // DissectOptions::refine_before_split (the pipeline's default): the split points are taken at equal
       // (u, v) in every mesh, so each mesh's map of the node is refined against mesh 0's before
       // the cuts (border, corners and features held). The split (peak, w) and the children's
       // parent stretch stay those of the dissection's own maps, so only where the cuts run on
