@@ -127,6 +127,35 @@ TEST_P(GreatCircles, StraightenedCurvesFollowTheGreatCirclesAndAreShorter) {
 
 INSTANTIATE_TEST_SUITE_P(TwoTessellations, GreatCircles, ::testing::Values(0, 1));
 
+TEST(GeodesicLoop, OnACutMeshItIsTheSameAsOnTheMesh) {
+  const TriMesh m = qs::shapes::cube_sphere(12);
+  const SeedLoop edge_loop = qs::dissect::trace_seed_loop(m, tilted_seeds(m));
+  GeodesicLoopOptions o;
+  o.avoid = {5, 77};
+  const GeodesicLoop a = qs::dissect::straighten_seed_loop(m, edge_loop, o);
+  ASSERT_TRUE(a.any_straightened());
+  // A cut mesh whose out-half-edges and labels are not a fresh build's (a face split and undone).
+  qs::dissect::CutMesh cm(m);
+  cm.checkpoint();
+  cm.split_face(0, Vec3(0.2, 0.3, 0.5));
+  cm.rollback();
+  cm.set_patch(3, 1);
+  const GeodesicLoop b = qs::dissect::straighten_seed_loop(cm, edge_loop, o);
+  EXPECT_EQ(b.mesh.positions, a.mesh.positions);
+  EXPECT_EQ(b.mesh.faces, a.mesh.faces);
+  EXPECT_EQ(b.loop.paths, a.loop.paths);
+  EXPECT_EQ(b.straightened, a.straightened);
+  EXPECT_EQ(b.why, a.why);
+  EXPECT_EQ(b.length_after, a.length_after);
+  EXPECT_EQ(b.face_patches, a.face_patches);
+  EXPECT_EQ(b.inserted_vertices, a.inserted_vertices);
+  // A loop that is not one: the same refusal as on the mesh.
+  SeedLoop broken = edge_loop;
+  broken.paths[1].pop_back();
+  EXPECT_THROW(qs::dissect::straighten_seed_loop(cm, broken, o), qs::InvalidInput);
+  EXPECT_THROW(qs::dissect::straighten_seed_loop(m, broken, o), qs::InvalidInput);
+}
+
 TEST(GeodesicLoop, ItsCutMeshIsTheRefinedMeshBuiltAfresh) {
   const TriMesh m = qs::shapes::icosphere(4);
   const GeodesicLoop g = qs::dissect::straighten_seed_loop(m, qs::dissect::trace_seed_loop(m, tilted_seeds(m)));

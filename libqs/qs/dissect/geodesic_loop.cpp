@@ -15,6 +15,7 @@
 #include "qs/core/geometry2d.h"
 #include "qs/core/parallel.h"
 #include "qs/dissect/cut_mesh.h"
+#include "qs/dissect/seed_routing_detail.h"
 
 namespace qs::dissect {
 namespace {
@@ -392,37 +393,25 @@ double path_length_of(const std::vector<Vec3>& P, const std::vector<int>& p) {
   return l;
 }
 
-}  // namespace
-
-GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options,
-                                  const Context& context) {
+void check_options(const GeodesicLoopOptions& options, int num_vertices) {
   if (!(options.snap >= 0 && options.snap < 0.5))
     throw InvalidInput("straighten_seed_loop: options.snap must be in [0, 0.5) (got " + std::to_string(options.snap) + ")");
   if (options.max_rounds < 0)
     throw InvalidInput("straighten_seed_loop: options.max_rounds must be >= 0");
   for (int v : options.avoid)
-    if (v < 0 || v >= mesh.num_vertices())
+    if (v < 0 || v >= num_vertices)
       throw InvalidInput("straighten_seed_loop: vertex to avoid " + std::to_string(v) + " is out of range");
-  // The loop's check and the cut mesh are independent: on two threads where the context allows.
-  auto check = [&] { return sides_of_vertices(mesh, loop, options.avoid); };
-  const bool two = thread_count(0, context) > 1 && !inside_parallel_loop();
-  std::future<std::vector<int>> checked;
-  if (two) checked = std::async(std::launch::async, check);
-  std::optional<CutMesh> built;
-  std::exception_ptr build_error;
-  try {
-    built.emplace(mesh);
-  } catch (...) {
-    build_error = std::current_exception();
-  }
-  const std::vector<int> sides_before = two ? checked.get() : check();  // checks the loop (its error first)
-  if (build_error) std::rethrow_exception(build_error);
-  CutMesh& cm = *built;
+}
 
+// The straightening of `loop` on `cm`, a cut mesh of `mesh` as built from it; `sides_before`: the
+// sides of options.avoid before.
+GeodesicLoop straighten_on(CutMesh cm, TriMesh mesh, const SeedLoop& loop, const std::vector<int>& sides_before,
+                           const GeodesicLoopOptions& options, const Context& context) {
   GeodesicLoop result;
-  result.mesh = mesh;
   result.loop = loop;
   for (int i = 0; i < 4; ++i) result.length_before[i] = result.length_after[i] = path_length_of(mesh.positions, loop.paths[i]);
+  const int input_vertices = mesh.num_vertices();
+  result.mesh = std::move(mesh);
   SeedLoop cur = loop;
   for (int i = 0; i < 4; ++i) {
     context.check_cancel();
@@ -458,14 +447,11 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
   TriMesh refined = cm.to_trimesh();
   // The loop must still cut the mesh in two with every avoided vertex on its old side.
   std::string why;
-  std::vector<int> face_patches;
-  try {
-    face_patches = seed_patch_of_faces(refined, cur);
-    const std::vector<int> sides_after = sides_of_vertices(refined, face_patches, options.avoid);
-    if (sides_after != sides_before) why = "a feature changed sides";
-  } catch (const InvalidInput& e) {
-    why = e.what();
-  }
+  std::vector<int> face_patches = routing::label_faces(cm, cur, why);
+  if (face_patches.empty())
+    why = "seed loop does not cut the mesh into two patches: " + why;
+  else if (sides_of_vertices(refined, face_patches, options.avoid) != sides_before)
+    why = "a feature changed sides";
   if (!why.empty()) {
     for (int i = 0; i < 4; ++i) {
       result.straightened[i] = false;
@@ -473,7 +459,7 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
     }
     return result;
   }
-  result.inserted_vertices = refined.num_vertices() - mesh.num_vertices();
+  result.inserted_vertices = refined.num_vertices() - input_vertices;
   result.mesh = std::move(refined);
   result.loop = std::move(cur);
   if (result.any_straightened()) {
@@ -483,6 +469,41 @@ GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, con
   }
   for (int i = 0; i < 4; ++i) result.length_after[i] = path_length_of(result.mesh.positions, result.loop.paths[i]);
   return result;
+}
+
+}  // namespace
+
+GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options,
+                                  const Context& context) {
+  check_options(options, mesh.num_vertices());
+  // The loop's check and the cut mesh are independent: on two threads where the context allows.
+  auto check = [&] { return sides_of_vertices(mesh, loop, options.avoid); };
+  const bool two = thread_count(0, context) > 1 && !inside_parallel_loop();
+  std::future<std::vector<int>> checked;
+  if (two) checked = std::async(std::launch::async, check);
+  std::optional<CutMesh> built;
+  std::exception_ptr build_error;
+  try {
+    built.emplace(mesh);
+  } catch (...) {
+    build_error = std::current_exception();
+  }
+  const std::vector<int> sides_before = two ? checked.get() : check();  // checks the loop (its error first)
+  if (build_error) std::rethrow_exception(build_error);
+  return straighten_on(std::move(*built), mesh, loop, sides_before, options, context);
+}
+
+GeodesicLoop straighten_seed_loop(const CutMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options,
+                                  const Context& context) {
+  check_options(options, mesh.num_vertices());
+  CutMesh cm = mesh;
+  cm.reset();
+  std::string why;
+  const std::vector<int> labels = routing::label_faces(cm, loop, why);
+  if (labels.empty()) throw InvalidInput("seed loop does not cut the mesh into two patches: " + why);
+  TriMesh input = cm.to_trimesh();
+  const std::vector<int> sides_before = sides_of_vertices(input, labels, options.avoid);
+  return straighten_on(std::move(cm), std::move(input), loop, sides_before, options, context);
 }
 
 }  // namespace qs::dissect

@@ -58,9 +58,12 @@ struct GeodesicLoop {
 /// path and `why` says so; this function does not throw for that.
 /// \pre mesh is a validated closed manifold mesh and loop is a seed loop of it (seed_patch_of_faces
 /// accepts it). \throws InvalidInput when it is not, or for options out of range.
-/// Cost: O(strip size x flips) per curve, plus a copy of the cut mesh per curve; measured on
-/// venus_100k (automatic seeds, 2-core machine): qs-dissect's CPU time 0.88 s -> 1.01 s.
+/// Cost: O(strip size x flips) per curve, plus the cut mesh's build.
 GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options = {},
+                                  const Context& context = {});
+/// The same on a mesh held as a cut mesh already (its patch labels are ignored): copied instead of
+/// built again, and the loop checked on its half-edges.
+GeodesicLoop straighten_seed_loop(const CutMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options = {},
                                   const Context& context = {});
 
 }  // namespace qs::dissect

@@ -195,7 +195,7 @@ std::vector<Vec3> MeshDissector::landmark_points(const std::array<int, 4>& seeds
 GeodesicLoop MeshDissector::straighten(const SeedLoop& loop) const {
   GeodesicLoopOptions go;
   go.avoid = feature_vertex_;
-  return straighten_seed_loop(cm_.to_trimesh(), loop, go, ctx_);
+  return straighten_seed_loop(cm_, loop, go, ctx_);
 }
 
 std::array<Node, 2> MeshDissector::seed(SeedLoop loop, std::optional<GeodesicLoop> straightened) {

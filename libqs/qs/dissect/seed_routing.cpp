@@ -159,8 +159,13 @@ Graph build_graph(const TriMesh& mesh) {
   return g;
 }
 
-std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop& loop,
-                             std::string& why) {
+namespace {
+
+// label_faces on any mesh: across(h) is the face across half-edge h = 3 f + k, left_of(a, b) the
+// face with half-edge a -> b (-1 when a and b are not joined).
+template <class Across, class LeftOf>
+std::vector<int> label_faces_by(const std::vector<Tri>& faces, int nv, const Across& across, const LeftOf& left_of,
+                                const SeedLoop& loop, std::string& why) {
   for (int i = 0; i < 4; ++i) {
     const auto& p = loop.paths[i];
     if (p.size() < 2 || p.front() != loop.seeds[i] || p.back() != loop.seeds[(i + 1) % 4]) {
@@ -169,14 +174,14 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
       return {};
     }
     for (int v : p)
-      if (v < 0 || v >= g.num_vertices()) {
+      if (v < 0 || v >= nv) {
         why = "path " + std::to_string(i) + " has vertex " + std::to_string(v) + " out of range";
         return {};
       }
   }
   const std::vector<int> cycle = loop_cycle(loop);
   const int n = static_cast<int>(cycle.size());
-  std::vector<int> position(g.num_vertices(), -1);
+  std::vector<int> position(nv, -1);
   for (int i = 0; i < n; ++i) {
     if (position[cycle[i]] >= 0) {
       why = "the loop visits vertex " + std::to_string(cycle[i]) + " twice";
@@ -184,10 +189,10 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
     }
     position[cycle[i]] = i;
   }
-  std::vector<int> loop_slot(n);
+  std::vector<int> left(n);  // the face left of loop edge i
   for (int i = 0; i < n; ++i) {
-    loop_slot[i] = g.find(cycle[i], cycle[(i + 1) % n]);
-    if (loop_slot[i] < 0) {
+    left[i] = left_of(cycle[i], cycle[(i + 1) % n]);
+    if (left[i] < 0) {
       why = "loop vertices " + std::to_string(cycle[i]) + " and " +
             std::to_string(cycle[(i + 1) % n]) + " are not joined by an edge";
       return {};
@@ -201,7 +206,7 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
   };
   // Union-find over the faces, joined across every side that is not on the loop. A sweep in
   // face order touches memory in order (a flood fill jumps around and is several times slower).
-  const int nf = mesh.num_faces();
+  const int nf = static_cast<int>(faces.size());
   std::vector<int> root(nf);
   std::iota(root.begin(), root.end(), 0);
   auto find = [&](int f) {
@@ -209,9 +214,9 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
     return f;
   };
   for (int f = 0; f < nf; ++f) {
-    const Tri& t = mesh.faces[f];
+    const Tri& t = faces[f];
     for (int k = 0; k < 3; ++k) {
-      const int other = g.across[3 * f + k];
+      const int other = across(3 * f + k);
       if (other < f || on_loop(t[k], t[(k + 1) % 3])) continue;
       const int x = find(f), y = find(other);
       if (x != y) root[std::max(x, y)] = std::min(x, y);
@@ -219,8 +224,8 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
   }
   // The face right of loop edge i is the face left of its reverse.
   std::vector<int> right(n);
-  for (int i = 0; i < n; ++i) right[i] = g.left[g.find(cycle[(i + 1) % n], cycle[i])];
-  const int root0 = find(g.left[loop_slot[0]]), root1 = find(right[0]);
+  for (int i = 0; i < n; ++i) right[i] = left_of(cycle[(i + 1) % n], cycle[i]);
+  const int root0 = find(left[0]), root1 = find(right[0]);
   if (root0 == root1) {
     why = "the loop does not separate the mesh (both faces beside loop edge " +
           edge_name(cycle[0], cycle[1]) + " are joined around it); is the mesh genus 0?";
@@ -238,13 +243,35 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
     return {};
   }
   for (int i = 0; i < n; ++i) {
-    if (label[g.left[loop_slot[i]]] != 0 || label[right[i]] != 1) {
+    if (label[left[i]] != 0 || label[right[i]] != 1) {
       why = "loop edge " + edge_name(cycle[i], cycle[(i + 1) % n]) +
             " does not have one part on each side";
       return {};
     }
   }
   return label;
+}
+
+}  // namespace
+
+std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop& loop, std::string& why) {
+  return label_faces_by(
+      mesh.faces, g.num_vertices(), [&](int h) { return g.across[h]; },
+      [&](int a, int b) {
+        const int slot = g.find(a, b);
+        return slot < 0 ? -1 : g.left[slot];
+      },
+      loop, why);
+}
+
+std::vector<int> label_faces(const CutMesh& cm, const SeedLoop& loop, std::string& why) {
+  return label_faces_by(
+      cm.faces(), cm.num_vertices(), [&](int h) { return CutMesh::face_of(cm.opposite(h)); },
+      [&](int a, int b) {
+        const int h = cm.find_halfedge(a, b);
+        return h < 0 ? -1 : CutMesh::face_of(h);
+      },
+      loop, why);
 }
 
 std::string seed_name(const std::array<int, 4>& seeds, int i) {

@@ -13,6 +13,7 @@
 
 #include "qs/core/context.h"
 #include "qs/core/mesh.h"
+#include "qs/dissect/cut_mesh.h"
 #include "qs/dissect/seed_loop.h"
 
 namespace qs::dissect::routing {
@@ -144,6 +145,8 @@ class Dijkstra {
 /// (0 = the part left of the loop, 1 = the part right of it), or an empty vector with `why` set
 /// when the loop does not cut the mesh into two parts each bounded by the whole loop.
 std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop& loop, std::string& why);
+/// The same on a cut mesh (its half-edges give the faces across; no graph is built).
+std::vector<int> label_faces(const CutMesh& cm, const SeedLoop& loop, std::string& why);
 
 /// "seed i (vertex v)", for messages.
 std::string seed_name(const std::array<int, 4>& seeds, int i);
