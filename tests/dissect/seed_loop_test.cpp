@@ -24,6 +24,7 @@
 
 #include "../common/shared_meshes.h"
 #include "qs/core/error.h"
+#include "qs/dissect/seed_routing_detail.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
 #include "qs/shapes/shapes.h"
@@ -178,6 +179,22 @@ TEST(SeedLoop, ChosenSeedsGiveAValidLoopOnEveryShape) {
     const Seeds seeds = qs::dissect::choose_seeds(s.mesh);
     const SeedLoop loop = qs::dissect::trace_seed_loop(s.mesh, seeds);
     check_loop(s.mesh, seeds, loop);
+  }
+}
+
+// The dissector routes its automatic seeds' loop on the graph the seed choice built: the same
+// seeds and the same loop as the public calls, which build their own.
+TEST(SeedLoop, TheSeedChoicesGraphRoutesTheSameLoop) {
+  for (const Shape& s : shapes()) {
+    SCOPED_TRACE(s.name);
+    qs::dissect::routing::Graph g;
+    const Seeds seeds = qs::dissect::routing::choose_seeds(s.mesh, {}, g);
+    EXPECT_EQ(seeds, qs::dissect::choose_seeds(s.mesh));
+    ASSERT_EQ(g.num_vertices(), s.mesh.num_vertices());
+    const SeedLoop shared = qs::dissect::routing::trace_seed_loop(s.mesh, g, seeds, {}, {});
+    EXPECT_EQ(shared.paths, qs::dissect::trace_seed_loop(s.mesh, seeds).paths);
+    EXPECT_THROW(qs::dissect::routing::trace_seed_loop(s.mesh, g, {seeds[0], seeds[0], seeds[2], seeds[3]}, {}, {}),
+                 qs::InvalidInput);
   }
 }
 

@@ -27,6 +27,10 @@ namespace qs::metro {
 class SurfaceDistance;
 }
 
+namespace qs::dissect::routing {
+struct Graph;
+}
+
 namespace qs::dissect::detail {
 
 // A split that could not be completed; the parent is restored and kept as a leaf.
@@ -108,8 +112,9 @@ class MeshDissector {
   MeshDissector(const MeshToDissect& in, int index, const std::vector<std::string>& feature_names,
                 const DissectOptions& options, const Context& context);
 
-  /// Traces the shortest seed loop through `seeds`, avoiding the features.
-  SeedLoop trace_loop(const std::array<int, 4>& seeds) const;
+  /// Traces the shortest seed loop through `seeds`, avoiding the features; on `input_graph`, the
+  /// input mesh's routing graph, where nothing has been inserted into the mesh yet.
+  SeedLoop trace_loop(const std::array<int, 4>& seeds, const routing::Graph* input_graph = nullptr) const;
   /// The side of the loop (0 or 1) of every feature, by feature index.
   std::vector<int> feature_sides(const SeedLoop& loop) const;
   /// Re-routes the loop so that feature k lies on side want[k], and every vertex of `more` on its

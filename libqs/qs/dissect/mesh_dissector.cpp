@@ -8,6 +8,7 @@
 #include <vector>
 #include "qs/dissect/geodesic_loop.h"
 #include "qs/dissect/seed_loop.h"
+#include "qs/dissect/seed_routing_detail.h"
 #include "qs/warp/warp.h"
 
 #include "qs/core/error.h"
@@ -164,12 +165,15 @@ int MeshDissector::insert_surface_point(const landmarks::SurfacePoint& where, bo
   return m;
 }
 
-SeedLoop MeshDissector::trace_loop(const std::array<int, 4>& seeds) const {
+SeedLoop MeshDissector::trace_loop(const std::array<int, 4>& seeds, const routing::Graph* input_graph) const {
   for (size_t k = 0; k < feature_vertex_.size(); ++k)
     for (int i = 0; i < 4; ++i)
       if (feature_vertex_[k] == seeds[i])
         throw InvalidInput(name_ + ": a feature is the seed s" + std::to_string(i) + " (vertex " +
                            std::to_string(seeds[i]) + "); seeds are features already, remove it");
+  // The cut mesh is the input while nothing has been inserted into it (splits only add faces).
+  if (input_graph && cm_.num_faces() == mesh_.num_faces())
+    return routing::trace_seed_loop(mesh_, *input_graph, seeds, feature_vertex_, ctx_);
   return trace_seed_loop(cm_.to_trimesh(), seeds, feature_vertex_, ctx_);
 }
 

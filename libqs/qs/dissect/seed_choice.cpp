@@ -333,6 +333,11 @@ std::array<int, 4> first_routable_seeds(const TriMesh& mesh,
 }
 
 std::array<int, 4> choose_seeds(const TriMesh& mesh, const Context& context) {
+  Graph g;
+  return routing::choose_seeds(mesh, context, g);
+}
+
+std::array<int, 4> routing::choose_seeds(const TriMesh& mesh, const Context& context, Graph& g) {
   // The routing graph is built beside the axes and the face areas on large meshes (the axes'
   // error, when both fail, is the one thrown, as in one thread).
   const bool beside =
@@ -342,7 +347,7 @@ std::array<int, 4> choose_seeds(const TriMesh& mesh, const Context& context) {
   std::vector<char> used;
   const Axes axes = checked_axes(mesh, used);
   const std::vector<double> area = face_areas(mesh);
-  const Graph g = beside ? graph.get() : build_graph(mesh);
+  g = beside ? graph.get() : build_graph(mesh);
   // Candidates: ray belts in the three principal planes, each also turned by 45 degrees about the
   // plane's normal, then the principal-axis extremes and the geodesically farthest vertices. The
   // loop with the best area fraction per length wins among those enclosing at least 5% of the

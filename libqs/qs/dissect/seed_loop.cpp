@@ -22,13 +22,26 @@ SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
   return trace_seed_loop(mesh, seeds, {}, context);
 }
 
-SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
-                         const Context& context) {
+namespace {
+
+void check_trace_inputs(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid) {
   check_seeds(mesh, seeds);
   for (int v : avoid)
     if (v < 0 || v >= static_cast<int>(mesh.positions.size()))
       throw InvalidInput("seed loop: vertex to avoid " + std::to_string(v) + " is out of range");
-  const Graph g = build_graph(mesh);
+}
+
+}  // namespace
+
+SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
+                         const Context& context) {
+  check_trace_inputs(mesh, seeds, avoid);
+  return routing::trace_seed_loop(mesh, build_graph(mesh), seeds, avoid, context);
+}
+
+SeedLoop routing::trace_seed_loop(const TriMesh& mesh, const Graph& g, const std::array<int, 4>& seeds,
+                                  const std::vector<int>& avoid, const Context& context) {
+  check_trace_inputs(mesh, seeds, avoid);
   Dijkstra dijkstra(g);
   Attempt attempt = try_route(mesh, g, dijkstra, seeds, context, avoid);
   if (!attempt.ok)

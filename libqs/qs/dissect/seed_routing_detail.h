@@ -148,6 +148,13 @@ std::vector<int> label_faces(const TriMesh& mesh, const Graph& g, const SeedLoop
 /// The same on a cut mesh (its half-edges give the faces across; no graph is built).
 std::vector<int> label_faces(const CutMesh& cm, const SeedLoop& loop, std::string& why);
 
+/// choose_seeds() that also hands over the routing graph of `mesh` it built (valid while `mesh`
+/// lives: it points to its positions).
+std::array<int, 4> choose_seeds(const TriMesh& mesh, const Context& context, Graph& graph);
+/// trace_seed_loop() on the routing graph of `mesh` built already.
+SeedLoop trace_seed_loop(const TriMesh& mesh, const Graph& g, const std::array<int, 4>& seeds,
+                         const std::vector<int>& avoid, const Context& context);
+
 /// "seed i (vertex v)", for messages.
 std::string seed_name(const std::array<int, 4>& seeds, int i);
 

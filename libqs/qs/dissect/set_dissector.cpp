@@ -18,6 +18,7 @@
 #include "qs/dissect/dissect_detail.h"
 #include "qs/dissect/loop_guide.h"
 #include "qs/dissect/seed_loop.h"
+#include "qs/dissect/seed_routing_detail.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/metro/metro.h"
 
@@ -444,10 +445,13 @@ DissectionSet SetDissector::run() {
   // The shortest loop of every mesh (in parallel: the meshes are independent here).
   std::vector<SeedLoop> loops(nm);
   parallel_for(nm, ctx_, [&](size_t i) {
-    const std::array<int, 4> s = meshes_[i].inserted_seeds ? *meshes_[i].inserted_seeds
-                                 : in_[i].seeds      ? *in_[i].seeds
-                                                     : choose_seeds(*in_[i].mesh, ctx_);
-    loops[i] = meshes_[i].trace_loop(s);
+    if (meshes_[i].inserted_seeds || in_[i].seeds) {
+      loops[i] = meshes_[i].trace_loop(meshes_[i].inserted_seeds ? *meshes_[i].inserted_seeds : *in_[i].seeds);
+      return;
+    }
+    routing::Graph g;  // the automatic seeds' graph of the input, routed on again
+    const std::array<int, 4> s = routing::choose_seeds(*in_[i].mesh, ctx_, g);
+    loops[i] = meshes_[i].trace_loop(s, &g);
   });
   // Consistent loops: every feature on the same side in every mesh. The side each feature takes
   // in most meshes (ties: the first mesh's) is required of all; a mesh whose shortest loop puts a
