@@ -5,15 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
-#include <future>
 #include <optional>
 #include <string>
 #include <utility>
 
 #include "qs/core/error.h"
 #include "qs/core/geometry2d.h"
-#include "qs/core/parallel.h"
 #include "qs/dissect/cut_mesh.h"
 #include "qs/dissect/seed_routing_detail.h"
 
@@ -403,10 +400,16 @@ void check_options(const GeodesicLoopOptions& options, int num_vertices) {
       throw InvalidInput("straighten_seed_loop: vertex to avoid " + std::to_string(v) + " is out of range");
 }
 
-// The straightening of `loop` on `cm`, a cut mesh of `mesh` as built from it; `sides_before`: the
-// sides of options.avoid before.
-GeodesicLoop straighten_on(CutMesh cm, TriMesh mesh, const SeedLoop& loop, const std::vector<int>& sides_before,
-                           const GeodesicLoopOptions& options, const Context& context) {
+// The straightening of `loop` on the cut mesh `cm` (reset first: what a build from its faces gives).
+GeodesicLoop straighten_on(CutMesh cm, const SeedLoop& loop, const GeodesicLoopOptions& options,
+                           const Context& context) {
+  check_options(options, cm.num_vertices());
+  cm.reset();
+  std::string why;
+  const std::vector<int> labels = routing::label_faces(cm, loop, why);
+  if (labels.empty()) throw InvalidInput("seed loop does not cut the mesh into two patches: " + why);
+  TriMesh mesh = cm.to_trimesh();
+  const std::vector<int> sides_before = sides_of_vertices(mesh, labels, options.avoid);
   GeodesicLoop result;
   result.loop = loop;
   for (int i = 0; i < 4; ++i) result.length_before[i] = result.length_after[i] = path_length_of(mesh.positions, loop.paths[i]);
@@ -446,7 +449,6 @@ GeodesicLoop straighten_on(CutMesh cm, TriMesh mesh, const SeedLoop& loop, const
   }
   TriMesh refined = cm.to_trimesh();
   // The loop must still cut the mesh in two with every avoided vertex on its old side.
-  std::string why;
   std::vector<int> face_patches = routing::label_faces(cm, cur, why);
   if (face_patches.empty())
     why = "seed loop does not cut the mesh into two patches: " + why;
@@ -475,35 +477,12 @@ GeodesicLoop straighten_on(CutMesh cm, TriMesh mesh, const SeedLoop& loop, const
 
 GeodesicLoop straighten_seed_loop(const TriMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options,
                                   const Context& context) {
-  check_options(options, mesh.num_vertices());
-  // The loop's check and the cut mesh are independent: on two threads where the context allows.
-  auto check = [&] { return sides_of_vertices(mesh, loop, options.avoid); };
-  const bool two = thread_count(0, context) > 1 && !inside_parallel_loop();
-  std::future<std::vector<int>> checked;
-  if (two) checked = std::async(std::launch::async, check);
-  std::optional<CutMesh> built;
-  std::exception_ptr build_error;
-  try {
-    built.emplace(mesh);
-  } catch (...) {
-    build_error = std::current_exception();
-  }
-  const std::vector<int> sides_before = two ? checked.get() : check();  // checks the loop (its error first)
-  if (build_error) std::rethrow_exception(build_error);
-  return straighten_on(std::move(*built), mesh, loop, sides_before, options, context);
+  return straighten_on(CutMesh(mesh), loop, options, context);
 }
 
 GeodesicLoop straighten_seed_loop(const CutMesh& mesh, const SeedLoop& loop, const GeodesicLoopOptions& options,
                                   const Context& context) {
-  check_options(options, mesh.num_vertices());
-  CutMesh cm = mesh;
-  cm.reset();
-  std::string why;
-  const std::vector<int> labels = routing::label_faces(cm, loop, why);
-  if (labels.empty()) throw InvalidInput("seed loop does not cut the mesh into two patches: " + why);
-  TriMesh input = cm.to_trimesh();
-  const std::vector<int> sides_before = sides_of_vertices(input, labels, options.avoid);
-  return straighten_on(std::move(cm), std::move(input), loop, sides_before, options, context);
+  return straighten_on(mesh, loop, options, context);
 }
 
 }  // namespace qs::dissect

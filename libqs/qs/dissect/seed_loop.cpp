@@ -31,17 +31,9 @@ void check_trace_inputs(const TriMesh& mesh, const std::array<int, 4>& seeds, co
       throw InvalidInput("seed loop: vertex to avoid " + std::to_string(v) + " is out of range");
 }
 
-}  // namespace
-
-SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
-                         const Context& context) {
-  check_trace_inputs(mesh, seeds, avoid);
-  return routing::trace_seed_loop(mesh, build_graph(mesh), seeds, avoid, context);
-}
-
-SeedLoop routing::trace_seed_loop(const TriMesh& mesh, const Graph& g, const std::array<int, 4>& seeds,
-                                  const std::vector<int>& avoid, const Context& context) {
-  check_trace_inputs(mesh, seeds, avoid);
+// trace_seed_loop once its inputs are checked.
+SeedLoop trace_checked(const TriMesh& mesh, const Graph& g, const std::array<int, 4>& seeds,
+                       const std::vector<int>& avoid, const Context& context) {
   Dijkstra dijkstra(g);
   Attempt attempt = try_route(mesh, g, dijkstra, seeds, context, avoid);
   if (!attempt.ok)
@@ -57,6 +49,20 @@ SeedLoop routing::trace_seed_loop(const TriMesh& mesh, const Graph& g, const std
     context.info(m);
   }
   return std::move(attempt.loop);
+}
+
+}  // namespace
+
+SeedLoop trace_seed_loop(const TriMesh& mesh, const std::array<int, 4>& seeds, const std::vector<int>& avoid,
+                         const Context& context) {
+  check_trace_inputs(mesh, seeds, avoid);  // before the graph: a bad seed is reported before a bad mesh
+  return trace_checked(mesh, build_graph(mesh), seeds, avoid, context);
+}
+
+SeedLoop routing::trace_seed_loop(const TriMesh& mesh, const Graph& g, const std::array<int, 4>& seeds,
+                                  const std::vector<int>& avoid, const Context& context) {
+  check_trace_inputs(mesh, seeds, avoid);
+  return trace_checked(mesh, g, seeds, avoid, context);
 }
 
 namespace {
