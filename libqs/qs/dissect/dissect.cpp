@@ -16,6 +16,7 @@
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
 #include "qs/dissect/dissection.h"
+#include "qs/dissect/loop_guide.h"
 #include "qs/dissect/seed_order.h"
 #include "qs/metro/metro.h"
 
@@ -43,6 +44,68 @@ std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect
   }
   for (const auto& f : m.features) out.emplace_back(f.name, at(f.vertex, f.where));
   return out;
+}
+
+// A mesh's landmark vertices by name (a landmark inside a face: the face's corner nearest to it).
+std::vector<std::pair<std::string, int>> landmark_vertices(const MeshToDissect& m) {
+  std::vector<std::pair<std::string, int>> out;
+  const TriMesh& mesh = *m.mesh;
+  auto at = [&](int vertex, const landmarks::SurfacePoint& where) {
+    if (vertex >= 0) return vertex;
+    const Vec3 x = landmarks::position_of(mesh, where);
+    int best = mesh.faces[where.face][0];
+    for (int v : mesh.faces[where.face])
+      if ((mesh.positions[v] - x).squaredNorm() < (mesh.positions[best] - x).squaredNorm()) best = v;
+    return best;
+  };
+  for (int k = 0; k < 4; ++k) {
+    if (m.seed_points) out.emplace_back("seed" + std::to_string(k), at(-1, (*m.seed_points)[k]));
+    else if (m.seeds) out.emplace_back("seed" + std::to_string(k), (*m.seeds)[k]);
+    else return {};
+  }
+  for (const auto& f : m.features) out.emplace_back(f.name, at(f.vertex, f.where));
+  return out;
+}
+
+// DissectOptions::register_poses: the first mesh registered onto every other one, when the set is
+// one surface in other poses (landmark_discrepancy within kIntrinsicLoopIsometry) and every
+// registration fits (kRegisteredFit, kRegisteredDistortion); nullopt otherwise. The worst fit and
+// distortion go to `fit` and `distortion` (-1 when nothing was registered).
+std::optional<std::vector<registration::Pose>> register_poses(const std::vector<MeshToDissect>& meshes,
+                                                              const Context& context, double& fit,
+                                                              double& distortion) {
+  fit = distortion = -1;
+  const auto first = landmark_vertices(meshes[0]);
+  const auto first_at = landmark_positions(meshes[0]);
+  if (first.empty()) return std::nullopt;
+  // One surface: the landmarks' geodesic distances, every mesh's against the first's.
+  std::vector<int> l0;
+  for (const auto& [name, v] : first) l0.push_back(v);
+  const GeodesicCoordinates c0 = geodesic_coordinates(*meshes[0].mesh, l0);
+  for (size_t i = 1; i < meshes.size(); ++i) {
+    const auto mine = landmark_vertices(meshes[i]);
+    if (mine.size() != first.size()) return std::nullopt;
+    std::vector<int> li;
+    for (size_t k = 0; k < mine.size(); ++k) {
+      if (mine[k].first != first[k].first) return std::nullopt;
+      li.push_back(mine[k].second);
+    }
+    if (!(landmark_discrepancy(c0, l0, geodesic_coordinates(*meshes[i].mesh, li), li) <= detail::kIntrinsicLoopIsometry))
+      return std::nullopt;
+  }
+  std::vector<registration::Pose> poses(meshes.size());
+  fit = distortion = 0;
+  for (size_t i = 1; i < meshes.size(); ++i) {
+    const auto mine = landmark_positions(meshes[i]);
+    std::vector<registration::LandmarkPair> pairs;
+    for (size_t k = 0; k < mine.size(); ++k) pairs.push_back({first_at[k].second, mine[k].second});
+    registration::Registration r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
+    fit = std::max(fit, r.p99_distance);
+    distortion = std::max(distortion, r.distortion);
+    if (!(r.p99_distance <= kRegisteredFit && r.distortion <= kRegisteredDistortion)) return std::nullopt;
+    poses[i] = registration::Pose(*meshes[0].mesh, std::move(r));
+  }
+  return poses;
 }
 
 // The distances from mesh's vertices to `to`, each with its vertex's area (a third of its faces').
@@ -185,12 +248,11 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
                                    const Context& context) {
   // Same pose found by measurement (DissectOptions::same_pose_detect).
   std::optional<PoseDistance> measured;
-  bool detected = false;
+  bool detected = false, identical = true;
   if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
     measured = pose_distance(meshes);
     if (measured) {
       // One mesh given several times maps by the identity already; nothing to pose.
-      bool identical = true;
       for (size_t i = 1; i < meshes.size() && identical; ++i)
         identical = meshes[i].mesh->positions == meshes[0].mesh->positions &&
                     meshes[i].mesh->faces == meshes[0].mesh->faces &&
@@ -200,8 +262,18 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
     }
   }
   DissectOptions used = options;
+  double fit = -1, distortion = -1;
+  if (measured && !detected && !identical && options.register_poses && used.pose_registrations.empty()) {
+    if (auto poses = register_poses(meshes, context, fit, distortion)) {
+      used.pose_registrations = std::move(*poses);
+      detected = true;
+    }
+  }
   used.same_pose = options.same_pose || detected;
   DissectionSet out = dissect_with_nets(meshes, used, context);
+  out.poses = used.pose_registrations;
+  out.registration_fit = fit;
+  out.registration_distortion = distortion;
   out.pose_distance = measured ? measured->mean : -1;
   out.pose_distance_p99 = measured ? measured->p99 : -1;
   out.same_pose_detected = detected;

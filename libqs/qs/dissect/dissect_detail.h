@@ -22,6 +22,7 @@
 #include "qs/dissect/seed_loop.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/param/square_param.h"
+#include "qs/register/registration.h"
 
 namespace qs::metro {
 class SurfaceDistance;
@@ -334,7 +335,8 @@ class SetDissector {
   void align(const std::vector<Node>& nodes, std::vector<Param>& ps, TreeNode& tn);
   std::pair<Vec2, double> choose_split(const Node& node, const std::vector<Param>& ps, TreeNode& tn,
                                        const std::vector<bool>& over);
-  // DissectOptions::same_pose: the similarity from mesh 0 to every mesh by their landmarks.
+  // DissectOptions::same_pose: mesh 0 -> every mesh, the landmarks' similarity or the
+  // registration given (DissectOptions::pose_registrations).
   void fit_poses(const std::vector<SeedLoop>& loops);
   // DissectOptions::same_pose: four curves of mesh 0 moved into mesh i's pose.
   std::array<std::vector<Vec3>, 4> in_pose(size_t i, const std::array<std::vector<Vec3>, 4>& curves) const;
@@ -361,7 +363,7 @@ class SetDissector {
   std::vector<MeshDissector> meshes_;
   std::vector<char> joint_weights_;    // per mesh: node weights chosen with the set (joint_weights)
   bool one_tessellation_ = false;      // the meshes choosing together share one face list
-  std::vector<Eigen::Matrix4d> pose_;  // same_pose: mesh 0 -> mesh i (landmarks' similarity)
+  std::vector<registration::Pose> pose_;  // same_pose: mesh 0 -> mesh i
   std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
 };
 
@@ -398,7 +400,7 @@ constexpr int kTransferPolishRings = 2;
 /// whole node instead (Untangled). p.sp changes only to a bijective map (every face positive,
 /// counted).
 enum class Transfer { Own, Taken, Polished, Untangled };
-Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
+Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const registration::Pose& pose,
                            double reach, const NodeMapPuller& untangle, const Context& context, Param& p);
 
 /// same_pose: a posed corner farther than this fraction of its mesh's diagonal from the point it

@@ -16,6 +16,7 @@
 #include "qs/dissect/geodesic_loop.h"
 #include "qs/dissect/seed_loop.h"
 #include "qs/param/square_param.h"
+#include "qs/register/registration.h"
 
 namespace qs::dissect {
 
@@ -40,6 +41,13 @@ using NodeMapPuller =
 /// re-tessellation lie 0.1% apart, two registered bodies 0.2-0.3%, two shapes of a generated
 /// family 1.4-2.9%; docs/algorithms.md, "Same pose").
 inline constexpr double kSamePoseDetect = 0.01;
+/// DissectOptions::register_poses: a registration puts its meshes in one pose when 99% of the
+/// area of each lies within this fraction of the diagonal of the other (pose pairs: 0.1-0.4%;
+/// spot, the cat and the koala registered onto each other: 3-8%) ...
+inline constexpr double kRegisteredFit = 0.01;
+/// ... and its distortion (symmetric Dirichlet / 4, 1: isometric) is at most this (pose pairs:
+/// 1.00-1.04; the examples' shapes onto each other: 1.17-6.7).
+inline constexpr double kRegisteredDistortion = 1.1;
 /// One pose also needs 99% of the area within this multiple of same_pose_detect: a shape whose
 /// limbs moved (a pose change) lies close on average but far at the limbs (docs/algorithms.md).
 inline constexpr double kSamePoseTail = 2.0;
@@ -125,6 +133,15 @@ struct DissectOptions {
   /// its area within kSamePoseTail times that (pose_distance; needs seeds in every mesh; one mesh
   /// given twice is not posed). 0: off. \pre >= 0
   double same_pose_detect = kSamePoseDetect;
+  /// Meshes of one surface in other poses (their landmarks' geodesic distances within 5% of the
+  /// first mesh's) and not in one pose: the first mesh is registered onto each other mesh
+  /// (qs::registration::register_surface); when every registration fits (kRegisteredFit,
+  /// kRegisteredDistortion), the set is dissected in one pose through the registrations. Needs
+  /// same_pose_detect > 0.
+  bool register_poses = true;
+  /// Set by dissect_set (empty here): per mesh, the first mesh's registration onto it (the first
+  /// entry the identity), which same_pose then uses instead of the landmarks' similarity.
+  std::vector<registration::Pose> pose_registrations;
   /// Meshes in other poses: every mesh's seed loop but the first's is routed to follow the
   /// first's in geodesic coordinates of the landmarks (trace_intrinsic_loop), which a change of
   /// pose keeps, instead of each mesh's own shortest loop. Not with same_pose (the loops follow
@@ -302,6 +319,12 @@ struct DissectionSet {
   double pose_distance = -1;
   double pose_distance_p99 = -1;  ///< the 99% quantile (-1: not measured)
   bool same_pose_detected = false;
+  /// DissectOptions::register_poses: the registrations that put the set in one pose (empty when
+  /// not registered; else one per mesh, the first the identity), their largest distance from the
+  /// meshes (99% of the area within, a fraction of a mesh's diagonal) and largest distortion.
+  std::vector<registration::Pose> poses;
+  double registration_fit = -1;
+  double registration_distortion = -1;
   /// The seeds' cyclic order used (seed k of the result is seed seed_order[k] as given): the
   /// set's shortest loop (shortest_seed_order), and the three orders' loop lengths (0 when the
   /// seeds were automatic).

@@ -9,6 +9,18 @@
 
 namespace qs::dissect {
 
+double landmark_discrepancy(const GeodesicCoordinates& a, const std::vector<int>& la, const GeodesicCoordinates& b,
+                            const std::vector<int>& lb) {
+  double diff = 0, sum = 0;
+  for (size_t p = 0; p < la.size(); ++p)
+    for (size_t q = p + 1; q < la.size(); ++q) {
+      const double da = a.at(la[q])[p], db = b.at(lb[q])[p];
+      diff += std::abs(da - db);
+      sum += da;
+    }
+  return sum > 0 && std::isfinite(diff) ? diff / sum : std::numeric_limits<double>::infinity();
+}
+
 GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks) {
   const routing::Graph g = routing::build_graph(mesh);
   routing::Dijkstra dijkstra(g);

@@ -21,6 +21,12 @@ struct GeodesicCoordinates {
 /// \pre landmarks index into mesh.positions.
 GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks);
 
+/// How far two meshes are from one shape in two poses: their landmarks' geodesic distances to each
+/// other (a and b: coordinates of the landmark vertices la and lb, in the same order) differ by
+/// this fraction of their sum; +infinity when unmeasurable.
+double landmark_discrepancy(const GeodesicCoordinates& a, const std::vector<int>& la, const GeodesicCoordinates& b,
+                            const std::vector<int>& lb);
+
 /// The coordinates of the vertices of each path of `loop` (at most `samples` per path, evenly
 /// spaced along the path's vertices, both ends included).
 std::array<std::vector<std::vector<double>>, 4> loop_coordinates(const GeodesicCoordinates& coords,

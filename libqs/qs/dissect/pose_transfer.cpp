@@ -13,7 +13,7 @@
 
 namespace qs::dissect::detail {
 
-Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const Eigen::Matrix4d& to_ref,
+Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const registration::Pose& pose,
                            double reach, const NodeMapPuller& untangle, const Context& context, Param& p) {
   const param::PatchMesh& pm = p.ex.pm;
   const int n = static_cast<int>(pm.positions.size());
@@ -24,14 +24,13 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   // vertex does (its normal turned into mesh 0's frame), so that it does not jump across a thin
   // part to the next finger; one farther than `reach` is left to the repair below.
   const std::vector<Vec3> normal = vertex_normals(pm.positions, pm.faces);
-  const Eigen::Matrix3d turn = to_ref.topLeftCorner<3, 3>();
   std::vector<Vec2> uv = p.sp.uv;
   std::vector<char> unplaced(n, 0), has_target(n, 0);
   int placed = 0;
   for (int v = 0; v < n; ++v) {
     if (fixed[v]) continue;
-    const Vec3 q = (to_ref * pm.positions[v].homogeneous()).head<3>();
-    const auto c = on_ref.closest_facing(q, turn * normal[v], kSamePoseFacingCos);
+    const Vec3 q = pose.inverse(pm.positions[v]);
+    const auto c = on_ref.closest_facing(q, pose.inverse_normal(pm.positions[v], normal[v]), kSamePoseFacingCos);
     if (c.face < 0 || c.distance > reach) {
       unplaced[v] = 1;
       continue;

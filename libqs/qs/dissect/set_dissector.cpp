@@ -187,12 +187,14 @@ std::vector<Param> SetDissector::evaluate(const std::vector<Node>& nodes, TreeNo
 
 void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
   const size_t nm = meshes_.size();
-  pose_.assign(nm, Eigen::Matrix4d::Identity());
+  pose_.assign(nm, registration::Pose());
   pose_diagonal_.assign(nm, 0.0);
   pose_diagonal_[0] = bounding_box(in_[0].mesh->positions).diagonal();
   const std::vector<Vec3> from = meshes_[0].landmark_points(loops[0].seeds);
   for (size_t i = 1; i < nm; ++i) {
-    pose_[i] = fit_similarity(from, meshes_[i].landmark_points(loops[i].seeds));
+    pose_[i] = i < opt_.pose_registrations.size() && opt_.pose_registrations[i].registered()
+                   ? opt_.pose_registrations[i]
+                   : registration::Pose(fit_similarity(from, meshes_[i].landmark_points(loops[i].seeds)));
     pose_diagonal_[i] = bounding_box(in_[i].mesh->positions).diagonal();
   }
 }
@@ -200,7 +202,7 @@ void SetDissector::fit_poses(const std::vector<SeedLoop>& loops) {
 std::array<std::vector<Vec3>, 4> SetDissector::in_pose(size_t i, const std::array<std::vector<Vec3>, 4>& curves) const {
   std::array<std::vector<Vec3>, 4> moved;
   for (int k = 0; k < 4; ++k)
-    for (const Vec3& x : curves[k]) moved[k].push_back((pose_[i] * x.homogeneous()).head<3>());
+    for (const Vec3& x : curves[k]) moved[k].push_back(pose_[i].forward(x));
   return moved;
 }
 
@@ -340,8 +342,8 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     }
     bool near = true;
     for (int c = 0; c < 4 && near; ++c) {
-      const Vec3 target = (pose_[i] * x0[c].homogeneous()).head<3>();
-      const Vec3 facing = (pose_[i].topLeftCorner<3, 3>() * n0[c]).normalized();
+      const Vec3 target = pose_[i].forward(x0[c]);
+      const Vec3 facing = pose_[i].forward_normal(x0[c], n0[c]).normalized();
       double best = INFINITY;
       for (size_t k = 0; k < pm.faces.size(); ++k) {
         const Tri& t = pm.faces[k];
@@ -374,24 +376,6 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
   }
   return out;
 }
-
-namespace {
-
-// How far two meshes are from one shape in two poses: the landmarks' geodesic distances to each
-// other (over the square root of the area) differ by this fraction of their sum.
-double landmark_discrepancy(const GeodesicCoordinates& a, const std::vector<int>& la, const GeodesicCoordinates& b,
-                            const std::vector<int>& lb) {
-  double diff = 0, sum = 0;
-  for (size_t p = 0; p < la.size(); ++p)
-    for (size_t q = p + 1; q < la.size(); ++q) {
-      const double da = a.at(la[q])[p], db = b.at(lb[q])[p];
-      diff += std::abs(da - db);
-      sum += da;
-    }
-  return sum > 0 && std::isfinite(diff) ? diff / sum : std::numeric_limits<double>::infinity();
-}
-
-}  // namespace
 
 int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops, std::vector<double>& discrepancy) const {
   const size_t nm = meshes_.size();
@@ -688,7 +672,7 @@ DissectionSet SetDissector::run() {
         // Also where mesh i's own map of the node folds; only a bijective result is taken.
         parallel_for(nm - 1, node_faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t k) {
           Param& p = ps[k + 1];
-          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1].inverse(), kSamePoseReach * pose_diagonal_[0],
+          taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1], kSamePoseReach * pose_diagonal_[0],
                                            opt_.same_pose_untangle, quiet, p);
         });
         for (size_t i = 1; i < nm; ++i) {

@@ -202,11 +202,10 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
                        .cross(chart.mesh.positions[c[2]] - chart.mesh.positions[c[0]]);
     for (int l : pr.tri[t]) area[l] += pr.area[t] / 3, normal[l] += n, patch[l] = pr.face_patch[t];
   }
-  const Eigen::Matrix3d turn = pull.to_ref.topLeftCorner<3, 3>();
   for (size_t l = 0; l < pr.uv.size(); ++l) {
     if (pr.dims[l] == 0) continue;
-    const Vec3 y = (pull.to_ref * chart.mesh.positions[pr.vertices[l]].homogeneous()).head<3>();
-    if (const auto t = locate(patch[l], y, turn * normal[l])) {
+    const Vec3& x = chart.mesh.positions[pr.vertices[l]];
+    if (const auto t = locate(patch[l], pull.pose.inverse(x), pull.pose.inverse_normal(x, normal[l]))) {
       pr.target[l] = t->uv;
       pr.pull[l] = pull.weight * area[l] * t->metric;
     }

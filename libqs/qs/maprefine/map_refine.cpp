@@ -66,7 +66,10 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
     if (options.pose_pull > 0) {
       pose.ref = &ref;
       pose.patches = &pull_patches;
-      pose.to_ref = pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]);
+      pose.pose = i < options.poses.size() && options.poses[i].registered()
+                      ? options.poses[i]
+                      : registration::Pose::from_inverse(
+                            pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]));
       pose.weight = pull_weight;
       pull = &pose;
     }

@@ -197,7 +197,7 @@ struct PullPatch {
 struct PosePull {
   const dissect::Chart* ref = nullptr;
   const std::vector<PullPatch>* patches = nullptr;
-  Eigen::Matrix4d to_ref = Eigen::Matrix4d::Identity();
+  registration::Pose pose;  ///< the reference's frame -> B's
   double weight = 0;
 };
 

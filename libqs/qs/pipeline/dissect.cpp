@@ -122,6 +122,7 @@ SetResult dissect_meshes(const std::vector<dissect::MeshToDissect>& meshes, cons
   // One pose (told or found): posed splits (unless they fell back) and the refinement's pull.
   out.one_pose = opt.same_pose || out.set.same_pose_detected;
   refine_opt.pose_pull = out.one_pose ? config.pose_pull : 0;
+  refine_opt.poses = out.set.poses;
   if (refine_opt.pose_pull > 0) refine_opt.border_iterations = config.pose_border_iterations;
   if (config.refine_maps && out.set.meshes.size() > 1) {
     const auto t2 = std::chrono::steady_clock::now();
@@ -290,11 +291,17 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << "% of the diagonal apart after the landmarks' similarity (mean; 99% of the area within "
          << 100 * sets.pose_distance_p99 << "%; one pose: at most " << 100 * limit << "% and " << 100 * tail
          << "%): "
-         << (sets.same_pose_detected ? "one pose (as --same-pose)"
-             : near                  ? "one mesh given again (its map is the identity)"
-                                     : "not one pose")
+         << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)"
+             : near                                        ? "one mesh given again (its map is the identity)"
+                                                           : "not one pose")
          << "\n";
   }
+  if (sets.registration_fit >= 0)
+    text << "registration: the first mesh deformed onto the others as rigidly as possible lies within "
+         << std::setprecision(3) << 100 * sets.registration_fit << "% of the diagonal on 99% of the area, distortion "
+         << std::setprecision(4) << sets.registration_distortion << " (one pose: at most "
+         << 100 * dissect::kRegisteredFit << "% and " << dissect::kRegisteredDistortion << "): "
+         << (sets.poses.empty() ? "not used" : "one pose through the registrations") << "\n";
   if (one_pose && inputs.size() > 1) {
     if (sets.same_pose_fallback.empty())
       text << "same pose: " << sets.same_pose_loops << " of " << inputs.size() - 1 << " seed loops routed by pose, "

@@ -1,0 +1,336 @@
+#include "qs/register/registration.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include "qs/core/error.h"
+#include "qs/core/parallel.h"
+#include "qs/landmarks/landmarks.h"
+#include "qs/metro/metro.h"
+#include "qs/param/sparse_cholesky.h"
+
+namespace qs::registration {
+namespace {
+
+/// Vertices per task of the parallel passes.
+constexpr int kBlock = 1024;
+
+/// Steps of extract_rotation per round.
+constexpr int kRotationSteps = 6;
+
+/// The pull's targets (nearest points of B) are found again every this many rounds while the
+/// pull is weak (stages below 0.1), every round after.
+constexpr int kWeakPullEvery = 1;
+
+/// A facing nearest point keeps a thin part's sides apart (two fingers, a lip); its normal may
+/// be turned this far from the query's (cos).
+constexpr double kFacingCos = 0.3;
+
+template <class F>
+void for_blocks(int n, int threads, const Context& context, F&& body) {
+  parallel_for((n + kBlock - 1) / kBlock, threads, context, [&](int b) {
+    const int end = std::min(n, (b + 1) * kBlock);
+    for (int i = b * kBlock; i < end; ++i) body(i);
+  });
+}
+
+/// The rotation part of a (the rotation R maximizing trace(R^T a)), improved from q in place
+/// (Mueller, Bender, Chentanez and Macklin 2016: a robust method to extract the rotational part
+/// of deformations; warm-started from the last round's, a few steps suffice).
+void extract_rotation(const Eigen::Matrix3d& a, Eigen::Quaterniond& q) {
+  for (int step = 0; step < kRotationSteps; ++step) {
+    const Eigen::Matrix3d r = q.toRotationMatrix();
+    const Vec3 omega = (r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2))) /
+                       (std::abs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-12);
+    const double angle = omega.norm();
+    if (angle < 1e-12) break;
+    q = Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle)) * q;
+    q.normalize();
+  }
+}
+
+/// The point of `mesh` nearest to x, as a face and barycentric weights.
+struct Located {
+  int face = -1;
+  std::array<double, 3> w{};
+};
+Located locate(const TriMesh& mesh, const metro::SurfaceDistance& tree, const Vec3& x) {
+  const auto c = tree.closest(x);
+  if (c.face < 0) return {};
+  const Tri& t = mesh.faces[c.face];
+  return {c.face, landmarks::closest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]])};
+}
+
+/// Area-weighted distances of `from`'s vertices to `to`.
+void distances(const TriMesh& from, const metro::SurfaceDistance& to, std::vector<std::pair<double, double>>& out) {
+  std::vector<double> area(from.positions.size(), 0.0);
+  for (int f = 0; f < from.num_faces(); ++f)
+    for (int v : from.faces[f]) area[v] += face_area(from, f) / 3;
+  for (size_t v = 0; v < from.positions.size(); ++v)
+    if (area[v] > 0) out.emplace_back(to.distance(from.positions[v]), area[v]);
+}
+
+}  // namespace
+
+Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vector<LandmarkPair>& landmarks,
+                              const RegisterOptions& options, const Context& context) {
+  if (landmarks.size() < 3)
+    throw InvalidInput("register_surface: " + std::to_string(landmarks.size()) +
+                       " landmarks; a registration needs at least 3");
+  if (options.iterations < 1 || options.stages.empty())
+    throw InvalidInput("register_surface: at least one stage of at least one iteration expected");
+  const int n = a.num_vertices();
+  const int threads = options.threads;
+
+  // A moved onto B by the landmarks' similarity: the rest shape.
+  std::vector<Vec3> from, to;
+  for (const LandmarkPair& l : landmarks) {
+    from.push_back(l.on_a);
+    to.push_back(l.on_b);
+  }
+  const Eigen::Matrix4d similarity = fit_similarity(from, to);
+  const Eigen::Matrix3d linear = similarity.topLeftCorner<3, 3>();
+  const double scale = std::cbrt(linear.determinant());
+  const Eigen::Matrix3d turn0 = linear / scale;
+  std::vector<Vec3> rest(n);
+  for (int i = 0; i < n; ++i) rest[i] = (similarity * a.positions[i].homogeneous()).head<3>();
+
+  // Cotangent weights of the rest shape, per vertex's neighbours (CSR; an edge once per face).
+  std::vector<int> start(n + 1, 0);
+  for (const Tri& t : a.faces)
+    for (int v : t) start[v + 1] += 2;
+  for (int i = 0; i < n; ++i) start[i + 1] += start[i];
+  std::vector<int> nbr(start[n]);
+  std::vector<double> weight(start[n]);
+  std::vector<double> area(n, 0.0);
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (const Tri& t : a.faces) {
+      for (int c = 0; c < 3; ++c) {
+        const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
+        const Vec3 u = rest[i] - rest[k], v = rest[j] - rest[k];
+        const double cross = u.cross(v).norm();
+        const double w = 0.5 * std::clamp(cross > 0 ? u.dot(v) / cross : 0.0, 1e-3, 1e3);
+        nbr[fill[i]] = j;
+        weight[fill[i]++] = w;
+        nbr[fill[j]] = i;
+        weight[fill[j]++] = w;
+      }
+      const double ar = 0.5 * (rest[t[1]] - rest[t[0]]).cross(rest[t[2]] - rest[t[0]]).norm();
+      for (int v : t) area[v] += ar / 3;
+    }
+  }
+  double mean_area = 0, mean_weight = 0;
+  for (int i = 0; i < n; ++i) {
+    mean_area += area[i] / n;
+    for (int p = start[i]; p < start[i + 1]; ++p) mean_weight += weight[p] / n;
+  }
+
+  // The landmarks held at B's points: A's point of each, as a face and weights.
+  const metro::SurfaceDistance on_a(a, "A");
+  struct Held {
+    Tri t;
+    std::array<double, 3> w;
+    Vec3 target;
+  };
+  std::vector<Held> held;
+  for (const LandmarkPair& l : landmarks) {
+    const Located at = locate(a, on_a, l.on_a);
+    if (at.face >= 0) held.push_back({a.faces[at.face], at.w, l.on_b});
+  }
+  const double hold = 1e3 * mean_weight;
+
+  const metro::SurfaceDistance on_b(b, "B");
+  std::vector<Vec3> x = rest;
+  std::vector<Eigen::Matrix3d> rot(n, Eigen::Matrix3d::Identity());
+  std::vector<Eigen::Quaterniond> quat(n, Eigen::Quaterniond::Identity());
+  std::vector<Vec3> target(n);
+  param::SupernodalCholesky llt;
+  bool analyzed = false;
+  for (const double mu : options.stages) {
+    // The system of this stage: rigidity + pull + holds (lower triangle).
+    std::vector<Eigen::Triplet<double>> lower;
+    lower.reserve(start[n] + n + 9 * held.size());
+    for (int i = 0; i < n; ++i) {
+      double diag = mu * mean_weight * area[i] / mean_area;
+      for (int p = start[i]; p < start[i + 1]; ++p) {
+        diag += weight[p];
+        if (nbr[p] < i) lower.emplace_back(i, nbr[p], -weight[p]);  // row nbr[p] holds the same weight
+      }
+      lower.emplace_back(i, i, diag);
+    }
+    for (const Held& h : held)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          if (h.t[r] >= h.t[c]) lower.emplace_back(h.t[r], h.t[c], hold * h.w[r] * h.w[c]);
+    Eigen::SparseMatrix<double> m(n, n);
+    m.setFromTriplets(lower.begin(), lower.end());
+    m.makeCompressed();
+    if (!analyzed) {
+      llt.analyze(m);
+      analyzed = true;
+    }
+    if (!llt.factorize(m, threads))
+      throw InternalError("register_surface: the deformation's system is not positive definite");
+    for (int it = 0; it < options.iterations; ++it) {
+      context.check_cancel();
+      // Local: each vertex's rotation; the pull's targets.
+      const bool find = mu >= 0.1 || it % kWeakPullEvery == 0;
+      std::vector<Vec3> normal;
+      if (find) normal = vertex_normals(x, a.faces);
+      for_blocks(n, threads, context, [&](int i) {
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (int p = start[i]; p < start[i + 1]; ++p)
+          cov += weight[p] * (x[i] - x[nbr[p]]) * (rest[i] - rest[nbr[p]]).transpose();
+        extract_rotation(cov, quat[i]);
+        rot[i] = quat[i].toRotationMatrix();
+        if (!find) return;
+        auto c = on_b.closest_facing(x[i], normal[i], kFacingCos);
+        if (c.face < 0) c = on_b.closest(x[i]);
+        target[i] = c.point;
+      });
+      // Global: the positions.
+      Eigen::MatrixXd rhs(n, 3);
+      for_blocks(n, threads, context, [&](int i) {
+        Vec3 r = mu * mean_weight * area[i] / mean_area * target[i];
+        for (int p = start[i]; p < start[i + 1]; ++p)
+          r += 0.5 * weight[p] * (rot[i] + rot[nbr[p]]) * (rest[i] - rest[nbr[p]]);
+        rhs.row(i) = r.transpose();
+      });
+      for (const Held& h : held)
+        for (int r = 0; r < 3; ++r) rhs.row(h.t[r]) += hold * h.w[r] * h.target.transpose();
+      const Eigen::MatrixXd sol = llt.solve(rhs, threads);
+      for (int i = 0; i < n; ++i) x[i] = sol.row(i).transpose();
+    }
+  }
+
+  Registration out;
+  out.positions = x;
+  out.turn.resize(n);
+  for (int i = 0; i < n; ++i) out.turn[i] = rot[i] * turn0;
+  // Fit: both ways.
+  const TriMesh moved{x, a.faces};
+  const metro::SurfaceDistance on_moved(moved, "the registered A");
+  std::vector<std::pair<double, double>> d;
+  distances(moved, on_b, d);
+  distances(b, on_moved, d);
+  double sum = 0, total = 0;
+  for (const auto& [dist, w] : d) {
+    sum += dist * w;
+    total += w;
+  }
+  std::sort(d.begin(), d.end());
+  double acc = 0, p99 = d.empty() ? 0 : d.back().first;
+  for (const auto& [dist, w] : d)
+    if ((acc += w) >= 0.99 * total) {
+      p99 = dist;
+      break;
+    }
+  const double diag = bounding_box(b.positions).diagonal();
+  out.mean_distance = total > 0 && diag > 0 ? sum / total / diag : 0;
+  out.p99_distance = diag > 0 ? p99 / diag : 0;
+  // Distortion: symmetric Dirichlet of each face of the rest shape onto its registered face.
+  double energy = 0, energy_area = 0;
+  for (const Tri& t : a.faces) {
+    const Vec3 e1 = rest[t[1]] - rest[t[0]], e2 = rest[t[2]] - rest[t[0]];
+    const Vec3 f1 = x[t[1]] - x[t[0]], f2 = x[t[2]] - x[t[0]];
+    const double ar = 0.5 * e1.cross(e2).norm();
+    if (!(ar > 0)) continue;
+    // Each face in its own plane: 2x2 edge matrices.
+    const Vec3 u = e1.normalized(), v = (e1.cross(e2)).cross(e1).normalized();
+    Eigen::Matrix2d ea, eb;
+    ea << e1.dot(u), e2.dot(u), e1.dot(v), e2.dot(v);
+    const Vec3 p = f1.normalized(), q = (f1.cross(f2)).cross(f1).normalized();
+    eb << f1.dot(p), f2.dot(p), f1.dot(q), f2.dot(q);
+    const Eigen::Matrix2d j = eb * ea.inverse();
+    const double det = j.determinant();
+    if (!(det > 0) || !std::isfinite(det)) {
+      energy += ar * 1e3;
+    } else {
+      energy += ar * (j.squaredNorm() + j.inverse().squaredNorm()) / 4;
+    }
+    energy_area += ar;
+  }
+  out.distortion = energy_area > 0 ? energy / energy_area : 1;
+  return out;
+}
+
+struct Pose::Impl {
+  Eigen::Matrix4d similarity = Eigen::Matrix4d::Identity();
+  Eigen::Matrix4d inverse = Eigen::Matrix4d::Identity();
+  // A registration: A, A registered, per-vertex turns and both surfaces' trees.
+  std::optional<TriMesh> a, moved;
+  std::vector<Eigen::Matrix3d> turns;
+  std::optional<metro::SurfaceDistance> on_a, on_moved;
+
+  // The vertex of the located face with the largest weight.
+  int corner(const Located& l) const {
+    const Tri& t = a->faces[l.face];
+    const int k = l.w[0] >= l.w[1] ? (l.w[0] >= l.w[2] ? 0 : 2) : (l.w[1] >= l.w[2] ? 1 : 2);
+    return t[k];
+  }
+};
+
+Pose::Pose() : impl_(std::make_shared<const Impl>()) {}
+
+Pose::Pose(const Eigen::Matrix4d& similarity) {
+  auto impl = std::make_shared<Impl>();
+  impl->similarity = similarity;
+  impl->inverse = similarity.inverse();
+  impl_ = std::move(impl);
+}
+
+Pose Pose::from_inverse(const Eigen::Matrix4d& inverse) {
+  auto impl = std::make_shared<Impl>();
+  impl->similarity = inverse.inverse();
+  impl->inverse = inverse;
+  Pose out;
+  out.impl_ = std::move(impl);
+  return out;
+}
+
+Pose::Pose(const TriMesh& a, Registration registration) {
+  auto impl = std::make_shared<Impl>();
+  impl->a = a;
+  impl->moved = TriMesh{std::move(registration.positions), a.faces};
+  impl->turns = std::move(registration.turn);
+  impl->on_a.emplace(*impl->a, "A");
+  impl->on_moved.emplace(*impl->moved, "the registered A");
+  impl_ = std::move(impl);
+}
+
+bool Pose::registered() const { return impl_->a.has_value(); }
+
+Vec3 Pose::forward(const Vec3& x) const {
+  const Impl& m = *impl_;
+  if (!m.a) return (m.similarity * x.homogeneous()).head<3>();
+  const Located l = locate(*m.a, *m.on_a, x);
+  const Tri& t = m.moved->faces[l.face];
+  return l.w[0] * m.moved->positions[t[0]] + l.w[1] * m.moved->positions[t[1]] + l.w[2] * m.moved->positions[t[2]];
+}
+
+Vec3 Pose::forward_normal(const Vec3& x, const Vec3& n) const {
+  const Impl& m = *impl_;
+  if (!m.a) return m.similarity.topLeftCorner<3, 3>() * n;
+  return m.turns[m.corner(locate(*m.a, *m.on_a, x))] * n;
+}
+
+Vec3 Pose::inverse(const Vec3& y) const {
+  const Impl& m = *impl_;
+  if (!m.a) return (m.inverse * y.homogeneous()).head<3>();
+  const Located l = locate(*m.moved, *m.on_moved, y);
+  const Tri& t = m.a->faces[l.face];
+  return l.w[0] * m.a->positions[t[0]] + l.w[1] * m.a->positions[t[1]] + l.w[2] * m.a->positions[t[2]];
+}
+
+Vec3 Pose::inverse_normal(const Vec3& y, const Vec3& n) const {
+  const Impl& m = *impl_;
+  if (!m.a) return m.inverse.topLeftCorner<3, 3>() * n;
+  return m.turns[m.corner(locate(*m.moved, *m.on_moved, y))].transpose() * n;
+}
+
+}  // namespace qs::registration
