@@ -1,6 +1,7 @@
 // Benchmark: what each stage costs on a pair with one connectivity (vertex i <-> vertex i: a mesh
-// and its pose from `qs-family pose`). The pair is dissected as qs-dissect does by default, except
-// that stages of B are replaced by their exact counterparts taken from A, one more per level:
+// and its pose from `qs-family pose`). The pair is dissected as qs-dissect does by default, by the
+// path of other poses (DissectOptions::register_poses off: no registration), except that stages of
+// B are replaced by their exact counterparts taken from A, one more per level:
 //   loop    B's straightened seed loop is A's (the same curve on B's surface);
 //   splits  also, before every split, B's map of the node is A's map of it (the same vertices at
 //           the same (u, v)), so every cut runs through the same points of the surface and B's
@@ -117,6 +118,8 @@ int main(int argc, char** argv) {
     if (a.faces != b.faces)
       throw qs::InvalidInput(args.b + ": its faces are not " + args.a + "'s; exact stages need one connectivity");
     qs::pipeline::DissectConfig config;
+    // The stages of the other-pose path: a registration would put the pair in one pose.
+    config.dissect.register_poses = false;
     config.refine_before_split = args.refine;
     config.refine_maps = args.refine;
     if (args.leaf_rounds >= 0) config.dissect.stretch_iterations = args.leaf_rounds;

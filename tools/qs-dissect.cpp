@@ -94,7 +94,8 @@ int main(int argc, char** argv) {
   app.add_option("--same-pose", same_pose,
                  "Meshes in one pose (registered scans, re-tessellations of one surface): yes, no, or auto "
                  "(yes when the surfaces lie within 1% of the diagonal of each other after the landmarks' "
-                 "similarity, 99% of them within 2%)")
+                 "similarity, 99% of them within 2%, or, for one surface in other poses, after registering the "
+                 "first mesh onto the others)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "yes", "no"}));
   app.add_flag("--no-refine-maps", no_refine,

@@ -99,7 +99,13 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
     const auto mine = landmark_positions(meshes[i]);
     std::vector<registration::LandmarkPair> pairs;
     for (size_t k = 0; k < mine.size(); ++k) pairs.push_back({first_at[k].second, mine[k].second});
-    registration::Registration r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
+    registration::Registration r;
+    try {
+      r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
+    } catch (const InternalError& e) {  // a solve that failed: the set keeps the path of other poses
+      context.info(std::string("registration: ") + e.what());
+      return std::nullopt;
+    }
     fit = std::max(fit, r.p99_distance);
     distortion = std::max(distortion, r.distortion);
     if (!(r.p99_distance <= kRegisteredFit && r.distortion <= kRegisteredDistortion)) return std::nullopt;

@@ -412,14 +412,21 @@ SurfaceDistance::Closest SurfaceDistance::closest(const Vec3& query) const {
 
 SurfaceDistance::Closest SurfaceDistance::closest_facing(const Vec3& query, const Vec3& facing,
                                                          double min_cos) const {
+  int hint = -1;
+  return closest_facing(query, facing, min_cos, hint);
+}
+
+SurfaceDistance::Closest SurfaceDistance::closest_facing(const Vec3& query, const Vec3& facing, double min_cos,
+                                                         int& hint) const {
   const double len = facing.norm();
   Closest c;
   c.face = -1;
   c.distance = std::numeric_limits<double>::infinity();
   if (!(len > 0)) return c;
   const P3 f = to_p3(facing / len);
-  const Impl::Hit h = impl_->closest(to_p3(query), -1, &f, min_cos);
+  const Impl::Hit h = impl_->closest(to_p3(query), hint, &f, min_cos);
   if (h.tri < 0) return c;
+  hint = h.tri;
   c.distance = std::sqrt(h.d2);
   c.point = Vec3(h.point.x, h.point.y, h.point.z);
   c.face = impl_->tris[static_cast<size_t>(h.tri)].face;

@@ -101,6 +101,9 @@ class SurfaceDistance {
   /// thin part (two fingers, a lip) when `facing` is the query's own normal. face -1 and an
   /// infinite distance when no face qualifies or `facing` is zero.
   Closest closest_facing(const Vec3& query, const Vec3& facing, double min_cos) const;
+  /// The same, with the last query's answer tried first (`hint`: -1 at first, then kept from
+  /// call to call; the same point, faster for a query near the last one's).
+  Closest closest_facing(const Vec3& query, const Vec3& facing, double min_cos, int& hint) const;
   double distance(const Vec3& query) const { return closest(query).distance; }
 
   struct Impl;  ///< implementation detail (metro() shares it)

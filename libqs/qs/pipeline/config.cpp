@@ -71,6 +71,8 @@ const std::vector<Entry>& schema() {
        "the meshes are in one pose: splits placed by nearest points after the landmarks' similarity"},
       {"same_pose_detect", +[](DissectConfig& c) -> double& { return c.dissect.same_pose_detect; }, 0, 1,
        "treat the meshes as one pose when they lie within this fraction of the diagonal of each other (mean), 99% of them within twice that (0: never)"},
+      {"register_poses", +[](DissectConfig& c) -> bool& { return c.dissect.register_poses; }, 0, 1,
+       "in other poses of one surface, register the first mesh onto the others and dissect in one pose through that"},
       {"intrinsic_loops", +[](DissectConfig& c) -> bool& { return c.dissect.intrinsic_loops; }, 0, 1,
        "in other poses, route every mesh's seed loop along the first mesh's in geodesic coordinates of the landmarks"},
       {"same_pose_maps", +[](DissectConfig& c) -> bool& { return c.dissect.same_pose_maps; }, 0, 1,

@@ -149,6 +149,7 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
   std::vector<Eigen::Matrix3d> rot(n, Eigen::Matrix3d::Identity());
   std::vector<Eigen::Quaterniond> quat(n, Eigen::Quaterniond::Identity());
   std::vector<Vec3> target(n);
+  std::vector<int> hint(n, -1);  // per vertex: its last nearest point's triangle in on_b's tree
   param::SupernodalCholesky llt;
   bool analyzed = false;
   for (const double mu : options.stages) {
@@ -189,7 +190,7 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
         extract_rotation(cov, quat[i]);
         rot[i] = quat[i].toRotationMatrix();
         if (!find) return;
-        auto c = on_b.closest_facing(x[i], normal[i], kFacingCos);
+        auto c = on_b.closest_facing(x[i], normal[i], kFacingCos, hint[i]);
         if (c.face < 0) c = on_b.closest(x[i]);
         target[i] = c.point;
       });
@@ -208,6 +209,8 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     }
   }
 
+  for (const Vec3& p : x)
+    if (!p.allFinite()) throw InternalError("register_surface: the deformation diverged (a position is not finite)");
   Registration out;
   out.positions = x;
   out.turn.resize(n);

@@ -44,7 +44,9 @@ struct Registration {
 
 /// Registers A onto B. \pre a and b valid triangle meshes (qs::mesh::validate), at least 3
 /// landmark pairs not on one line. \throws InvalidInput for fewer than 3 landmarks or
-/// iterations < 1; Error(Internal "cancelled") on cancel. Deterministic on any thread count.
+/// iterations < 1 or no stage; InternalError when the deformation's system is not positive
+/// definite or a position diverges; Error(Internal "cancelled") on cancel. Deterministic on any
+/// thread count.
 Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vector<LandmarkPair>& landmarks,
                               const RegisterOptions& options = {}, const Context& context = {});
 

@@ -1,0 +1,109 @@
+// Benchmark: the registration alone (qs::registration::register_surface) on a pose pair, as a map.
+//   usage: qs-bench-registration A B LANDMARKS_A LANDMARKS_B [TRUTH]
+// A and TRUTH share their connectivity (vertex i <-> vertex i is the exact map: a pose from
+// `qs-family pose`); B is TRUTH itself or its re-tessellation (default: B). A's vertices are mapped
+// to B by nearest points, after the landmarks' similarity (the baseline) and after the
+// registration; each image's distance to the exact one, per vertex area of A, in % of TRUTH's
+// bounding-box diagonal: mean / p95 / max. Also the registration's fit (99% of both surfaces'
+// area within), distortion and wall time.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "qs/core/error.h"
+#include "qs/core/mesh.h"
+#include "qs/io/read_mesh.h"
+#include "qs/landmarks/landmarks.h"
+#include "qs/mesh/validate.h"
+#include "qs/metro/metro.h"
+#include "qs/register/registration.h"
+
+namespace {
+using qs::TriMesh;
+using qs::Vec3;
+
+struct Stats {
+  double mean = 0, p95 = 0, max = 0;
+};
+
+// Each vertex's image (its nearest point of `b` from at[i], facing as A's face there) against
+// truth.positions[i].
+Stats error(const TriMesh& a, const std::vector<Vec3>& at, const qs::metro::SurfaceDistance& b,
+            const TriMesh& truth) {
+  const double diag = qs::bounding_box(truth.positions).diagonal();
+  const auto normal = qs::vertex_normals(at, a.faces);
+  std::vector<double> area(a.positions.size(), 0.0);
+  for (int f = 0; f < a.num_faces(); ++f)
+    for (int v : a.faces[f]) area[v] += qs::face_area(a, f) / 3;
+  std::vector<std::pair<double, double>> e;
+  double sum = 0, total = 0;
+  for (size_t i = 0; i < at.size(); ++i) {
+    auto c = b.closest_facing(at[i], normal[i], 0.3);
+    if (c.face < 0) c = b.closest(at[i]);
+    const double d = 100 * (c.point - truth.positions[i]).norm() / diag;
+    e.emplace_back(d, area[i]);
+    sum += d * area[i];
+    total += area[i];
+  }
+  std::sort(e.begin(), e.end());
+  Stats s{sum / total, e.back().first, e.back().first};
+  double acc = 0;
+  for (const auto& [d, w] : e)
+    if ((acc += w) >= 0.95 * total) {
+      s.p95 = d;
+      break;
+    }
+  return s;
+}
+
+TriMesh read(const char* path) {
+  auto v = qs::mesh::validate(qs::io::read_mesh(path).mesh);
+  if (!v.report.accepted) throw qs::InvalidInput(std::string(path) + ": not a valid mesh");
+  return v.mesh;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 5 && argc != 6) {
+    std::fprintf(stderr, "usage: qs-bench-registration A B LANDMARKS_A LANDMARKS_B [TRUTH]\n");
+    return 1;
+  }
+  try {
+    const auto va = qs::mesh::validate(qs::io::read_mesh(argv[1]).mesh);
+    const auto vb = qs::mesh::validate(qs::io::read_mesh(argv[2]).mesh);
+    const TriMesh& a = va.mesh;
+    const TriMesh& b = vb.mesh;
+    const TriMesh truth = argc == 6 ? read(argv[5]) : b;
+    if (truth.num_vertices() != a.num_vertices()) throw qs::InvalidInput("TRUTH does not share A's vertices");
+    const auto la = qs::landmarks::read_landmarks(argv[3], va);
+    const auto lb = qs::landmarks::read_landmarks(argv[4], vb);
+    std::vector<qs::registration::LandmarkPair> pairs;
+    std::vector<Vec3> from, to;
+    for (int k = 0; k < 4; ++k) pairs.push_back({la.seeds[k].position, lb.seeds[k].position});
+    for (const auto& f : la.features)
+      for (const auto& g : lb.features)
+        if (f.name == g.name) pairs.push_back({f.position, g.position});
+    for (const auto& p : pairs) from.push_back(p.on_a), to.push_back(p.on_b);
+    const Eigen::Matrix4d s = qs::fit_similarity(from, to);
+    std::vector<Vec3> moved;
+    for (const Vec3& x : a.positions) moved.push_back((s * x.homogeneous()).head<3>());
+    const qs::metro::SurfaceDistance on_b(b, "B");
+    const Stats base = error(a, moved, on_b, truth);
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = qs::registration::register_surface(a, b, pairs);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const Stats reg = error(a, r.positions, on_b, truth);
+    std::printf("similarity + nearest point: %.2f / %.2f / %.2f%%\n", base.mean, base.p95, base.max);
+    std::printf("registered + nearest point: %.2f / %.2f / %.2f%% (fit: 99%% within %.3f%%, distortion %.4f, %.2f s)\n",
+                reg.mean, reg.p95, reg.max, 100 * r.p99_distance, r.distortion, seconds);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "qs-bench-registration: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
