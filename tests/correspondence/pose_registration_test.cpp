@@ -5,29 +5,12 @@
 
 #include "qs/correspondence/correspondence.h"
 #include "qs/dissect/dissection.h"
-#include "qs/family/family.h"
-#include "qs/family/pose.h"
+#include "../common/posed_animal.h"
 
 namespace {
 
-struct Posed {
-  qs::TriMesh a, b;
-  qs::family::PoseLandmarks landmarks;
-};
-
-const Posed& posed() {
-  static const Posed p = [] {
-    qs::family::FamilyOptions o;
-    o.shapes = 1;
-    o.seed = 2;
-    o.faces = 4000;
-    o.limbs = 5;
-    Posed out;
-    out.a = qs::family::generate_family(o).shapes[0].mesh;
-    out.b = qs::family::pose_mesh(out.a, {}).mesh;
-    out.landmarks = qs::family::choose_landmarks(out.a);
-    return out;
-  }();
+const qs::test::PosedAnimal& posed() {
+  static const qs::test::PosedAnimal p = qs::test::posed_animal(2);
   return p;
 }
 
@@ -47,7 +30,7 @@ qs::dissect::MeshToDissect input(const qs::TriMesh& mesh, const qs::family::Pose
 
 // The dissection's mean error against the exact map (vertex i <-> vertex i), % of the diagonal.
 double mean_error(const qs::dissect::DissectionSet& set) {
-  const Posed& p = posed();
+  const qs::test::PosedAnimal& p = posed();
   std::vector<qs::correspondence::TruthMesh> truth(2);
   truth[0].name = "a";
   truth[0].mesh = p.a;
@@ -62,7 +45,7 @@ double mean_error(const qs::dissect::DissectionSet& set) {
 }
 
 TEST(PoseRegistration, APosedPairIsDissectedInOnePoseThroughTheRegistration) {
-  const Posed& p = posed();
+  const qs::test::PosedAnimal& p = posed();
   const std::vector<qs::dissect::MeshToDissect> meshes{input(p.a, p.landmarks, "a"), input(p.b, p.landmarks, "b")};
   const auto registered = qs::dissect::dissect_set(meshes, {});
   ASSERT_EQ(registered.poses.size(), 2u);

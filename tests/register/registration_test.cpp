@@ -6,10 +6,9 @@
 #include <cmath>
 
 #include "qs/core/error.h"
-#include "qs/family/family.h"
-#include "qs/family/pose.h"
 #include "qs/metro/metro.h"
 #include "qs/register/registration.h"
+#include "../common/posed_animal.h"
 
 using qs::TriMesh;
 using qs::Vec3;
@@ -17,8 +16,7 @@ using qs::registration::LandmarkPair;
 
 namespace {
 
-// A generated animal (four legs and a head) and itself with its limbs bent and turned: the same
-// faces, so vertex i <-> vertex i is the exact map.
+// The registration's inputs on a posed generated animal (vertex i <-> vertex i is exact).
 struct PosedPair {
   TriMesh a, b;
   std::vector<LandmarkPair> landmarks;
@@ -26,17 +24,11 @@ struct PosedPair {
 
 const PosedPair& pair() {
   static const PosedPair p = [] {
-    qs::family::FamilyOptions o;
-    o.shapes = 1;
-    o.seed = 1;
-    o.faces = 4000;
-    o.limbs = 5;
-    PosedPair out;
-    out.a = qs::family::generate_family(o).shapes[0].mesh;
-    out.b = qs::family::pose_mesh(out.a, {}).mesh;
-    const auto lm = qs::family::choose_landmarks(out.a);
-    for (int v : lm.seeds) out.landmarks.push_back({out.a.positions[v], out.b.positions[v]});
-    for (const auto& [name, v] : lm.features) out.landmarks.push_back({out.a.positions[v], out.b.positions[v]});
+    const qs::test::PosedAnimal animal = qs::test::posed_animal(1);
+    PosedPair out{animal.a, animal.b, {}};
+    for (int v : animal.landmarks.seeds) out.landmarks.push_back({out.a.positions[v], out.b.positions[v]});
+    for (const auto& [name, v] : animal.landmarks.features)
+      out.landmarks.push_back({out.a.positions[v], out.b.positions[v]});
     return out;
   }();
   return p;

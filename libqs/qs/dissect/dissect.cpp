@@ -47,6 +47,7 @@ std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect
 }
 
 // A mesh's landmark vertices by name (a landmark inside a face: the face's corner nearest to it).
+// \pre landmark_positions(m) did not throw (every face in range).
 std::vector<std::pair<std::string, int>> landmark_vertices(const MeshToDissect& m) {
   std::vector<std::pair<std::string, int>> out;
   const TriMesh& mesh = *m.mesh;
@@ -75,14 +76,15 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
                                                               const Context& context, double& fit,
                                                               double& distortion) {
   fit = distortion = -1;
+  const auto first_at = landmark_positions(meshes[0]);  // checks the landmarks' faces
   const auto first = landmark_vertices(meshes[0]);
-  const auto first_at = landmark_positions(meshes[0]);
   if (first.empty()) return std::nullopt;
   // One surface: the landmarks' geodesic distances, every mesh's against the first's.
   std::vector<int> l0;
   for (const auto& [name, v] : first) l0.push_back(v);
   const GeodesicCoordinates c0 = geodesic_coordinates(*meshes[0].mesh, l0);
   for (size_t i = 1; i < meshes.size(); ++i) {
+    landmark_positions(meshes[i]);  // checks the landmarks' faces
     const auto mine = landmark_vertices(meshes[i]);
     if (mine.size() != first.size()) return std::nullopt;
     std::vector<int> li;

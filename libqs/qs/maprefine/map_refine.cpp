@@ -66,7 +66,7 @@ RefineReport refine_maps(std::vector<dissect::Dissection>& meshes, const RefineO
     if (options.pose_pull > 0) {
       pose.ref = &ref;
       pose.patches = &pull_patches;
-      pose.pose = i < options.poses.size() && options.poses[i].registered()
+      pose.pose = options.reference == 0 && i < options.poses.size() && options.poses[i].registered()
                       ? options.poses[i]
                       : registration::Pose::from_inverse(
                             pose_to_reference(meshes[static_cast<size_t>(options.reference)], meshes[i]));

@@ -66,8 +66,8 @@ struct RefineOptions {
   /// area(v) * |d(u, v)|^2 / (kPullLength * the reference's diagonal)^2, with |d|^2 the squared 3D
   /// distance on the reference's patch (its metric at the target). 0: off. \pre >= 0
   double pose_pull = 0;
-  /// With pose_pull: per mesh, the reference registered onto it (DissectionSet::poses), which the
-  /// pull takes instead of the landmarks' similarity where given.
+  /// With pose_pull and reference 0: per mesh, the first mesh registered onto it
+  /// (DissectionSet::poses), which the pull takes instead of the landmarks' similarity where given.
   std::vector<registration::Pose> poses;
 };
 
