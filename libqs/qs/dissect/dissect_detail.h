@@ -397,9 +397,11 @@ constexpr int kTransferPolishRings = 2;
 /// kTransferPolishRings rings around them, are pulled back toward them under an injectivity
 /// barrier (Polished); where folds remain after the repair, p's own map, or its
 /// stretch-minimized map (minimized_leaf) when the own map folds, is pulled toward them over the
-/// whole node instead (Untangled). p.sp changes only to a bijective map (every face positive,
-/// counted).
-enum class Transfer { Own, Taken, Polished, Untangled };
+/// whole node instead (Untangled). When no bijective map results, p.sp takes the nearest-point
+/// (u, v) as they are, folded, if `pose` is a registration (Folded: the map serves the split only,
+/// whose cuts then run where ref's do); otherwise, or when no vertex has a nearest point, p keeps
+/// its own map (Own).
+enum class Transfer { Own, Taken, Polished, Untangled, Folded };
 Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const registration::Pose& pose,
                            double reach, const NodeMapPuller& untangle, const Context& context, Param& p);
 

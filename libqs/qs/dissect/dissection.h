@@ -295,10 +295,12 @@ struct DissectionSet {
   int same_pose_common = 0;
   int same_pose_loops = 0;  ///< meshes but the first whose seed loop follows the first's by pose
   /// DissectOptions::same_pose_maps: node maps (of meshes but the first, before a split) taken
-  /// over from the first mesh's, and those that kept their own (still folded after the repair);
-  /// of the taken-over ones, those polished after the repair and those untangled from their own
-  /// by DissectOptions::same_pose_untangle.
+  /// over from the first mesh's; of those, the ones left folded (no bijective map near the
+  /// first's, in another pose: they cut where the first mesh's map does), polished after the
+  /// repair, and untangled from their own by DissectOptions::same_pose_untangle; and those that
+  /// kept their own (no bijective map near the first's, in one pose).
   int same_pose_maps = 0;
+  int same_pose_folded_taken = 0;
   int same_pose_own_maps = 0;
   int same_pose_polished = 0;
   int same_pose_untangled = 0;

@@ -157,11 +157,24 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     }
     blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
+  // No bijective map near the targets (mesh 0's map folds there: a leg squeezed to zero uv area).
+  // In another pose (a registration), the targets as they are: the map serves only the split,
+  // whose cuts then run where mesh 0's do, and the children are parameterized afresh; the own map
+  // of a limb bent otherwise cuts elsewhere (a posed horse's hoof: 21% of the diagonal). In one
+  // pose (a similarity: the same shape), the own map cuts close to mesh 0's, and folded targets
+  // can tangle the cuts (a camel against its re-tessellation: 214 folded uv faces, pose given up).
+  auto as_targets = [&] {
+    if (!pose.registered()) return Transfer::Own;
+    for (int v = 0; v < n; ++v)
+      if (has_target[v]) p.sp.uv[v] = target[v];
+    param::count_uv_faces(pm.faces, p.sp);
+    return Transfer::Folded;
+  };
   if (repaired && (folded == 0 || !untangle)) {
     p.sp = std::move(*repaired);
     return Transfer::Taken;
   }
-  if (!untangle) return Transfer::Own;
+  if (!untangle) return as_targets();
   // The untangler (the map pulled toward the targets under an injectivity barrier). After a
   // repair, from the repaired map, free only where it left the targets (kTransferPolishRings
   // rings around): the repair's solves of the own weights put those vertices by the own map's
@@ -179,7 +192,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
       if (!off[v]) hold[v] = 1;
   } else if (!p.sp.bijective()) {
     const param::SquareParam m = minimized_leaf(p, kRepairRounds, context);
-    if (m.uv.empty() || !m.bijective()) return Transfer::Own;
+    if (m.uv.empty() || !m.bijective()) return as_targets();
     start = m.uv;
   }
   param::SquareParam sp = p.sp;
@@ -188,7 +201,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     param::count_uv_faces(pm.faces, sp);
   }
   if (sp.uv == p.sp.uv || !sp.bijective()) {
-    if (!repaired) return Transfer::Own;
+    if (!repaired) return as_targets();
     p.sp = std::move(*repaired);
     return Transfer::Taken;
   }

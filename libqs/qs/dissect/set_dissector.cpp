@@ -661,15 +661,17 @@ DissectionSet SetDissector::run() {
       }
       // DissectOptions::same_pose_maps: every mesh's map of the node taken over from mesh 0's, also
       // where mesh 0's folds (a leg squeezed to zero uv area): the split cuts every mesh at equal
-      // (u, v), so the others must follow mesh 0's map as it is, and only theirs must be bijective
-      // (a camel against its re-tessellation: a hoof in another leg's patch, 31% of the diagonal).
+      // (u, v), so the others must follow mesh 0's map as it is (a camel against its
+      // re-tessellation: a hoof in another leg's patch, 31% of the diagonal). In another pose,
+      // where no bijective map follows it, the nearest points' (u, v) as they are, folded, still
+      // cut where mesh 0 is cut (see transfer_node_map).
       if (opt_.same_pose && opt_.same_pose_maps && nm > 1) {
         const TriMesh ref_mesh{ps[0].ex.pm.positions, ps[0].ex.pm.faces};
         const metro::SurfaceDistance on_ref(ref_mesh, "the first mesh's node");
         std::vector<Transfer> taken(nm, Transfer::Own);
         Context quiet = ctx_.without_progress();
         quiet.log = nullptr;
-        // Also where mesh i's own map of the node folds; only a bijective result is taken.
+        // Also where mesh i's own map of the node folds.
         parallel_for(nm - 1, node_faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t k) {
           Param& p = ps[k + 1];
           taken[k + 1] = transfer_node_map(ps[0], on_ref, pose_[k + 1], kSamePoseReach * pose_diagonal_[0],
@@ -677,6 +679,7 @@ DissectionSet SetDissector::run() {
         });
         for (size_t i = 1; i < nm; ++i) {
           ++(taken[i] == Transfer::Own ? out.same_pose_own_maps : out.same_pose_maps);
+          out.same_pose_folded_taken += taken[i] == Transfer::Folded;
           out.same_pose_polished += taken[i] == Transfer::Polished;
           out.same_pose_untangled += taken[i] == Transfer::Untangled;
         }

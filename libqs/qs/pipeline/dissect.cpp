@@ -308,7 +308,8 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
            << sets.same_pose_splits << " splits with inner corners placed by pose, " << sets.same_pose_common
            << " at the common (u,v); " << sets.same_pose_maps
            << " node maps taken over from the first mesh by nearest points, " << sets.same_pose_own_maps
-           << " kept their own (folded); of those taken over " << sets.same_pose_polished
+           << " kept their own; of those taken over " << sets.same_pose_folded_taken
+           << " left folded (the cuts follow the first mesh's), " << sets.same_pose_polished
            << " polished after the repair, " << sets.same_pose_untangled << " untangled from their own"
            << (sets.posed_corners_fallback.empty()
                    ? std::string()
