@@ -99,7 +99,7 @@ TEST(Registration, PoseMapsPointsAndNormalsBothWays) {
   for (int v = 0; v < p.a.num_vertices(); ++v) {
     forward += (pose.forward(p.a.positions[v]) - p.b.positions[v]).norm();
     back += (pose.inverse(pose.forward(p.a.positions[v])) - p.a.positions[v]).norm();
-    turned += pose.forward_normal(p.a.positions[v], na[v]).normalized().dot(nb[v]);
+    turned += pose.forward(p.a.positions[v], na[v]).normal.normalized().dot(nb[v]);
   }
   const int n = p.a.num_vertices();
   EXPECT_LT(forward / n / diag, 0.02);   // each vertex near its exact image

@@ -29,8 +29,8 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   int placed = 0;
   for (int v = 0; v < n; ++v) {
     if (fixed[v]) continue;
-    const Vec3 q = pose.inverse(pm.positions[v]);
-    const auto c = on_ref.closest_facing(q, pose.inverse_normal(pm.positions[v], normal[v]), kSamePoseFacingCos);
+    const auto [q, facing] = pose.inverse(pm.positions[v], normal[v]);
+    const auto c = on_ref.closest_facing(q, facing, kSamePoseFacingCos);
     if (c.face < 0 || c.distance > reach) {
       unplaced[v] = 1;
       continue;

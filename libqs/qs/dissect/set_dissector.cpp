@@ -342,8 +342,8 @@ std::vector<std::array<Vec2, 4>> SetDissector::posed_corners(const std::vector<P
     }
     bool near = true;
     for (int c = 0; c < 4 && near; ++c) {
-      const Vec3 target = pose_[i].forward(x0[c]);
-      const Vec3 facing = pose_[i].forward_normal(x0[c], n0[c]).normalized();
+      const auto [target, turned] = pose_[i].forward(x0[c], n0[c]);
+      const Vec3 facing = turned.normalized();
       double best = INFINITY;
       for (size_t k = 0; k < pm.faces.size(); ++k) {
         const Tri& t = pm.faces[k];

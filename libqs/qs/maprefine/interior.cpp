@@ -205,7 +205,8 @@ void add_pull(PatchProblem& pr, const dissect::Chart& chart, const PosePull& pul
   for (size_t l = 0; l < pr.uv.size(); ++l) {
     if (pr.dims[l] == 0) continue;
     const Vec3& x = chart.mesh.positions[pr.vertices[l]];
-    if (const auto t = locate(patch[l], pull.pose.inverse(x), pull.pose.inverse_normal(x, normal[l]))) {
+    const auto [y, facing] = pull.pose.inverse(x, normal[l]);
+    if (const auto t = locate(patch[l], y, facing)) {
       pr.target[l] = t->uv;
       pr.pull[l] = pull.weight * area[l] * t->metric;
     }

@@ -22,10 +22,6 @@ constexpr int kBlock = 1024;
 /// Steps of extract_rotation per round.
 constexpr int kRotationSteps = 6;
 
-/// The pull's targets (nearest points of B) are found again every this many rounds while the
-/// pull is weak (stages below 0.1), every round after.
-constexpr int kWeakPullEvery = 1;
-
 /// A facing nearest point keeps a thin part's sides apart (two fingers, a lip); its normal may
 /// be turned this far from the query's (cos).
 constexpr double kFacingCos = 0.3;
@@ -180,16 +176,13 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     for (int it = 0; it < options.iterations; ++it) {
       context.check_cancel();
       // Local: each vertex's rotation; the pull's targets.
-      const bool find = mu >= 0.1 || it % kWeakPullEvery == 0;
-      std::vector<Vec3> normal;
-      if (find) normal = vertex_normals(x, a.faces);
+      const std::vector<Vec3> normal = vertex_normals(x, a.faces);
       for_blocks(n, threads, context, [&](int i) {
         Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
         for (int p = start[i]; p < start[i + 1]; ++p)
           cov += weight[p] * (x[i] - x[nbr[p]]) * (rest[i] - rest[nbr[p]]).transpose();
         extract_rotation(cov, quat[i]);
         rot[i] = quat[i].toRotationMatrix();
-        if (!find) return;
         auto c = on_b.closest_facing(x[i], normal[i], kFacingCos, hint[i]);
         if (c.face < 0) c = on_b.closest(x[i]);
         target[i] = c.point;
@@ -308,32 +301,26 @@ Pose::Pose(const TriMesh& a, Registration registration) {
 
 bool Pose::registered() const { return impl_->a.has_value(); }
 
-Vec3 Pose::forward(const Vec3& x) const {
+Vec3 Pose::forward(const Vec3& x) const { return forward(x, Vec3::Zero()).point; }
+
+Vec3 Pose::inverse(const Vec3& y) const { return inverse(y, Vec3::Zero()).point; }
+
+Pose::Moved Pose::forward(const Vec3& x, const Vec3& n) const {
   const Impl& m = *impl_;
-  if (!m.a) return (m.similarity * x.homogeneous()).head<3>();
+  if (!m.a) return {(m.similarity * x.homogeneous()).head<3>(), m.similarity.topLeftCorner<3, 3>() * n};
   const Located l = locate(*m.a, *m.on_a, x);
   const Tri& t = m.moved->faces[l.face];
-  return l.w[0] * m.moved->positions[t[0]] + l.w[1] * m.moved->positions[t[1]] + l.w[2] * m.moved->positions[t[2]];
+  return {l.w[0] * m.moved->positions[t[0]] + l.w[1] * m.moved->positions[t[1]] + l.w[2] * m.moved->positions[t[2]],
+          m.turns[m.corner(l)] * n};
 }
 
-Vec3 Pose::forward_normal(const Vec3& x, const Vec3& n) const {
+Pose::Moved Pose::inverse(const Vec3& y, const Vec3& n) const {
   const Impl& m = *impl_;
-  if (!m.a) return m.similarity.topLeftCorner<3, 3>() * n;
-  return m.turns[m.corner(locate(*m.a, *m.on_a, x))] * n;
-}
-
-Vec3 Pose::inverse(const Vec3& y) const {
-  const Impl& m = *impl_;
-  if (!m.a) return (m.inverse * y.homogeneous()).head<3>();
+  if (!m.a) return {(m.inverse * y.homogeneous()).head<3>(), m.inverse.topLeftCorner<3, 3>() * n};
   const Located l = locate(*m.moved, *m.on_moved, y);
   const Tri& t = m.a->faces[l.face];
-  return l.w[0] * m.a->positions[t[0]] + l.w[1] * m.a->positions[t[1]] + l.w[2] * m.a->positions[t[2]];
-}
-
-Vec3 Pose::inverse_normal(const Vec3& y, const Vec3& n) const {
-  const Impl& m = *impl_;
-  if (!m.a) return m.inverse.topLeftCorner<3, 3>() * n;
-  return m.turns[m.corner(locate(*m.moved, *m.on_moved, y))].transpose() * n;
+  return {l.w[0] * m.a->positions[t[0]] + l.w[1] * m.a->positions[t[1]] + l.w[2] * m.a->positions[t[2]],
+          m.turns[m.corner(l)].transpose() * n};
 }
 
 }  // namespace qs::registration

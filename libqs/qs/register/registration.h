@@ -67,10 +67,14 @@ class Pose {
 
   bool registered() const;
   Vec3 forward(const Vec3& x) const;
-  /// A normal at x (on A) turned into B's frame (by the similarity's linear part: not unit length).
-  Vec3 forward_normal(const Vec3& x, const Vec3& n) const;
   Vec3 inverse(const Vec3& y) const;
-  Vec3 inverse_normal(const Vec3& y, const Vec3& n) const;
+  /// A point and a normal there, moved together (one lookup); the normal turned by the local
+  /// rotation (by the similarity's linear part: not unit length).
+  struct Moved {
+    Vec3 point, normal;
+  };
+  Moved forward(const Vec3& x, const Vec3& n) const;
+  Moved inverse(const Vec3& y, const Vec3& n) const;
 
   struct Impl;
 
