@@ -4,6 +4,7 @@
 
 #include <cstdint>
 
+#include "qs/dissect/dissection.h"
 #include "qs/family/family.h"
 #include "qs/family/pose.h"
 
@@ -26,6 +27,16 @@ inline PosedAnimal posed_animal(std::uint64_t seed) {
   out.b = family::pose_mesh(out.a, {}).mesh;
   out.landmarks = family::choose_landmarks(out.a);
   return out;
+}
+
+/// `mesh` to dissect with the automatic landmarks `l` (seeds and features as vertex ids).
+inline dissect::MeshToDissect with_landmarks(const TriMesh& mesh, const family::PoseLandmarks& l, const char* name) {
+  dissect::MeshToDissect m;
+  m.mesh = &mesh;
+  m.seeds = std::array<int, 4>{l.seeds[0], l.seeds[1], l.seeds[2], l.seeds[3]};
+  for (const auto& [feature, v] : l.features) m.features.push_back({feature, v, {}});
+  m.name = name;
+  return m;
 }
 
 }  // namespace qs::test

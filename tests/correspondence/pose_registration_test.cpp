@@ -14,20 +14,6 @@ const qs::test::PosedAnimal& posed() {
   return p;
 }
 
-qs::dissect::MeshToDissect input(const qs::TriMesh& mesh, const qs::family::PoseLandmarks& l, const char* name) {
-  qs::dissect::MeshToDissect m;
-  m.mesh = &mesh;
-  m.seeds = std::array<int, 4>{l.seeds[0], l.seeds[1], l.seeds[2], l.seeds[3]};
-  for (const auto& [feature, v] : l.features) {
-    qs::dissect::Feature f;
-    f.name = feature;
-    f.vertex = v;
-    m.features.push_back(f);
-  }
-  m.name = name;
-  return m;
-}
-
 // The dissection's mean error against the exact map (vertex i <-> vertex i), % of the diagonal.
 double mean_error(const qs::dissect::DissectionSet& set) {
   const qs::test::PosedAnimal& p = posed();
@@ -46,7 +32,8 @@ double mean_error(const qs::dissect::DissectionSet& set) {
 
 TEST(PoseRegistration, APosedPairIsDissectedInOnePoseThroughTheRegistration) {
   const qs::test::PosedAnimal& p = posed();
-  const std::vector<qs::dissect::MeshToDissect> meshes{input(p.a, p.landmarks, "a"), input(p.b, p.landmarks, "b")};
+  const std::vector<qs::dissect::MeshToDissect> meshes{qs::test::with_landmarks(p.a, p.landmarks, "a"),
+                                                       qs::test::with_landmarks(p.b, p.landmarks, "b")};
   const auto registered = qs::dissect::dissect_set(meshes, {});
   ASSERT_EQ(registered.poses.size(), 2u);
   EXPECT_TRUE(registered.poses[1].registered());

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 
+#include "../common/posed_animal.h"
 #include "../common/shared_meshes.h"
 #include "qs/correspondence/correspondence.h"
 #include "qs/dissect/dissection.h"
@@ -17,15 +18,6 @@ namespace {
 
 namespace cr = qs::correspondence;
 
-qs::dissect::MeshToDissect input(const qs::TriMesh& mesh, const qs::family::PoseLandmarks& l, const char* name) {
-  qs::dissect::MeshToDissect m;
-  m.mesh = &mesh;
-  m.seeds = std::array<int, 4>{l.seeds[0], l.seeds[1], l.seeds[2], l.seeds[3]};
-  for (const auto& [feature, v] : l.features) m.features.push_back({feature, v, {}});
-  m.name = name;
-  return m;
-}
-
 TEST(SharedMeshes, APosedHorseIsCutWhereTheFirstMeshIsCutWhereItsMapFolds) {
   const std::filesystem::path file = qs::testing::shared_meshes_dir() / "horse_5k.obj";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
@@ -37,7 +29,8 @@ TEST(SharedMeshes, APosedHorseIsCutWhereTheFirstMeshIsCutWhereItsMapFolds) {
 
   qs::dissect::DissectOptions o;  // as qs-dissect runs it
   o.same_pose_untangle = qs::maprefine::untangler();
-  const auto set = qs::dissect::dissect_set({input(horse, landmarks, "horse"), input(posed, landmarks, "posed")}, o);
+  const auto set = qs::dissect::dissect_set(
+      {qs::test::with_landmarks(horse, landmarks, "horse"), qs::test::with_landmarks(posed, landmarks, "posed")}, o);
   ASSERT_EQ(set.poses.size(), 2u);
   EXPECT_TRUE(set.poses[1].registered());
   EXPECT_GT(set.same_pose_folded_taken, 0);
