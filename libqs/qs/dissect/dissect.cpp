@@ -24,47 +24,44 @@ namespace qs::dissect {
 
 namespace {
 
-// A mesh's landmarks by name ("seed0".."seed3", then its features), as 3D points; empty without
-// seeds.
-std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect& m) {
-  std::vector<std::pair<std::string, Vec3>> out;
+// A mesh's landmarks by name ("seed0".."seed3", then its features): each its 3D point and a vertex
+// (a landmark inside a face: the face's corner nearest to it); empty without seeds.
+struct NamedLandmark {
+  std::string name;
+  Vec3 position;
+  int vertex = -1;
+};
+std::vector<NamedLandmark> mesh_landmarks(const MeshToDissect& m) {
+  std::vector<NamedLandmark> out;
   const TriMesh& mesh = *m.mesh;
-  auto at = [&](int vertex, const landmarks::SurfacePoint& where) {
-    if (vertex >= 0 && vertex < mesh.num_vertices()) return mesh.positions[vertex];
+  auto add = [&](std::string name, int vertex, const landmarks::SurfacePoint& where) {
+    if (vertex >= 0 && vertex < mesh.num_vertices()) {
+      out.push_back({std::move(name), mesh.positions[vertex], vertex});
+      return;
+    }
     if (where.face < 0 || where.face >= mesh.num_faces())
       throw InvalidInput((m.name.empty() ? std::string("a mesh") : m.name) + ": a landmark refers to face " +
                          std::to_string(where.face) + ", out of range (0.." + std::to_string(mesh.num_faces() - 1) +
                          ")");
-    return landmarks::position_of(mesh, where);
-  };
-  for (int k = 0; k < 4; ++k) {
-    if (m.seed_points) out.emplace_back("seed" + std::to_string(k), at(-1, (*m.seed_points)[k]));
-    else if (m.seeds) out.emplace_back("seed" + std::to_string(k), at((*m.seeds)[k], {}));
-    else return {};
-  }
-  for (const auto& f : m.features) out.emplace_back(f.name, at(f.vertex, f.where));
-  return out;
-}
-
-// A mesh's landmark vertices by name (a landmark inside a face: the face's corner nearest to it).
-// \pre landmark_positions(m) did not throw (every face in range).
-std::vector<std::pair<std::string, int>> landmark_vertices(const MeshToDissect& m) {
-  std::vector<std::pair<std::string, int>> out;
-  const TriMesh& mesh = *m.mesh;
-  auto at = [&](int vertex, const landmarks::SurfacePoint& where) {
-    if (vertex >= 0) return vertex;
     const Vec3 x = landmarks::position_of(mesh, where);
     int best = mesh.faces[where.face][0];
     for (int v : mesh.faces[where.face])
       if ((mesh.positions[v] - x).squaredNorm() < (mesh.positions[best] - x).squaredNorm()) best = v;
-    return best;
+    out.push_back({std::move(name), x, best});
   };
   for (int k = 0; k < 4; ++k) {
-    if (m.seed_points) out.emplace_back("seed" + std::to_string(k), at(-1, (*m.seed_points)[k]));
-    else if (m.seeds) out.emplace_back("seed" + std::to_string(k), (*m.seeds)[k]);
+    if (m.seed_points) add("seed" + std::to_string(k), -1, (*m.seed_points)[k]);
+    else if (m.seeds) add("seed" + std::to_string(k), (*m.seeds)[k], {});
     else return {};
   }
-  for (const auto& f : m.features) out.emplace_back(f.name, at(f.vertex, f.where));
+  for (const auto& f : m.features) add(f.name, f.vertex, f.where);
+  return out;
+}
+
+// mesh_landmarks' names and 3D points.
+std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect& m) {
+  std::vector<std::pair<std::string, Vec3>> out;
+  for (NamedLandmark& l : mesh_landmarks(m)) out.emplace_back(std::move(l.name), l.position);
   return out;
 }
 
@@ -76,21 +73,19 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
                                                               const Context& context, double& fit,
                                                               double& distortion) {
   fit = distortion = -1;
-  const auto first_at = landmark_positions(meshes[0]);  // checks the landmarks' faces
-  const auto first = landmark_vertices(meshes[0]);
-  if (first.empty()) return std::nullopt;
+  std::vector<std::vector<NamedLandmark>> l(meshes.size());
+  for (size_t i = 0; i < meshes.size(); ++i) l[i] = mesh_landmarks(meshes[i]);
+  if (l[0].empty()) return std::nullopt;
   // One surface: the landmarks' geodesic distances, every mesh's against the first's.
   std::vector<int> l0;
-  for (const auto& [name, v] : first) l0.push_back(v);
+  for (const NamedLandmark& x : l[0]) l0.push_back(x.vertex);
   const GeodesicCoordinates c0 = geodesic_coordinates(*meshes[0].mesh, l0);
   for (size_t i = 1; i < meshes.size(); ++i) {
-    landmark_positions(meshes[i]);  // checks the landmarks' faces
-    const auto mine = landmark_vertices(meshes[i]);
-    if (mine.size() != first.size()) return std::nullopt;
+    if (l[i].size() != l[0].size()) return std::nullopt;
     std::vector<int> li;
-    for (size_t k = 0; k < mine.size(); ++k) {
-      if (mine[k].first != first[k].first) return std::nullopt;
-      li.push_back(mine[k].second);
+    for (size_t k = 0; k < l[i].size(); ++k) {
+      if (l[i][k].name != l[0][k].name) return std::nullopt;
+      li.push_back(l[i][k].vertex);
     }
     if (!(landmark_discrepancy(c0, l0, geodesic_coordinates(*meshes[i].mesh, li), li) <= detail::kIntrinsicLoopIsometry))
       return std::nullopt;
@@ -98,9 +93,8 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   std::vector<registration::Pose> poses(meshes.size());
   fit = distortion = 0;
   for (size_t i = 1; i < meshes.size(); ++i) {
-    const auto mine = landmark_positions(meshes[i]);
     std::vector<registration::LandmarkPair> pairs;
-    for (size_t k = 0; k < mine.size(); ++k) pairs.push_back({first_at[k].second, mine[k].second});
+    for (size_t k = 0; k < l[i].size(); ++k) pairs.push_back({l[0][k].position, l[i][k].position});
     registration::Registration r;
     try {
       r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
