@@ -4,9 +4,11 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 
+#include "qs/core/anderson.h"
 #include "qs/core/error.h"
 #include "qs/core/parallel.h"
 #include "qs/landmarks/landmarks.h"
@@ -21,6 +23,9 @@ constexpr int kBlock = 1024;
 
 /// Steps of extract_rotation per round.
 constexpr int kRotationSteps = 6;
+
+/// Past rounds that the Anderson acceleration combines.
+constexpr int kAndersonDepth = 5;
 
 /// A facing nearest point keeps a thin part's sides apart (two fingers, a lip); its normal may
 /// be turned this far from the query's (cos).
@@ -146,6 +151,8 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
   std::vector<Eigen::Quaterniond> quat(n, Eigen::Quaterniond::Identity());
   std::vector<Vec3> target(n);
   std::vector<int> hint(n, -1);  // per vertex: its last nearest point's triangle in on_b's tree
+  std::vector<double> vertex_energy(n);
+  Anderson aa(kAndersonDepth);
   param::SupernodalCholesky llt;
   bool analyzed = false;
   for (const double mu : options.stages) {
@@ -173,9 +180,10 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     }
     if (!llt.factorize(m, threads))
       throw InternalError("register_surface: the deformation's system is not positive definite");
-    for (int it = 0; it < options.iterations; ++it) {
-      context.check_cancel();
-      // Local: each vertex's rotation; the pull's targets.
+    const double pull = mu * mean_weight / mean_area;
+    // Local step at x: each vertex's rotation, its pull's target, and the energy that the
+    // global step lowers (with these rotations and targets).
+    auto local = [&]() {
       const std::vector<Vec3> normal = vertex_normals(x, a.faces);
       for_blocks(n, threads, context, [&](int i) {
         Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
@@ -186,20 +194,53 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
         auto c = on_b.closest_facing(x[i], normal[i], kFacingCos, hint[i]);
         if (c.face < 0) c = on_b.closest(x[i]);
         target[i] = c.point;
+        double e = 2 * pull * area[i] * (x[i] - target[i]).squaredNorm();
+        for (int p = start[i]; p < start[i + 1]; ++p)
+          e += weight[p] * ((x[i] - x[nbr[p]]) - rot[i] * (rest[i] - rest[nbr[p]])).squaredNorm();
+        vertex_energy[i] = e;
       });
-      // Global: the positions.
+      double e = 0;
+      for (int i = 0; i < n; ++i) e += vertex_energy[i];
+      for (const Held& h : held)
+        e += 2 * hold * (h.w[0] * x[h.t[0]] + h.w[1] * x[h.t[1]] + h.w[2] * x[h.t[2]] - h.target).squaredNorm();
+      return e;
+    };
+    // Global step: the positions that the rotations and targets ask for.
+    auto global = [&]() {
       Eigen::MatrixXd rhs(n, 3);
       for_blocks(n, threads, context, [&](int i) {
-        Vec3 r = mu * mean_weight * area[i] / mean_area * target[i];
+        Vec3 r = pull * area[i] * target[i];
         for (int p = start[i]; p < start[i + 1]; ++p)
           r += 0.5 * weight[p] * (rot[i] + rot[nbr[p]]) * (rest[i] - rest[nbr[p]]);
         rhs.row(i) = r.transpose();
       });
       for (const Held& h : held)
         for (int r = 0; r < 3; ++r) rhs.row(h.t[r]) += hold * h.w[r] * h.target.transpose();
-      const Eigen::MatrixXd sol = llt.solve(rhs, threads);
-      for (int i = 0; i < n; ++i) x[i] = sol.row(i).transpose();
+      return Eigen::MatrixXd(llt.solve(rhs, threads));
+    };
+    // x as one vector of 3n coordinates (std::vector<Vec3> is contiguous).
+    auto flat = [&]() { return Eigen::Map<Eigen::VectorXd>(x[0].data(), 3 * n); };
+    // Local/global rounds, Anderson-accelerated with its safeguard: an accelerated point whose
+    // energy is not below the last round's is replaced by the plain step's.
+    aa.clear();
+    double last_energy = std::numeric_limits<double>::infinity();
+    bool accelerated = false;
+    Eigen::VectorXd plain(3 * n);  // the last global step's positions
+    for (int it = 0; it < options.iterations; ++it) {
+      context.check_cancel();
+      double energy = local();
+      if (accelerated && energy >= last_energy) {
+        flat() = plain;
+        energy = local();
+        aa.clear();
+      }
+      last_energy = energy;
+      const Eigen::MatrixXd sol = global();
+      for (int i = 0; i < n; ++i) plain.segment<3>(3 * i) = sol.row(i).transpose();
+      accelerated = aa.step(plain, plain - flat());
+      flat() = accelerated ? aa.next() : plain;
     }
+    flat() = plain;
   }
 
   for (const Vec3& p : x)
