@@ -3,7 +3,8 @@
 # (spot_6k, 6k to 6M faces), double cones whose caps are fans (one vertex of valence 5k-40k),
 # generated families of 2-32 meshes dissected together (qs-family generate), a mesh paired
 # with its own re-tessellation (qs-family retessellate, 40k-150k faces), a face re-tessellated
-# twice (max_planck_11k to 28k and 140k faces) and a set of four generated 100k-face meshes.
+# twice (max_planck_11k to 28k and 140k faces), a set of four generated 100k-face meshes and
+# koala_100k against itself in another pose re-tessellated to 140k faces.
 # Every mesh is made by script (bench/scale_meshes.py, qs-family) into OUT_DIR/meshes and kept
 # for the next run.
 #
@@ -12,7 +13,7 @@
 #
 # --quick: spot to 375k faces, the four cones, families of 1-16, one 40k pair and the face pair
 # (about 70 s of CPU, 2-3 minutes on 2 busy cores, 300 MB). Without it: spot to 6M faces,
-# families to 32, pairs to 150k, the four 100k-face meshes (the 6M-face mesh alone takes minutes
+# families to 32, pairs to 150k, the four 100k-face meshes, the posed koala (the 6M-face mesh alone takes minutes
 # of CPU and about 4 GB of memory).
 #
 # Per run (qs-dissect as a user runs it: dissection and map refinement, all threads): wall time,
@@ -186,4 +187,20 @@ if [ "$quick" = 0 ]; then
   echo "== four 100k-face meshes" >&2
   table "Four generated meshes dissected together (qs-family generate, 100000 faces a mesh)" faces \
     "family100k_4 400000 $(run family100k_4 "${shapes[@]}")"
+fi
+
+# 7. A mesh in another pose (full set only): koala_100k posed as rigidly as possible and the pose
+# re-tessellated to 140k faces (qs-family pose --retessellate --keep-shape), dissected as a pair
+# with the landmarks the generator chose (the first mesh registered onto the other).
+if [ "$quick" = 0 ]; then
+  posed=$M/koala_posed/posed
+  if [ ! -f "${posed}_r.obj" ]; then
+    mkdir -p "$M/koala_posed"
+    "$TOOLS/qs-family" pose "$MESHES/koala_100k.obj" --retessellate --faces 140000 --keep-shape -o "$posed.obj" -q \
+      || { echo "scale.sh: qs-family pose failed" >&2; exit 1; }
+  fi
+  echo "== koala_100k against its pose re-tessellated to $(faces_of "${posed}_r.obj") faces" >&2
+  table "A mesh and its pose, re-tessellated, as a pair (koala_100k; faces of both)" faces \
+    "koala_posed $(($(faces_of "$MESHES/koala_100k.obj") + $(faces_of "${posed}_r.obj"))) $(run koala_posed \
+      "$MESHES/koala_100k.obj" "${posed}_r.obj" --landmarks "$posed.source.landmarks.json" "${posed}_r.landmarks.json")"
 fi

@@ -366,3 +366,24 @@ TEST(Metro, AThrowingProgressCallbackStopsTheWorkCleanly) {
   o.threads = 2;
   EXPECT_THROW(metro(a, a, o, ctx), std::runtime_error);
 }
+
+TEST(Metro, VertexDistanceWeighsBothWaysByArea) {
+  // A unit icosphere and the same scaled by 1.1: every vertex 0.1 from the other surface (within
+  // its sag), both ways; the same on one thread.
+  const TriMesh a = qs::shapes::icosphere(4);
+  const TriMesh b = transformed(a, 1.1, Vec3::Zero());
+  const qs::metro::SurfaceDistance ta(a), tb(b);
+  const auto d = qs::metro::vertex_distance(a, ta, b, tb, 0.99);
+  EXPECT_NEAR(d.mean, 0.1, 0.002);
+  EXPECT_NEAR(d.quantile, 0.1, 0.002);
+  EXPECT_GE(d.quantile, d.mean - 0.002);
+  qs::Context one;
+  one.threads = 1;
+  const auto d1 = qs::metro::vertex_distance(a, ta, b, tb, 0.99, one);
+  EXPECT_EQ(d1.mean, d.mean);
+  EXPECT_EQ(d1.quantile, d.quantile);
+  // A surface against itself: zero.
+  const auto self = qs::metro::vertex_distance(a, ta, a, ta, 0.5);
+  EXPECT_EQ(self.mean, 0);
+  EXPECT_EQ(self.quantile, 0);
+}

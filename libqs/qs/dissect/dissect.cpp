@@ -110,43 +110,6 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   return poses;
 }
 
-// The distances from mesh's vertices to `to`, each with its vertex's area (a third of its faces').
-std::vector<std::pair<double, double>> weighted_distances(const TriMesh& mesh, const metro::SurfaceDistance& to) {
-  std::vector<double> area(mesh.positions.size(), 0.0);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const double third = face_area(mesh, f) / 3;
-    for (int v : mesh.faces[f]) area[v] += third;
-  }
-  std::vector<std::pair<double, double>> out;
-  for (size_t v = 0; v < mesh.positions.size(); ++v)
-    if (area[v] > 0) out.emplace_back(to.distance(mesh.positions[v]), area[v]);
-  return out;
-}
-
-// The mean and the 99% quantile of two directions' weighted distances, each direction weighing half.
-PoseDistance distance_stats(std::vector<std::pair<double, double>> ab, std::vector<std::pair<double, double>> ba) {
-  auto total = [](const std::vector<std::pair<double, double>>& v) {
-    double t = 0;
-    for (const auto& dw : v) t += dw.second;
-    return t;
-  };
-  const double ta = total(ab), tb = total(ba);
-  if (!(ta > 0) || !(tb > 0)) return {};
-  for (auto& dw : ab) dw.second /= 2 * ta;
-  for (auto& dw : ba) dw.second /= 2 * tb;
-  ab.insert(ab.end(), ba.begin(), ba.end());
-  std::sort(ab.begin(), ab.end());
-  PoseDistance out;
-  for (const auto& [d, w] : ab) out.mean += w * d;
-  double below = 0;
-  for (const auto& [d, w] : ab) {
-    out.p99 = d;
-    below += w;
-    if (below >= 0.99) break;
-  }
-  return out;
-}
-
 // dissect_set after its checks and the pose detection: the dissection and its safety nets. A
 // result with folded leaves is dissected again with safer options, in this order of preference:
 // the pose with the options' maps, the pose with edge+mean-value, the same two with posed corners
@@ -252,7 +215,7 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   std::optional<PoseDistance> measured;
   bool detected = false, identical = true;
   if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
-    measured = pose_distance(meshes);
+    measured = pose_distance(meshes, context);
     if (measured) {
       // One mesh given several times maps by the identity already; nothing to pose.
       for (size_t i = 1; i < meshes.size() && identical; ++i)
@@ -284,7 +247,7 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
 
 }  // namespace
 
-std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& meshes) {
+std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& meshes, const Context& context) {
   if (meshes.size() < 2) return std::nullopt;
   const auto first = landmark_positions(meshes[0]);
   if (first.empty()) return std::nullopt;
@@ -304,10 +267,9 @@ std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& mesh
     TriMesh moved = *meshes[i].mesh;
     for (auto& x : moved.positions) x = (pose * x.homogeneous()).head<3>();
     const metro::SurfaceDistance to_moved(moved, "a moved mesh");
-    const PoseDistance d =
-        distance_stats(weighted_distances(moved, to_first), weighted_distances(*meshes[0].mesh, to_moved));
+    const metro::VertexDistance d = metro::vertex_distance(moved, to_moved, *meshes[0].mesh, to_first, 0.99, context);
     worst.mean = std::max(worst.mean, d.mean);
-    worst.p99 = std::max(worst.p99, d.p99);
+    worst.p99 = std::max(worst.p99, d.quantile);
   }
   const double diag = bounding_box(meshes[0].mesh->positions).diagonal();
   if (!(diag > 0)) return PoseDistance{};

@@ -350,7 +350,7 @@ struct PoseDistance {
   double mean = 0;
   double p99 = 0;
 };
-std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& meshes);
+std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& meshes, const Context& context = {});
 
 /// "geodesic+cotan", "edge+mean-value", ...: the seed curves and patch weights of a dissection.
 std::string maps_name(bool geodesic_seed_curves, bool intrinsic_cotan);

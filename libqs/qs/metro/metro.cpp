@@ -593,4 +593,55 @@ MetroResult metro(const TriMesh& a, const TriMesh& b, const MetroOptions& option
   return res;
 }
 
+namespace {
+
+// Each vertex of `mesh` with a positive area share: (its distance to `to`, its share).
+std::vector<std::pair<double, double>> weighted_vertex_distances(const TriMesh& mesh, const SurfaceDistance& to,
+                                                                 const Context& ctx) {
+  const size_t n = mesh.positions.size();
+  std::vector<double> area(n, 0.0), distance(n, 0.0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const double third = face_area(mesh, f) / 3;
+    for (int v : mesh.faces[f]) area[static_cast<size_t>(v)] += third;
+  }
+  constexpr int kBlock = 1024;
+  parallel_for(static_cast<int>((n + kBlock - 1) / kBlock), ctx, [&](int block) {
+    const size_t end = std::min(n, static_cast<size_t>(block + 1) * kBlock);
+    for (size_t v = static_cast<size_t>(block) * kBlock; v < end; ++v)
+      if (area[v] > 0) distance[v] = to.distance(mesh.positions[v]);
+  });
+  std::vector<std::pair<double, double>> out;
+  for (size_t v = 0; v < n; ++v)
+    if (area[v] > 0) out.emplace_back(distance[v], area[v]);
+  return out;
+}
+
+}  // namespace
+
+VertexDistance vertex_distance(const TriMesh& a, const SurfaceDistance& to_a, const TriMesh& b,
+                               const SurfaceDistance& to_b, double fraction, const Context& ctx) {
+  std::vector<std::pair<double, double>> ab = weighted_vertex_distances(a, to_b, ctx);
+  std::vector<std::pair<double, double>> ba = weighted_vertex_distances(b, to_a, ctx);
+  auto total = [](const std::vector<std::pair<double, double>>& v) {
+    double t = 0;
+    for (const auto& dw : v) t += dw.second;
+    return t;
+  };
+  const double ta = total(ab), tb = total(ba);
+  if (!(ta > 0) || !(tb > 0)) return {};
+  for (auto& dw : ab) dw.second /= 2 * ta;
+  for (auto& dw : ba) dw.second /= 2 * tb;
+  ab.insert(ab.end(), ba.begin(), ba.end());
+  std::sort(ab.begin(), ab.end());
+  VertexDistance out;
+  for (const auto& [d, w] : ab) out.mean += w * d;
+  double below = 0;
+  for (const auto& [d, w] : ab) {
+    out.quantile = d;
+    below += w;
+    if (below >= fraction) break;
+  }
+  return out;
+}
+
 }  // namespace qs::metro

@@ -112,4 +112,15 @@ class SurfaceDistance {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Two surfaces' distance measured at their vertices: each vertex of one (with its area share, a
+/// third of its faces' areas) at its distance to the other, both ways, each way weighing half.
+struct VertexDistance {
+  double mean = 0;      ///< the area-weighted mean
+  double quantile = 0;  ///< the distance that `fraction` of the weight lies within
+};
+/// `to_a` and `to_b` are a's and b's trees. Parallel on the context's threads; the same result on
+/// any thread count. Zero for a surface without area.
+VertexDistance vertex_distance(const TriMesh& a, const SurfaceDistance& to_a, const TriMesh& b,
+                               const SurfaceDistance& to_b, double fraction, const Context& ctx = {});
+
 }  // namespace qs::metro

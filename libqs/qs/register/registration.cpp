@@ -12,6 +12,7 @@
 #include "qs/core/error.h"
 #include "qs/core/parallel.h"
 #include "qs/landmarks/landmarks.h"
+#include "qs/mesh/simplify.h"
 #include "qs/metro/metro.h"
 #include "qs/param/sparse_cholesky.h"
 
@@ -66,168 +67,140 @@ Located locate(const TriMesh& mesh, const metro::SurfaceDistance& tree, const Ve
   return {c.face, landmarks::closest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]])};
 }
 
-/// Area-weighted distances of `from`'s vertices to `to`.
-void distances(const TriMesh& from, const metro::SurfaceDistance& to, std::vector<std::pair<double, double>>& out) {
-  std::vector<double> area(from.positions.size(), 0.0);
-  for (int f = 0; f < from.num_faces(); ++f)
-    for (int v : from.faces[f]) area[v] += face_area(from, f) / 3;
-  for (size_t v = 0; v < from.positions.size(); ++v)
-    if (area[v] > 0) out.emplace_back(to.distance(from.positions[v]), area[v]);
-}
-
-}  // namespace
-
-Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vector<LandmarkPair>& landmarks,
-                              const RegisterOptions& options, const Context& context) {
-  if (landmarks.size() < 3)
-    throw InvalidInput("register_surface: " + std::to_string(landmarks.size()) +
-                       " landmarks; a registration needs at least 3");
-  if (options.iterations < 1 || options.stages.empty())
-    throw InvalidInput("register_surface: at least one stage of at least one iteration expected");
-  const int n = a.num_vertices();
-  const int threads = options.threads;
-
-  // A moved onto B by the landmarks' similarity: the rest shape.
-  std::vector<Vec3> from, to;
-  for (const LandmarkPair& l : landmarks) {
-    from.push_back(l.on_a);
-    to.push_back(l.on_b);
-  }
-  const Eigen::Matrix4d similarity = fit_similarity(from, to);
-  const Eigen::Matrix3d linear = similarity.topLeftCorner<3, 3>();
-  const double scale = std::cbrt(linear.determinant());
-  const Eigen::Matrix3d turn0 = linear / scale;
-  std::vector<Vec3> rest(n);
-  for (int i = 0; i < n; ++i) rest[i] = (similarity * a.positions[i].homogeneous()).head<3>();
-
-  // Cotangent weights of the rest shape, per vertex's neighbours (CSR; an edge once per face).
-  std::vector<int> start(n + 1, 0);
-  for (const Tri& t : a.faces)
-    for (int v : t) start[v + 1] += 2;
-  for (int i = 0; i < n; ++i) start[i + 1] += start[i];
-  std::vector<int> nbr(start[n]);
-  std::vector<double> weight(start[n]);
-  std::vector<double> area(n, 0.0);
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (const Tri& t : a.faces) {
+/// The as-rigid-as-possible deformation of one tessellation of A (rest: in B's frame) toward B,
+/// its landmarks held: cotangent weights, the held points, and the state that the stages move.
+class Deformation {
+ public:
+  /// `original`: the tessellation in A's frame (where the landmarks are located); `rest`: the same
+  /// moved by the landmarks' similarity.
+  Deformation(const TriMesh& original, std::vector<Vec3> rest, const std::vector<LandmarkPair>& landmarks,
+              int threads, const Context& context)
+      : faces_(original.faces), rest_(std::move(rest)), n_(original.num_vertices()), threads_(threads),
+        context_(context) {
+    const int n = n_;
+    // Cotangent weights of the rest shape, per vertex's neighbours (CSR; an edge once per face).
+    start_.assign(n + 1, 0);
+    for (const Tri& t : faces_)
+      for (int v : t) start_[v + 1] += 2;
+    for (int i = 0; i < n; ++i) start_[i + 1] += start_[i];
+    nbr_.resize(start_[n]);
+    weight_.resize(start_[n]);
+    area_.assign(n, 0.0);
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (const Tri& t : faces_) {
       for (int c = 0; c < 3; ++c) {
         const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
-        const Vec3 u = rest[i] - rest[k], v = rest[j] - rest[k];
+        const Vec3 u = rest_[i] - rest_[k], v = rest_[j] - rest_[k];
         const double cross = u.cross(v).norm();
         const double w = 0.5 * std::clamp(cross > 0 ? u.dot(v) / cross : 0.0, 1e-3, 1e3);
-        nbr[fill[i]] = j;
-        weight[fill[i]++] = w;
-        nbr[fill[j]] = i;
-        weight[fill[j]++] = w;
+        nbr_[fill[i]] = j;
+        weight_[fill[i]++] = w;
+        nbr_[fill[j]] = i;
+        weight_[fill[j]++] = w;
       }
-      const double ar = 0.5 * (rest[t[1]] - rest[t[0]]).cross(rest[t[2]] - rest[t[0]]).norm();
-      for (int v : t) area[v] += ar / 3;
+      const double ar = 0.5 * (rest_[t[1]] - rest_[t[0]]).cross(rest_[t[2]] - rest_[t[0]]).norm();
+      for (int v : t) area_[v] += ar / 3;
     }
-  }
-  double mean_area = 0, mean_weight = 0;
-  for (int i = 0; i < n; ++i) {
-    mean_area += area[i] / n;
-    for (int p = start[i]; p < start[i + 1]; ++p) mean_weight += weight[p] / n;
+    for (int i = 0; i < n; ++i) {
+      mean_area_ += area_[i] / n;
+      for (int p = start_[i]; p < start_[i + 1]; ++p) mean_weight_ += weight_[p] / n;
+    }
+    // The landmarks held at B's points: A's point of each, as a face and weights.
+    const metro::SurfaceDistance on_a(original, "A");
+    for (const LandmarkPair& l : landmarks) {
+      const Located at = locate(original, on_a, l.on_a);
+      if (at.face >= 0) held_.push_back({faces_[at.face], at.w, l.on_b});
+    }
+    hold_ = 1e3 * mean_weight_;
+    x_ = rest_;
+    rot_.assign(n, Eigen::Matrix3d::Identity());
+    quat_.assign(n, Eigen::Quaterniond::Identity());
+    target_.resize(n);
+    hint_.assign(n, -1);
+    vertex_energy_.resize(n);
   }
 
-  // The landmarks held at B's points: A's point of each, as a face and weights.
-  const metro::SurfaceDistance on_a(a, "A");
-  struct Held {
-    Tri t;
-    std::array<double, 3> w;
-    Vec3 target;
-  };
-  std::vector<Held> held;
-  for (const LandmarkPair& l : landmarks) {
-    const Located at = locate(a, on_a, l.on_a);
-    if (at.face >= 0) held.push_back({a.faces[at.face], at.w, l.on_b});
-  }
-  const double hold = 1e3 * mean_weight;
+  const std::vector<Vec3>& rest() const { return rest_; }
+  std::vector<Vec3>& positions() { return x_; }
+  std::vector<Eigen::Quaterniond>& rotations() { return quat_; }
+  const std::vector<Eigen::Matrix3d>& rotation_matrices() const { return rot_; }
 
-  const metro::SurfaceDistance on_b(b, "B");
-  std::vector<Vec3> x = rest;
-  std::vector<Eigen::Matrix3d> rot(n, Eigen::Matrix3d::Identity());
-  std::vector<Eigen::Quaterniond> quat(n, Eigen::Quaterniond::Identity());
-  std::vector<Vec3> target(n);
-  std::vector<int> hint(n, -1);  // per vertex: its last nearest point's triangle in on_b's tree
-  std::vector<double> vertex_energy(n);
-  Anderson aa(kAndersonDepth);
-  param::SupernodalCholesky llt;
-  bool analyzed = false;
-  for (const double mu : options.stages) {
+  /// One stage: pull weight mu, `iterations` local/global rounds from the current positions.
+  void stage(double mu, int iterations, const metro::SurfaceDistance& on_b) {
+    const int n = n_;
     // The system of this stage: rigidity + pull + holds (lower triangle).
     std::vector<Eigen::Triplet<double>> lower;
-    lower.reserve(start[n] + n + 9 * held.size());
+    lower.reserve(start_[n] + n + 9 * held_.size());
     for (int i = 0; i < n; ++i) {
-      double diag = mu * mean_weight * area[i] / mean_area;
-      for (int p = start[i]; p < start[i + 1]; ++p) {
-        diag += weight[p];
-        if (nbr[p] < i) lower.emplace_back(i, nbr[p], -weight[p]);  // row nbr[p] holds the same weight
+      double diag = mu * mean_weight_ * area_[i] / mean_area_;
+      for (int p = start_[i]; p < start_[i + 1]; ++p) {
+        diag += weight_[p];
+        if (nbr_[p] < i) lower.emplace_back(i, nbr_[p], -weight_[p]);  // row nbr[p] holds the same weight
       }
       lower.emplace_back(i, i, diag);
     }
-    for (const Held& h : held)
+    for (const Held& h : held_)
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
-          if (h.t[r] >= h.t[c]) lower.emplace_back(h.t[r], h.t[c], hold * h.w[r] * h.w[c]);
+          if (h.t[r] >= h.t[c]) lower.emplace_back(h.t[r], h.t[c], hold_ * h.w[r] * h.w[c]);
     Eigen::SparseMatrix<double> m(n, n);
     m.setFromTriplets(lower.begin(), lower.end());
     m.makeCompressed();
-    if (!analyzed) {
-      llt.analyze(m);
-      analyzed = true;
+    if (!analyzed_) {
+      llt_.analyze(m);
+      analyzed_ = true;
     }
-    if (!llt.factorize(m, threads))
+    if (!llt_.factorize(m, threads_))
       throw InternalError("register_surface: the deformation's system is not positive definite");
-    const double pull = mu * mean_weight / mean_area;
+    const double pull = mu * mean_weight_ / mean_area_;
+    auto& x = x_;
     // Local step at x: each vertex's rotation, its pull's target, and the energy that the
     // global step lowers (with these rotations and targets).
     auto local = [&]() {
-      const std::vector<Vec3> normal = vertex_normals(x, a.faces);
-      for_blocks(n, threads, context, [&](int i) {
+      const std::vector<Vec3> normal = vertex_normals(x, faces_);
+      for_blocks(n, threads_, context_, [&](int i) {
         Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-        for (int p = start[i]; p < start[i + 1]; ++p)
-          cov += weight[p] * (x[i] - x[nbr[p]]) * (rest[i] - rest[nbr[p]]).transpose();
-        extract_rotation(cov, quat[i]);
-        rot[i] = quat[i].toRotationMatrix();
-        auto c = on_b.closest_facing(x[i], normal[i], kFacingCos, hint[i]);
+        for (int p = start_[i]; p < start_[i + 1]; ++p)
+          cov += weight_[p] * (x[i] - x[nbr_[p]]) * (rest_[i] - rest_[nbr_[p]]).transpose();
+        extract_rotation(cov, quat_[i]);
+        rot_[i] = quat_[i].toRotationMatrix();
+        auto c = on_b.closest_facing(x[i], normal[i], kFacingCos, hint_[i]);
         if (c.face < 0) c = on_b.closest(x[i]);
-        target[i] = c.point;
-        double e = 2 * pull * area[i] * (x[i] - target[i]).squaredNorm();
-        for (int p = start[i]; p < start[i + 1]; ++p)
-          e += weight[p] * ((x[i] - x[nbr[p]]) - rot[i] * (rest[i] - rest[nbr[p]])).squaredNorm();
-        vertex_energy[i] = e;
+        target_[i] = c.point;
+        double e = 2 * pull * area_[i] * (x[i] - target_[i]).squaredNorm();
+        for (int p = start_[i]; p < start_[i + 1]; ++p)
+          e += weight_[p] * ((x[i] - x[nbr_[p]]) - rot_[i] * (rest_[i] - rest_[nbr_[p]])).squaredNorm();
+        vertex_energy_[i] = e;
       });
       double e = 0;
-      for (int i = 0; i < n; ++i) e += vertex_energy[i];
-      for (const Held& h : held)
-        e += 2 * hold * (h.w[0] * x[h.t[0]] + h.w[1] * x[h.t[1]] + h.w[2] * x[h.t[2]] - h.target).squaredNorm();
+      for (int i = 0; i < n; ++i) e += vertex_energy_[i];
+      for (const Held& h : held_)
+        e += 2 * hold_ * (h.w[0] * x[h.t[0]] + h.w[1] * x[h.t[1]] + h.w[2] * x[h.t[2]] - h.target).squaredNorm();
       return e;
     };
     // Global step: the positions that the rotations and targets ask for.
     auto global = [&]() {
       Eigen::MatrixXd rhs(n, 3);
-      for_blocks(n, threads, context, [&](int i) {
-        Vec3 r = pull * area[i] * target[i];
-        for (int p = start[i]; p < start[i + 1]; ++p)
-          r += 0.5 * weight[p] * (rot[i] + rot[nbr[p]]) * (rest[i] - rest[nbr[p]]);
+      for_blocks(n, threads_, context_, [&](int i) {
+        Vec3 r = pull * area_[i] * target_[i];
+        for (int p = start_[i]; p < start_[i + 1]; ++p)
+          r += 0.5 * weight_[p] * (rot_[i] + rot_[nbr_[p]]) * (rest_[i] - rest_[nbr_[p]]);
         rhs.row(i) = r.transpose();
       });
-      for (const Held& h : held)
-        for (int r = 0; r < 3; ++r) rhs.row(h.t[r]) += hold * h.w[r] * h.target.transpose();
-      return Eigen::MatrixXd(llt.solve(rhs, threads));
+      for (const Held& h : held_)
+        for (int r = 0; r < 3; ++r) rhs.row(h.t[r]) += hold_ * h.w[r] * h.target.transpose();
+      return Eigen::MatrixXd(llt_.solve(rhs, threads_));
     };
     // x as one vector of 3n coordinates (std::vector<Vec3> is contiguous).
     auto flat = [&]() { return Eigen::Map<Eigen::VectorXd>(x[0].data(), 3 * n); };
     // Local/global rounds, Anderson-accelerated with its safeguard: an accelerated point whose
     // energy is not below the last round's is replaced by the plain step's.
-    aa.clear();
+    Anderson aa(kAndersonDepth);
     double last_energy = std::numeric_limits<double>::infinity();
     bool accelerated = false;
     Eigen::VectorXd plain(3 * n);  // the last global step's positions
-    for (int it = 0; it < options.iterations; ++it) {
-      context.check_cancel();
+    for (int it = 0; it < iterations; ++it) {
+      context_.check_cancel();
       double energy = local();
       if (accelerated && energy >= last_energy) {
         flat() = plain;
@@ -243,6 +216,101 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     flat() = plain;
   }
 
+ private:
+  struct Held {
+    Tri t;
+    std::array<double, 3> w;
+    Vec3 target;
+  };
+  const std::vector<Tri>& faces_;
+  std::vector<Vec3> rest_;
+  int n_;
+  int threads_;
+  const Context& context_;
+  std::vector<int> start_, nbr_;
+  std::vector<double> weight_, area_;
+  double mean_area_ = 0, mean_weight_ = 0, hold_ = 0;
+  std::vector<Held> held_;
+  std::vector<Vec3> x_, target_;
+  std::vector<Eigen::Matrix3d> rot_;
+  std::vector<Eigen::Quaterniond> quat_;
+  std::vector<int> hint_;
+  std::vector<double> vertex_energy_;
+  param::SupernodalCholesky llt_;
+  bool analyzed_ = false;
+};
+
+/// Moves the vertices of `fine` as the deformation of `coarse` (another tessellation of the same
+/// surface in the same rest frame) moved the surface: each fine vertex by its nearest point of
+/// the coarse rest shape, carried with that face's corners, plus its offset from there turned by
+/// the nearest corner's rotation; the rotations are taken over likewise.
+void carry(Deformation& coarse, const TriMesh& coarse_rest, Deformation& fine) {
+  const metro::SurfaceDistance tree(coarse_rest, "the coarse A");
+  const std::vector<Vec3>& rest = fine.rest();
+  std::vector<Vec3>& x = fine.positions();
+  std::vector<Eigen::Quaterniond>& quat = fine.rotations();
+  const std::vector<Vec3>& cx = coarse.positions();
+  const std::vector<Eigen::Quaterniond>& cq = coarse.rotations();
+  for (size_t i = 0; i < rest.size(); ++i) {
+    const Located l = locate(coarse_rest, tree, rest[i]);
+    const Tri& t = coarse_rest.faces[l.face];
+    const int k = l.w[0] >= l.w[1] ? (l.w[0] >= l.w[2] ? 0 : 2) : (l.w[1] >= l.w[2] ? 1 : 2);
+    const Vec3 on = l.w[0] * coarse_rest.positions[t[0]] + l.w[1] * coarse_rest.positions[t[1]] +
+                    l.w[2] * coarse_rest.positions[t[2]];
+    quat[i] = cq[t[k]];
+    x[i] = l.w[0] * cx[t[0]] + l.w[1] * cx[t[1]] + l.w[2] * cx[t[2]] + quat[i] * (rest[i] - on);
+  }
+}
+
+}  // namespace
+
+Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vector<LandmarkPair>& landmarks,
+                              const RegisterOptions& options, const Context& context) {
+  if (landmarks.size() < 3)
+    throw InvalidInput("register_surface: " + std::to_string(landmarks.size()) +
+                       " landmarks; a registration needs at least 3");
+  if (options.iterations < 1 || options.stages.empty())
+    throw InvalidInput("register_surface: at least one stage of at least one iteration expected");
+  const int n = a.num_vertices();
+
+  // A moved onto B by the landmarks' similarity: the rest shape.
+  std::vector<Vec3> from, to;
+  for (const LandmarkPair& l : landmarks) {
+    from.push_back(l.on_a);
+    to.push_back(l.on_b);
+  }
+  const Eigen::Matrix4d similarity = fit_similarity(from, to);
+  const Eigen::Matrix3d linear = similarity.topLeftCorner<3, 3>();
+  const double scale = std::cbrt(linear.determinant());
+  const Eigen::Matrix3d turn0 = linear / scale;
+  auto moved_by_similarity = [&](const std::vector<Vec3>& p) {
+    std::vector<Vec3> out(p.size());
+    for (size_t i = 0; i < p.size(); ++i) out[i] = (similarity * p[i].homogeneous()).head<3>();
+    return out;
+  };
+
+  const metro::SurfaceDistance on_b(b, "B");
+  Deformation fine(a, moved_by_similarity(a.positions), landmarks, options.threads, context);
+  const std::vector<Vec3>& rest = fine.rest();
+  // A large A: every stage but the last on a coarser tessellation of A, carried over to A for the
+  // last. The pull's weight against the rigidity grows with the vertex count (it is per unit area
+  // over the mean vertex area), so the coarse stages' weights are scaled by the count's ratio.
+  size_t first_fine = 0;
+  int last_iterations = options.iterations;
+  if (options.coarse_faces > 0 && a.num_faces() > 2 * options.coarse_faces && options.stages.size() > 1) {
+    const TriMesh coarse_a = mesh::simplify(a, options.coarse_faces);
+    Deformation coarse(coarse_a, moved_by_similarity(coarse_a.positions), landmarks, options.threads, context);
+    const double ratio = static_cast<double>(n) / coarse_a.num_vertices();
+    first_fine = options.stages.size() - 1;
+    for (size_t s = 0; s < first_fine; ++s) coarse.stage(options.stages[s] * ratio, options.iterations, on_b);
+    carry(coarse, TriMesh{coarse.rest(), coarse_a.faces}, fine);
+    last_iterations = (options.iterations + 1) / 2;
+  }
+  for (size_t s = first_fine; s < options.stages.size(); ++s)
+    fine.stage(options.stages[s], s + 1 == options.stages.size() ? last_iterations : options.iterations, on_b);
+  const std::vector<Vec3>& x = fine.positions();
+  const std::vector<Eigen::Matrix3d>& rot = fine.rotation_matrices();
+
   for (const Vec3& p : x)
     if (!p.allFinite()) throw InternalError("register_surface: the deformation diverged (a position is not finite)");
   Registration out;
@@ -252,24 +320,12 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
   // Fit: both ways.
   const TriMesh moved{x, a.faces};
   const metro::SurfaceDistance on_moved(moved, "the registered A");
-  std::vector<std::pair<double, double>> d;
-  distances(moved, on_b, d);
-  distances(b, on_moved, d);
-  double sum = 0, total = 0;
-  for (const auto& [dist, w] : d) {
-    sum += dist * w;
-    total += w;
-  }
-  std::sort(d.begin(), d.end());
-  double acc = 0, p99 = d.empty() ? 0 : d.back().first;
-  for (const auto& [dist, w] : d)
-    if ((acc += w) >= 0.99 * total) {
-      p99 = dist;
-      break;
-    }
+  Context measure = context.without_progress();
+  if (options.threads > 0) measure.threads = options.threads;
+  const metro::VertexDistance fit = metro::vertex_distance(moved, on_moved, b, on_b, 0.99, measure);
   const double diag = bounding_box(b.positions).diagonal();
-  out.mean_distance = total > 0 && diag > 0 ? sum / total / diag : 0;
-  out.p99_distance = diag > 0 ? p99 / diag : 0;
+  out.mean_distance = diag > 0 ? fit.mean / diag : 0;
+  out.p99_distance = diag > 0 ? fit.quantile / diag : 0;
   // Distortion: symmetric Dirichlet of each face of the rest shape onto its registered face.
   double energy = 0, energy_area = 0;
   for (const Tri& t : a.faces) {
