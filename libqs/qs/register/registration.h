@@ -39,8 +39,9 @@ struct LandmarkPair {
 struct Registration {
   std::vector<Vec3> positions;          ///< A's vertices in B's frame, on B's surface
   std::vector<Eigen::Matrix3d> turn;    ///< per vertex of A: the rotation taking A's frame to B's there
-  /// How far the registered A lies from B, both ways (area-weighted over each surface's vertices),
-  /// as fractions of B's bounding-box diagonal: mean and the 99th percentile.
+  /// How far the registered A lies from B, both ways (qs::metro::vertex_distance: over each
+  /// surface's vertices by area, each way weighing half), as fractions of B's bounding-box
+  /// diagonal: mean and the 99th percentile.
   double mean_distance = 0, p99_distance = 0;
   /// The registration's isometric distortion: area-weighted mean over A's faces of the symmetric
   /// Dirichlet energy / 4 of A's face onto its registered face, scale of the similarity removed
