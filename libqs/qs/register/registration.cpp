@@ -67,6 +67,12 @@ Located locate(const TriMesh& mesh, const metro::SurfaceDistance& tree, const Ve
   return {c.face, landmarks::closest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]])};
 }
 
+/// The vertex of a located point's face with the largest weight.
+int nearest_corner(const TriMesh& mesh, const Located& l) {
+  const int k = l.w[0] >= l.w[1] ? (l.w[0] >= l.w[2] ? 0 : 2) : (l.w[1] >= l.w[2] ? 1 : 2);
+  return mesh.faces[l.face][k];
+}
+
 /// The as-rigid-as-possible deformation of one tessellation of A (rest: in B's frame) toward B,
 /// its landmarks held: cotangent weights, the held points, and the state that the stages move.
 class Deformation {
@@ -254,10 +260,9 @@ void carry(Deformation& coarse, const TriMesh& coarse_rest, Deformation& fine) {
   for (size_t i = 0; i < rest.size(); ++i) {
     const Located l = locate(coarse_rest, tree, rest[i]);
     const Tri& t = coarse_rest.faces[l.face];
-    const int k = l.w[0] >= l.w[1] ? (l.w[0] >= l.w[2] ? 0 : 2) : (l.w[1] >= l.w[2] ? 1 : 2);
     const Vec3 on = l.w[0] * coarse_rest.positions[t[0]] + l.w[1] * coarse_rest.positions[t[1]] +
                     l.w[2] * coarse_rest.positions[t[2]];
-    quat[i] = cq[t[k]];
+    quat[i] = cq[nearest_corner(coarse_rest, l)];
     x[i] = l.w[0] * cx[t[0]] + l.w[1] * cx[t[1]] + l.w[2] * cx[t[2]] + quat[i] * (rest[i] - on);
   }
 }
@@ -359,13 +364,6 @@ struct Pose::Impl {
   std::optional<TriMesh> a, moved;
   std::vector<Eigen::Matrix3d> turns;
   std::optional<metro::SurfaceDistance> on_a, on_moved;
-
-  // The vertex of the located face with the largest weight.
-  int corner(const Located& l) const {
-    const Tri& t = a->faces[l.face];
-    const int k = l.w[0] >= l.w[1] ? (l.w[0] >= l.w[2] ? 0 : 2) : (l.w[1] >= l.w[2] ? 1 : 2);
-    return t[k];
-  }
 };
 
 Pose::Pose() : impl_(std::make_shared<const Impl>()) {}
@@ -408,7 +406,7 @@ Pose::Moved Pose::forward(const Vec3& x, const Vec3& n) const {
   const Located l = locate(*m.a, *m.on_a, x);
   const Tri& t = m.moved->faces[l.face];
   return {l.w[0] * m.moved->positions[t[0]] + l.w[1] * m.moved->positions[t[1]] + l.w[2] * m.moved->positions[t[2]],
-          m.turns[m.corner(l)] * n};
+          m.turns[nearest_corner(*m.a, l)] * n};
 }
 
 Pose::Moved Pose::inverse(const Vec3& y, const Vec3& n) const {
@@ -417,7 +415,7 @@ Pose::Moved Pose::inverse(const Vec3& y, const Vec3& n) const {
   const Located l = locate(*m.moved, *m.on_moved, y);
   const Tri& t = m.a->faces[l.face];
   return {l.w[0] * m.a->positions[t[0]] + l.w[1] * m.a->positions[t[1]] + l.w[2] * m.a->positions[t[2]],
-          m.turns[m.corner(l)].transpose() * n};
+          m.turns[nearest_corner(*m.a, l)].transpose() * n};
 }
 
 }  // namespace qs::registration
