@@ -111,7 +111,25 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
   const std::array<Glue, 2> glue = {Glue{side.p, (1 - side.side_p + 4) % 4, 0.0},
                                     Glue{side.q, (3 - side.side_q + 4) % 4, 1.0}};
   std::vector<char> outside(nv, 0);
-  const std::vector<int> faces = index.gather(chart, {side.p, side.q}, outside);
+  const std::vector<int> union_faces = index.gather(chart, {side.p, side.q}, outside);
+  // With the pose pull, only the band of the union within kPoseSideBand of the side in u moves:
+  // the faces with a corner in the band, the band's edge held.
+  const double band = pull ? kPoseSideBand : 1.0;
+  double union_area = 0;
+  std::vector<int> faces;
+  auto in_band = [&](int f) {
+    const int w = chart.face_patch[f] == side.p ? 0 : 1;
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(glue[w].to_glued(chart.face_uv[f][k]).x() - 1) <= band) return true;
+    return false;
+  };
+  for (int f : union_faces) {
+    const auto& t = chart.mesh.faces[f];
+    double a = 0;
+    local_edges(chart.mesh.positions[t[0]], chart.mesh.positions[t[1]], chart.mesh.positions[t[2]], a);
+    union_area += a;
+    if (in_band(f)) faces.push_back(f);
+  }
   // Local vertices (one per chart vertex, glued (u, v)), with their original wedges per patch.
   PatchProblem pr;
   std::unordered_map<int, int> local;
@@ -132,7 +150,7 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
         pr.uv.push_back(g);
         in_patch.push_back({0, 0});
         wedge.emplace_back();
-        held.push_back(outside[v] || pinned[v]);
+        held.push_back(outside[v] || pinned[v] || std::abs(g.x() - 1) > band);
       }
       if (!in_patch[l][w]) {
         in_patch[l][w] = 1;
@@ -157,7 +175,7 @@ SideCut plan_side(const dissect::Chart& chart, const ChartIndex& index, const st
   if (pr.unknowns == 0) return out.with(SideOutcome::Unchanged);
   // The reference's metric on the same union, scaled by area_B(union) / area_A(union).
   const double area_a = refs[side.p].area() + refs[side.q].area();
-  const double scale = area_a > 0 ? pr.total_area / area_a : 1.0;
+  const double scale = area_a > 0 ? union_area / area_a : 1.0;
   const std::array<Eigen::Matrix2d, 2> lin = {glue[0].linear(), glue[1].linear()};
   auto hints = std::make_shared<std::vector<std::array<int, 2>>>(pr.faces.size(), std::array<int, 2>{-1, -1});
   const MetricFn metric = [&, hints](size_t t, const Vec2& g) {

@@ -312,6 +312,11 @@ std::vector<char> pinned_vertices(const dissect::Dissection& d);
 
 enum class SideOutcome { Refined, Unchanged, Skipped };
 
+// With the pose pull, a side's union moves only within this distance of the side in u (the rest
+// held): in one pose the maps start near their place and a side moves little. Without the pull
+// a side may move far, and a band loses accuracy (docs/algorithms.md, "Map refinement").
+constexpr double kPoseSideBand = 0.25;
+
 // A free vertex this close to the cut line (as a fraction of a crossing edge's extent across it)
 // is moved onto the line instead of cutting the edge next to it.
 constexpr double kCutSnap = 0.15;
