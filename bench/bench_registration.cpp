@@ -5,8 +5,9 @@
 // to B by nearest points, after the landmarks' similarity (the baseline) and after the
 // registration; each image's distance to the exact one, per vertex area of A, in % of TRUTH's
 // bounding-box diagonal: mean / p95 / max. Also the registration's fit (99% of both surfaces'
-// area within), distortion and wall time; for an A large enough for the coarse stages
-// (RegisterOptions::coarse_faces), the same with every stage on A itself, and the speed-up.
+// area within), distortion and wall time; for an A or a B large enough for the coarse stages
+// (RegisterOptions::coarse_faces), the same with every stage on A itself and toward B itself,
+// and the speed-up.
 
 #include <algorithm>
 #include <chrono>
@@ -107,10 +108,10 @@ int main(int argc, char** argv) {
     };
     const qs::registration::RegisterOptions defaults;
     const double t = run("registered + nearest point", defaults);
-    if (a.num_faces() > 2 * defaults.coarse_faces) {  // the coarse stages were used: against none
-      qs::registration::RegisterOptions fine = defaults;
+    if (a.num_faces() > 2 * defaults.coarse_faces || b.num_faces() > 2 * defaults.coarse_faces) {
+      qs::registration::RegisterOptions fine = defaults;  // the coarse stages were used: against none
       fine.coarse_faces = 0;
-      const double t_fine = run("every stage on A itself", fine);
+      const double t_fine = run("every stage on A itself, toward B itself", fine);
       std::printf("coarse stages: %.2fx faster\n", t_fine / t);
     }
   } catch (const std::exception& e) {

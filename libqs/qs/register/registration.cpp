@@ -295,6 +295,15 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
   };
 
   const metro::SurfaceDistance on_b(b, "B");
+  // A large B: every stage but the last two pulls toward a coarser tessellation of B (the early
+  // stages only bend the limbs into place; the nearest points on the fine B cost more).
+  const bool coarse_b = options.coarse_faces > 0 && b.num_faces() > 2 * options.coarse_faces;
+  const std::optional<metro::SurfaceDistance> on_coarse_b =
+      coarse_b ? std::optional<metro::SurfaceDistance>(std::in_place, mesh::simplify(b, options.coarse_faces), "B")
+               : std::nullopt;
+  auto pull_toward = [&](size_t stage) -> const metro::SurfaceDistance& {
+    return on_coarse_b && stage + 2 < options.stages.size() ? *on_coarse_b : on_b;
+  };
   Deformation fine(a, moved_by_similarity(a.positions), landmarks, options.threads, context);
   const std::vector<Vec3>& rest = fine.rest();
   // A large A: every stage but the last on a coarser tessellation of A, carried over to A for the
@@ -307,12 +316,13 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     Deformation coarse(coarse_a, moved_by_similarity(coarse_a.positions), landmarks, options.threads, context);
     const double ratio = static_cast<double>(n) / coarse_a.num_vertices();
     first_fine = options.stages.size() - 1;
-    for (size_t s = 0; s < first_fine; ++s) coarse.stage(options.stages[s] * ratio, options.iterations, on_b);
+    for (size_t s = 0; s < first_fine; ++s) coarse.stage(options.stages[s] * ratio, options.iterations, pull_toward(s));
     carry(coarse, TriMesh{coarse.rest(), coarse_a.faces}, fine);
     last_iterations = (options.iterations + 1) / 2;
   }
   for (size_t s = first_fine; s < options.stages.size(); ++s)
-    fine.stage(options.stages[s], s + 1 == options.stages.size() ? last_iterations : options.iterations, on_b);
+    fine.stage(options.stages[s], s + 1 == options.stages.size() ? last_iterations : options.iterations,
+               pull_toward(s));
   const std::vector<Vec3>& x = fine.positions();
   const std::vector<Eigen::Matrix3d>& rot = fine.rotation_matrices();
 

@@ -23,8 +23,9 @@ struct RegisterOptions {
   std::vector<double> stages{1e-4, 1e-3, 1e-2, 1e-1, 1};
   int iterations = 24;  ///< local/global rounds per stage (Anderson-accelerated). \pre >= 1
   /// An A of more than twice this many faces runs every stage but the last on a tessellation of
-  /// about this many faces (qs::mesh::simplify), and the last, on A, with half the rounds: about
-  /// 2.5x faster on 100k faces and as close. 0: every stage on A.
+  /// about this many faces (qs::mesh::simplify), and the last, on A, with half the rounds; a B of
+  /// more than twice this many faces is pulled toward such a tessellation of it in every stage
+  /// but the last two. 0: every stage on A and toward B.
   int coarse_faces = 30000;
   int threads = 0;      ///< 0: the context's; the result does not depend on it
 };
