@@ -613,6 +613,7 @@ TEST(PosePull, BringsOneSurfaceTessellatedTwiceCloserToTheIdentity) {
   o.pose_pull = 10;
   const auto r = expect_thread_independent(pulled, o);
   EXPECT_EQ(r.meshes[1].flipped_faces + r.meshes[1].zero_area_faces, 0);
+  EXPECT_GT(r.meshes[1].sides_refined, 0);  // the sides moved (within kPoseSideBand of each)
   // Reported energies are the distortion alone, comparable with the plain refinement's.
   EXPECT_EQ(r.meshes[1].energy_before, r0.meshes[1].energy_before);
   EXPECT_EQ(pulled[1].seeds, dissected[1].seeds);
