@@ -179,8 +179,10 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   // repair, from the repaired map, free only where it left the targets (kTransferPolishRings
   // rings around): the repair's solves of the own weights put those vertices by the own map's
   // shape, not near the targets. Without one (a tangle no repair mends), from the own map over
-  // the whole node, or from its stretch-minimized map when the own map folds or is squeezed to
-  // zero area (a thin leg).
+  // the whole node, or, in one pose by the similarity, from its stretch-minimized map when the
+  // own map folds or is squeezed to zero area (a thin leg). Through a registration such a node
+  // keeps the targets: there the stretch-minimized start costs much and gains nothing measurable
+  // (docs/pose-pairs.md).
   std::vector<Vec2> start = p.sp.uv;
   std::vector<char> hold = fixed;
   if (repaired) {
@@ -191,6 +193,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     for (int v = 0; v < n; ++v)
       if (!off[v]) hold[v] = 1;
   } else if (!p.sp.bijective()) {
+    if (pose.registered()) return as_targets();
     const param::SquareParam m = minimized_leaf(p, kRepairRounds, context);
     if (m.uv.empty() || !m.bijective()) return as_targets();
     start = m.uv;
