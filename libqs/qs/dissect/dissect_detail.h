@@ -169,6 +169,13 @@ class MeshDissector {
   void commit_split(const Node& node) { patch_faces_[node.label].clear(); }
   /// Records a node as a leaf with its (aligned) parameterization.
   void keep_leaf(const Node& node, const Param& p, PatchInfo info);
+  /// Keeps every leaf's parameterization from now on (take_over_leaves needs them).
+  void keep_leaf_params() { keep_params_ = true; }
+  /// Every leaf's map taken over from `ref`'s same leaf (kept in the same order, ref finished) by
+  /// transfer_node_map, where the result is bijective; such a leaf is not repaired on its own.
+  /// Returns the number of leaves taken over.
+  int take_over_leaves(const MeshDissector& ref, const registration::Pose& pose, double reach,
+                       const NodeMapPuller& untangle);
   Dissection finish(const std::vector<TreeNode>& tree);
   const std::string& name() const { return name_; }
   /// The label of the patch holding feature k (features never lie on a patch border).
@@ -254,6 +261,8 @@ class MeshDissector {
     int rounds;
   };
   std::vector<Repair> repairs_;  // leaves to minimize in finish()
+  bool keep_params_ = false;
+  std::vector<Param> leaf_params_;  // keep_leaf_params: by leaf, as repaired
   void set_leaf_map(size_t leaf, const Param& p, const param::SquareParam& sp, const param::Stretch& st);
   void run_repairs();
   std::array<int, 4> seeds_{};

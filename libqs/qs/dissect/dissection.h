@@ -304,6 +304,8 @@ struct DissectionSet {
   int same_pose_own_maps = 0;
   int same_pose_polished = 0;
   int same_pose_untangled = 0;
+  /// Leaves of meshes but the first whose map was taken over from the first mesh's leaf.
+  int same_pose_leaves = 0;
   /// DissectOptions::refine_before_split: node maps (of meshes but the first, before a split)
   /// refined against the first mesh's, and those that kept their own (the refinement failed, or
   /// its children's predicted stretch was higher).

@@ -10,6 +10,7 @@
 
 #include "qs/core/error.h"
 #include "qs/dissect/dissect_detail.h"
+#include "qs/metro/metro.h"
 
 namespace qs::dissect::detail {
 
@@ -137,6 +138,40 @@ void MeshDissector::run_repairs() {
     if (!p.sp.bijective() || st.patch < p.st.patch) set_leaf_map(repairs_[r].leaf, p, result[r], st);
   }
   repairs_.clear();
+}
+
+int MeshDissector::take_over_leaves(const MeshDissector& ref, const registration::Pose& pose, double reach,
+                                    const NodeMapPuller& untangle) {
+  if (leaf_params_.size() != ref.leaf_params_.size()) throw InternalError("take_over_leaves: leaves differ");
+  Context quiet = ctx_.without_progress();
+  quiet.log = nullptr;
+  const size_t n = leaf_params_.size();
+  std::vector<char> taken(n, 0);
+  std::vector<Param> result(n);
+  size_t faces = 0;
+  for (const Param& p : leaf_params_) faces += p.ex.faces.size();
+  parallel_for(n, faces >= kParallelFaces / 8 ? 0 : 1, ctx_, [&](size_t j) {
+    const Param& r = ref.leaf_params_[j];
+    if (!r.sp.bijective()) return;
+    const TriMesh rm{r.ex.pm.positions, r.ex.pm.faces};
+    const metro::SurfaceDistance on_ref(rm, "the first mesh's leaf");
+    Param p = leaf_params_[j];
+    const Transfer t = transfer_node_map(r, on_ref, pose, reach, untangle, quiet, p);
+    if ((t == Transfer::Taken || t == Transfer::Polished || t == Transfer::Untangled) && p.sp.bijective()) {
+      result[j] = std::move(p);
+      taken[j] = 1;
+    }
+  });
+  int count = 0;
+  for (size_t j = 0; j < n; ++j) {
+    if (!taken[j]) continue;
+    const Param& p = result[j];
+    set_leaf_map(j, p, p.sp, param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv));
+    ++count;
+  }
+  repairs_.erase(std::remove_if(repairs_.begin(), repairs_.end(), [&](const Repair& r) { return taken[r.leaf] != 0; }),
+                 repairs_.end());
+  return count;
 }
 
 }  // namespace qs::dissect::detail

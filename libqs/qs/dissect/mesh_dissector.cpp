@@ -355,6 +355,7 @@ void MeshDissector::keep_leaf(const Node& node, const Param& p, PatchInfo info) 
   const bool exception = !p.sp.bijective() || p.st.patch > opt_.tau;
   const int rounds = exception ? std::max(opt_.stretch_iterations, kRepairRounds) : opt_.stretch_iterations;
   if (rounds > 0) repairs_.push_back({infos_.size() - 1, p, rounds});
+  if (keep_params_) leaf_params_.push_back(p);
   set_leaf_map(infos_.size() - 1, p, p.sp, p.st);
 }
 
@@ -368,6 +369,10 @@ void MeshDissector::set_leaf_map(size_t leaf, const Param& p, const param::Squar
   info.flipped_faces = sp.flipped_faces;
   info.zero_area_faces = sp.zero_area_faces;
   info.uv_area_sum = sp.uv_area_sum;
+  if (leaf < leaf_params_.size()) {
+    leaf_params_[leaf].sp = sp;
+    leaf_params_[leaf].st = st;
+  }
   for (size_t lf = 0; lf < p.ex.faces.size(); ++lf)
     for (int k = 0; k < 3; ++k) face_uv_[p.ex.faces[lf]][k] = sp.uv[p.ex.pm.faces[lf][k]];
 }

@@ -241,6 +241,12 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
                               DissectionSet& out) {
   const size_t nm = meshes_.size();
   fit_poses(loops);
+  // Through a registration the leaves' maps are taken over too (run()): their Params are kept.
+  bool registered = false;
+  for (size_t i = 1; i < nm; ++i) registered = registered || pose_[i].registered();
+  if (opt_.same_pose_maps && registered)
+    for (size_t i = 0; i < nm; ++i)
+      if (i == 0 || pose_[i].registered()) meshes_[i].keep_leaf_params();
   const std::vector<int> want = meshes_[0].feature_sides(loops[0]);
   // Mesh 0's loop as traced (edge paths), then as cut into it (geodesics, by default).
   std::array<std::vector<Vec3>, 4> traced;
@@ -828,8 +834,16 @@ DissectionSet SetDissector::run() {
   std::stable_sort(out.tree.begin(), out.tree.end(), [](const TreeNode& a, const TreeNode& b) {
     return a.depth != b.depth ? a.depth < b.depth : a.name < b.name;
   });
-  for (auto& m : meshes_) {
+  for (size_t i = 0; i < meshes_.size(); ++i) {
+    MeshDissector& m = meshes_[i];
     ctx_.report("leaf repairs", static_cast<double>(out.meshes.size()) / static_cast<double>(meshes_.size()));
+    // Through a registration, each leaf's map follows the first mesh's (as repaired in its
+    // finish()), as the node maps did before every split: each mesh's own stretch-minimized map of
+    // a squeezed leaf (a camel's tail) runs its own way inside the leaf.
+    if (i > 0 && opt_.same_pose && opt_.same_pose_maps && pose_[i].registered()) {
+      out.same_pose_leaves += m.take_over_leaves(meshes_[0], pose_[i], kSamePoseReach * pose_diagonal_[0],
+                                                 opt_.same_pose_untangle);
+    }
     out.meshes.push_back(m.finish(out.tree));
     out.max_stretch = std::max(out.max_stretch, out.meshes.back().max_stretch);
     for (size_t k = 0; k < feature_names_.size(); ++k) out.meshes.back().features[k].name = feature_names_[k];

@@ -310,7 +310,8 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
            << " node maps taken over from the first mesh by nearest points, " << sets.same_pose_own_maps
            << " kept their own; of those taken over " << sets.same_pose_folded_taken
            << " left folded (the cuts follow the first mesh's), " << sets.same_pose_polished
-           << " polished after the repair, " << sets.same_pose_untangled << " untangled from their own"
+           << " polished after the repair, " << sets.same_pose_untangled << " untangled from their own; "
+           << sets.same_pose_leaves << " leaf maps taken over"
            << (sets.posed_corners_fallback.empty()
                    ? std::string()
                    : "; posed corners from unfolded node maps only (" + sets.posed_corners_fallback + ")")
