@@ -7,6 +7,8 @@
 # --correspondence` (chart map and level-4 common remesh) beside the similarity + nearest-point
 # baseline; then the seed loop's agreement: the share of the area whose exact image lies on the same
 # side of the other mesh's seed loop (level-0 patch), and the same patch (leaf) share.
+# Last, another person in another pose: smpl_man_14k against the posed smpl_woman_14k (and its
+# re-tessellation), when both are in the list.
 #
 #   usage: bench/pose_pairs.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-pose-pairs)
 #   env:   QS_TOOLS (default build/tools), SAMPLES (default 30000), SEED (pose seed, default 1),
@@ -105,6 +107,18 @@ for mesh in $LIST; do
   pair "$stem re-tessellated" "$d/dissection-r" "$MESHES/$mesh" "$d/posed_r.obj" "$d/posed.source.landmarks.json" \
       "$d/posed_r.landmarks.json" "$d/posed_r.map.json" "$d/posed.obj"
 done
+
+# Another person in another pose: smpl_man_14k against smpl_woman_14k's pose. The SMPL bodies
+# share their connectivity, so vertex i <-> vertex i is the exact map here too.
+w="$OUT/smpl_woman_14k"
+if [ -f "$MESHES/smpl_man_14k.obj" ] && [ -f "$w/posed.obj" ]; then
+  mkdir -p "$OUT/man-woman"
+  pair "smpl_man_14k -> smpl_woman_14k posed" "$OUT/man-woman/dissection" "$MESHES/smpl_man_14k.obj" "$w/posed.obj" \
+      bench/correspondence/smpl.landmarks.json "$w/posed.landmarks.json" - "$w/posed.obj"
+  pair "smpl_man_14k -> smpl_woman_14k posed, re-tessellated" "$OUT/man-woman/dissection-r" \
+      "$MESHES/smpl_man_14k.obj" "$w/posed_r.obj" bench/correspondence/smpl.landmarks.json "$w/posed_r.landmarks.json" \
+      "$w/posed_r.map.json" "$w/posed.obj"
+fi
 
 QS_BENCH_DIR="$(dirname "$0")" python3 - "$RESULTS" "$ATTRIBUTION" <<'PY'
 import json, math, os, sys
