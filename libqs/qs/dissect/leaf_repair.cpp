@@ -142,7 +142,10 @@ void MeshDissector::run_repairs() {
 
 int MeshDissector::take_over_leaves(const MeshDissector& ref, const registration::Pose& pose, double reach,
                                     const NodeMapPuller& untangle) {
-  if (leaf_params_.size() != ref.leaf_params_.size()) throw InternalError("take_over_leaves: leaves differ");
+  if (leaf_params_.size() != ref.leaf_params_.size() || leaves_.size() != ref.leaves_.size())
+    throw InternalError("take_over_leaves: the meshes' leaves differ");
+  for (size_t j = 0; j < leaves_.size(); ++j)
+    if (leaves_[j].name != ref.leaves_[j].name) throw InternalError("take_over_leaves: the meshes' leaves differ");
   Context quiet = ctx_.without_progress();
   quiet.log = nullptr;
   const size_t n = leaf_params_.size();
