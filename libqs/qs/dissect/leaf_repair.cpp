@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 #include "qs/warp/warp.h"
@@ -142,37 +143,31 @@ void MeshDissector::run_repairs() {
 
 int MeshDissector::take_over_leaves(const MeshDissector& ref, const registration::Pose& pose, double reach,
                                     const NodeMapPuller& untangle) {
-  if (leaf_params_.size() != ref.leaf_params_.size() || leaves_.size() != ref.leaves_.size())
-    throw InternalError("take_over_leaves: the meshes' leaves differ");
-  for (size_t j = 0; j < leaves_.size(); ++j)
-    if (leaves_[j].name != ref.leaves_[j].name) throw InternalError("take_over_leaves: the meshes' leaves differ");
+  const size_t n = leaf_params_.size();
+  bool same = n == ref.leaf_params_.size() && leaves_.size() == ref.leaves_.size();
+  for (size_t j = 0; same && j < leaves_.size(); ++j) same = leaves_[j].name == ref.leaves_[j].name;
+  if (!same) throw InternalError("take_over_leaves: the meshes' leaves differ");
   Context quiet = ctx_.without_progress();
   quiet.log = nullptr;
-  const size_t n = leaf_params_.size();
-  std::vector<char> taken(n, 0);
-  std::vector<Param> result(n);
+  std::vector<std::optional<Param>> taken(n);  // the leaves whose map was taken over
   size_t faces = 0;
   for (const Param& p : leaf_params_) faces += p.ex.faces.size();
   parallel_for(n, faces >= kParallelFaces / 8 ? 0 : 1, ctx_, [&](size_t j) {
     const Param& r = ref.leaf_params_[j];
     if (!r.sp.bijective()) return;
-    const TriMesh rm{r.ex.pm.positions, r.ex.pm.faces};
-    const metro::SurfaceDistance on_ref(rm, "the first mesh's leaf");
+    const metro::SurfaceDistance on_ref(TriMesh{r.ex.pm.positions, r.ex.pm.faces}, "the first mesh's leaf");
     Param p = leaf_params_[j];
     const Transfer t = transfer_node_map(r, on_ref, pose, reach, untangle, quiet, p);
-    if ((t == Transfer::Taken || t == Transfer::Polished || t == Transfer::Untangled) && p.sp.bijective()) {
-      result[j] = std::move(p);
-      taken[j] = 1;
-    }
+    if ((t == Transfer::Taken || t == Transfer::Polished || t == Transfer::Untangled) && p.sp.bijective())
+      taken[j] = std::move(p);
   });
   int count = 0;
-  for (size_t j = 0; j < n; ++j) {
-    if (!taken[j]) continue;
-    const Param& p = result[j];
-    set_leaf_map(j, p, p.sp, param::l2_stretch(p.ex.pm.positions, p.ex.pm.faces, p.sp.uv));
-    ++count;
-  }
-  repairs_.erase(std::remove_if(repairs_.begin(), repairs_.end(), [&](const Repair& r) { return taken[r.leaf] != 0; }),
+  for (size_t j = 0; j < n; ++j)
+    if (const auto& p = taken[j]) {
+      set_leaf_map(j, *p, p->sp, param::l2_stretch(p->ex.pm.positions, p->ex.pm.faces, p->sp.uv));
+      ++count;
+    }
+  repairs_.erase(std::remove_if(repairs_.begin(), repairs_.end(), [&](const Repair& r) { return taken[r.leaf].has_value(); }),
                  repairs_.end());
   return count;
 }
