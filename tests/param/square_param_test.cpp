@@ -863,4 +863,56 @@ TEST(IntrinsicCotan, QuadraticFlipsFallBackToMeanValueWithinALinearBudget) {
   for (size_t v = 0; v < c.uv.size(); ++v) EXPECT_EQ(c.uv[v], b.uv[v]) << "vertex " << v;
 }
 
+// A held solve of a few free vertices (a local repair) gives, bit for bit, what a full solve with
+// every other interior vertex pinned gives them, with either weights; the held vertices and the
+// border are left as they were, and a held vertex outside the square is refused.
+TEST(HeldSolverTest, GivesTheFreeVerticesWhatAPinnedSolveGivesThem) {
+  const PatchMesh p = hemisphere_patch(4);
+  const int nv = static_cast<int>(p.positions.size());
+  std::vector<char> on_border(nv, 0);
+  for (int v : p.boundary) on_border[v] = 1;
+  for (const InteriorWeights weights : {InteriorWeights::MeanValue, InteriorWeights::IntrinsicCotan}) {
+    SquareParamOptions o;
+    o.weights = weights;
+    const SquareParam own = parameterize_square(p, o);
+    ASSERT_TRUE(own.bijective());
+    // Held: the own map, shrunk toward the centre (a different map); free: every 7th interior vertex.
+    std::vector<Vec2> at = own.uv;
+    std::vector<char> free(nv, 0);
+    int nfree = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (on_border[v]) continue;
+      at[v] = Vec2(0.5, 0.5) + 0.9 * (own.uv[v] - Vec2(0.5, 0.5));
+      if (v % 7 == 0) free[v] = 1, ++nfree;
+    }
+    ASSERT_GT(nfree, 10);
+    SquareParamOptions pinned = o;
+    for (int v = 0; v < nv; ++v)
+      if (!on_border[v] && !free[v]) pinned.pinned.emplace_back(v, at[v]);
+    const SquareParam full = parameterize_square(p, pinned);
+    const HeldSolver held(p, weights);
+    std::vector<Vec2> local = at;
+    held.solve(free, local);
+    int moved = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (free[v]) {
+        EXPECT_EQ(local[v], full.uv[v]) << "free vertex " << v;
+        moved += local[v] != at[v];
+      } else {
+        EXPECT_EQ(local[v], at[v]) << "held vertex " << v;
+      }
+    }
+    EXPECT_GT(moved, nfree / 2);
+    std::vector<Vec2> outside = at;
+    for (int v = 0; v < nv; ++v)
+      if (!on_border[v] && !free[v]) {
+        outside[v] = Vec2(1.5, 0.5);
+        break;
+      }
+    EXPECT_THROW(held.solve(free, outside), InvalidInput);
+    EXPECT_THROW(held.solve(std::vector<char>(nv - 1, 0), local), InvalidInput);
+  }
+}
+
+
 }  // namespace qs::param

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/dissect/dissect_detail.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/metro/metro.h"
@@ -17,8 +18,8 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
                            double reach, const NodeMapPuller& untangle, const Context& context, Param& p) {
   const param::PatchMesh& pm = p.ex.pm;
   const int n = static_cast<int>(pm.positions.size());
-  std::vector<char> border(n, 0), fixed = feature_mask(p);
-  for (int v : pm.boundary) border[v] = fixed[v] = 1;
+  std::vector<char> fixed = feature_mask(p);
+  for (int v : pm.boundary) fixed[v] = 1;
 
   // Every free vertex at the (u, v) of mesh 0's nearest point among the faces that face as the
   // vertex does (its normal turned into mesh 0's frame), so that it does not jump across a thin
@@ -26,23 +27,24 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   const std::vector<Vec3> normal = vertex_normals(pm.positions, pm.faces);
   std::vector<Vec2> uv = p.sp.uv;
   std::vector<char> unplaced(n, 0), has_target(n, 0);
-  int placed = 0;
-  for (int v = 0; v < n; ++v) {
-    if (fixed[v]) continue;
-    const auto [q, facing] = pose.inverse(pm.positions[v], normal[v]);
-    const auto c = on_ref.closest_facing(q, facing, kSamePoseFacingCos);
-    if (c.face < 0 || c.distance > reach) {
-      unplaced[v] = 1;
-      continue;
+  constexpr int kBlock = 256;
+  parallel_for((n + kBlock - 1) / kBlock, inside_parallel_loop() ? 1 : 0, context, [&](int b) {
+    for (int v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+      if (fixed[v]) continue;
+      const auto [q, facing] = pose.inverse(pm.positions[v], normal[v]);
+      const auto c = on_ref.closest_facing(q, facing, kSamePoseFacingCos);
+      if (c.face < 0 || c.distance > reach) {
+        unplaced[v] = 1;
+        continue;
+      }
+      const Tri& t = ref.ex.pm.faces[c.face];
+      const auto l = landmarks::closest_on_triangle(q, ref.ex.pm.positions[t[0]], ref.ex.pm.positions[t[1]],
+                                                    ref.ex.pm.positions[t[2]]);
+      uv[v] = l[0] * ref.sp.uv[t[0]] + l[1] * ref.sp.uv[t[1]] + l[2] * ref.sp.uv[t[2]];
+      has_target[v] = 1;
     }
-    const Tri& t = ref.ex.pm.faces[c.face];
-    const auto l = landmarks::closest_on_triangle(q, ref.ex.pm.positions[t[0]], ref.ex.pm.positions[t[1]],
-                                                  ref.ex.pm.positions[t[2]]);
-    uv[v] = l[0] * ref.sp.uv[t[0]] + l[1] * ref.sp.uv[t[1]] + l[2] * ref.sp.uv[t[2]];
-    has_target[v] = 1;
-    ++placed;
-  }
-  if (placed == 0) return Transfer::Own;
+  });
+  if (std::find(has_target.begin(), has_target.end(), 1) == has_target.end()) return Transfer::Own;
   const std::vector<Vec2> target = uv;
 
   std::vector<std::vector<int>> ring(n);
@@ -107,6 +109,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   // each round. Only the free vertices take the solve's (u, v): the border stays where the node's
   // map put it (parameterize_square places it by the same rule). Returns the vertices of the
   // faces still folded (empty: every face positive), nullopt when a solve fails.
+  std::optional<param::HeldSolver> held;  // the node's weights, built at the first solve
   auto repair = [&](std::vector<Vec2>& at) -> std::optional<std::vector<int>> {
     std::vector<int> left;
     for (int round = 0; round <= kTransferLocalRounds + kTransferRepairRounds; ++round) {
@@ -123,16 +126,11 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
         if (free[v]) left.push_back(v);
       if (!any || round == kTransferLocalRounds + kTransferRepairRounds) break;
       widen(free, round < kTransferLocalRounds ? 0 : round - kTransferLocalRounds + 1, &fixed);
-      // The free vertices by the node's own weights, every other interior vertex pinned where
-      // it is: in the limit (all free) the node's own map.
-      param::SquareParamOptions po;
-      po.weights = p.weights;
-      for (int v = 0; v < n; ++v)
-        if (!free[v] && !border[v]) po.pinned.emplace_back(v, at[v]);
+      // The free vertices by the node's own weights, every other interior vertex held where it
+      // is: in the limit (all free) the node's own map.
       try {
-        const param::SquareParam solved = param::parameterize_square(pm, po);
-        for (int v = 0; v < n; ++v)
-          if (free[v]) at[v] = solved.uv[v];
+        if (!held) held.emplace(pm, p.weights);
+        held->solve(free, at);
       } catch (const Error&) {
         return std::nullopt;
       }

@@ -21,7 +21,8 @@
 #include "qs/param/sparse_cholesky.h"
 
 namespace qs::param {
-namespace {
+// Internal: a named namespace because HeldSolver::Impl holds some of its types.
+namespace square_detail {
 
 /// tan(a/2) is clamped here: a corner angle within ~2e-8 rad of pi (a vertex on its opposite
 /// edge) would otherwise give an infinite weight.
@@ -495,7 +496,8 @@ IntrinsicMesh intrinsic_delaunay(const PatchMesh& patch, const HalfEdges& he, do
   return m;
 }
 
-}  // namespace
+}  // namespace square_detail
+using namespace square_detail;  // NOLINT(google-build-using-namespace): this file's own internals
 
 std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch) {
   const HalfEdges he = validate_patch(patch, {});
@@ -533,24 +535,14 @@ std::vector<std::array<int, 2>> border_degeneracies(const PatchMesh& patch, cons
   return result;
 }
 
-SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions& options,
-                                const Context& context) {
-  const HalfEdges he = validate_patch(patch, options);
-  context.check_cancel();
+namespace square_detail {
+
+/// The border's (u, v): arc length on each side, each edge at least min_border_spacing times its
+/// side's mean.
+void place_border(const PatchMesh& patch, double min_border_spacing, std::vector<Vec2>& uv) {
   const auto& pos = patch.positions;
-  const auto& faces = patch.faces;
-  const int nv = static_cast<int>(pos.size());
-  const int nf = static_cast<int>(faces.size());
   const int nb = static_cast<int>(patch.boundary.size());
-
-  SquareParam result;
-  result.uv.assign(nv, Vec2::Zero());
-
-  // Border: arc length per side, each edge at least min_border_spacing times its side's mean.
   const Vec2 corner_uv[4] = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
-  std::vector<int> interior_index(nv, -1);
-  std::vector<char> on_border(nv, 0);
-  for (int v : patch.boundary) on_border[v] = 1;
   for (int s = 0; s < 4; ++s) {
     const int begin = patch.corner_index[s];
     const int end = s < 3 ? patch.corner_index[s + 1] : nb;
@@ -561,7 +553,7 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
       len[k] = (pos[patch.boundary[(begin + k + 1) % nb]] - pos[patch.boundary[begin + k]]).norm();
       total += len[k];
     }
-    const double floor_len = options.min_border_spacing * total / m;
+    const double floor_len = min_border_spacing * total / m;
     double sum = 0;
     for (int k = 0; k < m; ++k) {
       if (!(total > 0)) len[k] = 1;  // a side of zero length: spread its vertices evenly
@@ -570,13 +562,174 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     }
     const Vec2 a = corner_uv[s], b = corner_uv[(s + 1) % 4];
     double run = 0;
-    result.uv[patch.boundary[begin]] = a;
+    uv[patch.boundary[begin]] = a;
     for (int k = 1; k < m; ++k) {
       run += len[k - 1];
       const double t = run / sum;
-      result.uv[patch.boundary[begin + k]] = a + t * (b - a);  // exact 0 or 1 across the side
+      uv[patch.boundary[begin + k]] = a + t * (b - a);  // exact 0 or 1 across the side
     }
   }
+}
+
+/// A patch's Laplacian: the triangulation it is built on (the patch itself, or its intrinsic
+/// Delaunay triangulation for cotangent weights) and one weight per half-edge of it, for row
+/// he_from. Not copyable: `faces` and `he` may point into it.
+struct Laplacian {
+  InteriorWeights weights = InteriorWeights::MeanValue;  ///< as built (cotangent may fall back)
+  IntrinsicMesh idt;
+  HalfEdges idt_he;
+  const std::vector<Tri>* faces = nullptr;
+  const HalfEdges* he = nullptr;
+  std::vector<double> w;
+  Laplacian() = default;
+  Laplacian(const Laplacian&) = delete;
+  Laplacian& operator=(const Laplacian&) = delete;
+};
+
+/// The triangulation of `lap` for `weights`: the intrinsic Delaunay triangulation for cotangent
+/// weights (mean-value weights when its flips do not finish), else the patch's own.
+void laplacian_triangulation(const PatchMesh& patch, const HalfEdges& he, InteriorWeights weights,
+                             double min_edge_length, Laplacian& lap) {
+  lap.weights = weights;
+  lap.faces = &patch.faces;
+  lap.he = &he;
+  if (weights != InteriorWeights::IntrinsicCotan) return;
+  lap.idt = intrinsic_delaunay(patch, he, min_edge_length);
+  if (!lap.idt.complete) {
+    lap.weights = InteriorWeights::MeanValue;
+    return;
+  }
+  lap.idt_he = out_half_edges(static_cast<int>(patch.positions.size()), lap.idt.faces);  // twins: idt.twin
+  lap.faces = &lap.idt.faces;
+  lap.he = &lap.idt_he;
+}
+
+/// The weights of `lap` (after laplacian_triangulation), for every row without skip_row.
+void laplacian_weights(const PatchMesh& patch, const HalfEdges& he, const std::vector<char>& skip_row,
+                       double min_edge_length, Laplacian& lap) {
+  const auto& pos = patch.positions;
+  const auto& faces = patch.faces;
+  const int nf = static_cast<int>(faces.size());
+  lap.w.assign(3 * nf, 0.0);
+  if (lap.weights == InteriorWeights::IntrinsicCotan) {
+    // Cotangent weight of edge ij: (cot a + cot b) / 2 over the two corners opposite it in the
+    // intrinsic Delaunay triangulation, where both sum to at most pi: non-negative.
+    const IntrinsicMesh& idt = lap.idt;
+    for (int h = 0; h < 3 * nf; ++h)
+      lap.w[h] = std::max(0.0, 0.5 * (idt.twin[h] >= 0 ? idt.cot[h] + idt.cot[idt.twin[h]] : idt.cot[h]));
+    return;
+  }
+  // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
+  // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
+  // i->j is half-edge 3f+c itself, i->k is the twin of k->i (3f+(c+2)%3).
+  for (int f = 0; f < nf; ++f) {
+    const Tri& t = faces[f];
+    for (int c = 0; c < 3; ++c) {
+      const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
+      if (skip_row[i]) continue;
+      const Vec3 eij = pos[j] - pos[i], eik = pos[k] - pos[i];
+      const double th = tan_half_angle(eij, eik);
+      lap.w[3 * f + c] += th / std::max(eij.norm(), min_edge_length);
+      lap.w[he.twin[3 * f + (c + 2) % 3]] += th / std::max(eik.norm(), min_edge_length);
+    }
+  }
+}
+
+/// One solve of the rows with interior_index >= 0 (ni of them) under half-edge weights ww, every
+/// other vertex held at uv; their solution written to uv. By Cholesky when `spd` and the weights
+/// allow it; false when the Cholesky factorization failed (nothing is changed then).
+/// \throws SolverError when the LU factorization fails or the solution is not finite.
+bool solve_rows(const Laplacian& lap, const std::vector<double>& ww, const std::vector<int>& interior_index,
+                int ni, bool spd, LuOrdering ordering, const Context& context, CholeskyCache& cholesky,
+                SymbolicCache& symbolic, std::vector<int>* cholesky_ordering, std::vector<Vec2>& uv) {
+  const int nv = static_cast<int>(uv.size());
+  const HalfEdges& he = *lap.he;
+  // Symmetric assembly: the floor of edge ij is the larger of its two rows' floors, so the
+  // matrix stays symmetric; a row without a usable weight falls back to the general path.
+  std::vector<double> row_max_w;  // per vertex, the largest weight of its row (symmetric floor)
+  if (spd) {
+    row_max_w.assign(nv, 0.0);
+    for (int i = 0; i < nv && spd; ++i) {
+      for (int k = he.out_offset[i]; k < he.out_offset[i + 1]; ++k) {
+        const double x = ww[he.out[k]];
+        if (!std::isfinite(x)) spd = false;
+        row_max_w[i] = std::max(row_max_w[i], x);
+      }
+      if (interior_index[i] >= 0 && !(row_max_w[i] > 0)) spd = false;
+    }
+  }
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(he.out.size() + ni);
+  Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
+  for (int i = 0; i < nv; ++i) {
+    const int r = interior_index[i];
+    if (r < 0) continue;
+    const int begin = he.out_offset[i], end = he.out_offset[i + 1];
+    double wmax = 0;
+    bool finite = true;
+    for (int k = begin; k < end; ++k) {
+      const double x = ww[he.out[k]];
+      finite = finite && std::isfinite(x);
+      wmax = std::max(wmax, x);
+    }
+    // No usable angle at all around i (every face degenerate), or overflow: uniform weights.
+    const bool uniform = !finite || !(wmax > 0);
+    const double floor_w = kRelativeWeightFloor * wmax;
+    double diag = 0;
+    for (int k = begin; k < end; ++k) {
+      const int h = he.out[k];
+      const int j = he_to(*lap.faces, h);
+      const double x = spd ? std::max(ww[h], kRelativeWeightFloor * std::max(wmax, row_max_w[j]))
+                           : uniform ? 1.0
+                                     : std::max(ww[h], floor_w);
+      diag += x;
+      if (interior_index[j] >= 0) {
+        if (!spd || interior_index[j] <= r) triplets.emplace_back(r, interior_index[j], -x);
+      } else {
+        rhs.row(r) += x * uv[j].transpose();
+      }
+    }
+    triplets.emplace_back(r, r, diag);
+  }
+  Eigen::SparseMatrix<double> A(ni, ni);
+  A.setFromTriplets(triplets.begin(), triplets.end());  // spd: the lower triangle only
+  triplets = {};
+  context.report("parameterize: factorize", 0.2);
+  context.check_cancel();
+
+  Eigen::MatrixX2d x;
+  if (spd) {
+    if (!solve_cholesky(A, rhs, context, cholesky, x)) return false;
+    if (cholesky_ordering && cholesky_ordering->empty()) *cholesky_ordering = cholesky.llt.ordering();
+  } else {
+    x = ordering == LuOrdering::SymmetricAmd ? solve_symmetric_amd(A, rhs, context, symbolic)
+                                             : solve_colamd(A, rhs, context);
+  }
+  if (!x.allFinite())
+    throw SolverError("parameterize_square: the " + std::string(spd ? "cotangent" : "mean-value") + " solve (" +
+                      std::to_string(ni) + " interior vertices) gave no finite solution");
+  for (int v = 0; v < nv; ++v)
+    if (interior_index[v] >= 0) uv[v] = x.row(interior_index[v]).transpose();
+  return true;
+}
+
+}  // namespace square_detail
+
+SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions& options,
+                                const Context& context) {
+  const HalfEdges he = validate_patch(patch, options);
+  context.check_cancel();
+  const auto& pos = patch.positions;
+  const auto& faces = patch.faces;
+  const int nv = static_cast<int>(pos.size());
+  const int nf = static_cast<int>(faces.size());
+
+  SquareParam result;
+  result.uv.assign(nv, Vec2::Zero());
+  place_border(patch, options.min_border_spacing, result.uv);
+  std::vector<int> interior_index(nv, -1);
+  std::vector<char> on_border(nv, 0);
+  for (int v : patch.boundary) on_border[v] = 1;
 
   for (const auto& [v, q] : options.pinned) {
     if (v < 0 || v >= nv || on_border[v] || !q.allFinite() || q.minCoeff() < 0 || q.maxCoeff() > 1)
@@ -593,39 +746,26 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
   result.weights = options.weights;
   const bool plain_uv_given = options.plain && options.plain->uv.size() == pos.size() && options.pinned.empty();
   if (ni > 0) {
-    // The Laplacian's triangulation: the patch itself (mean-value weights) or its intrinsic
-    // Delaunay triangulation (cotangent weights).
-    const std::vector<Tri>* lap_faces = &faces;
-    const HalfEdges* lap_he = &he;
-    std::vector<double> w(3 * nf, 0.0);
-    IntrinsicMesh idt;
-    HalfEdges idt_he;
+    Laplacian lap;
+    laplacian_triangulation(patch, he, options.weights, options.min_edge_length, lap);
+    if (options.weights == InteriorWeights::IntrinsicCotan) result.intrinsic_flips = lap.idt.flips;
+    result.weights = lap.weights;
     CholeskyCache cholesky;
-    if (options.weights == InteriorWeights::IntrinsicCotan) {
-      idt = intrinsic_delaunay(patch, he, options.min_edge_length);
-      result.intrinsic_flips = idt.flips;
-      if (!idt.complete) result.weights = InteriorWeights::MeanValue;
-    }
     if (result.weights == InteriorWeights::IntrinsicCotan) {
-      // Cotangent weight of edge ij: (cot a + cot b) / 2 over the two corners opposite it in the
-      // intrinsic Delaunay triangulation, where both sum to at most pi: non-negative.
-      idt_he = out_half_edges(nv, idt.faces);  // its twins are idt.twin
-      lap_faces = &idt.faces;
-      lap_he = &idt_he;
       const bool solves = !plain_uv_given || options.stretch_iterations > 0;
       if (options.plain && is_permutation_of(options.plain->cholesky_ordering, ni))
         cholesky.ordering = &options.plain->cholesky_ordering;
       if (solves && !cholesky.ordering && ni >= kEarlyAnalysisRows && !inside_parallel_loop() &&
           thread_count(0, context) > 1) {
-        // The lower triangle's pattern as the assembly below makes it (same entries, same order).
+        // The lower triangle's pattern as the assembly makes it (same entries, same order).
         cholesky.pending = std::async(std::launch::async, [&] {
           std::vector<Eigen::Triplet<double>> pattern;
-          pattern.reserve(idt_he.out.size() / 2 + ni);
+          pattern.reserve(lap.idt_he.out.size() / 2 + ni);
           for (int i = 0; i < nv; ++i) {
             const int r = interior_index[i];
             if (r < 0) continue;
-            for (int k = idt_he.out_offset[i]; k < idt_he.out_offset[i + 1]; ++k) {
-              const int j = interior_index[he_to(idt.faces, idt_he.out[k])];
+            for (int k = lap.idt_he.out_offset[i]; k < lap.idt_he.out_offset[i + 1]; ++k) {
+              const int j = interior_index[he_to(lap.idt.faces, lap.idt_he.out[k])];
               if (j >= 0 && j <= r) pattern.emplace_back(r, j, 1.0);
             }
             pattern.emplace_back(r, r, 1.0);
@@ -635,107 +775,23 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
           cholesky.llt.analyze(lower);
         });
       }
-      for (int h = 0; h < 3 * nf; ++h)
-        w[h] = std::max(0.0, 0.5 * (idt.twin[h] >= 0 ? idt.cot[h] + idt.cot[idt.twin[h]] : idt.cot[h]));
-    } else {
-      // Mean-value weight of half-edge i->j, for row i: (tan(a/2) + tan(b/2)) / |ij| over the two
-      // corners at i next to the edge. Corner c of face f adds to its two out-going half-edge slots:
-      // i->j is half-edge 3f+c itself, i->k is the twin of k->i (3f+(c+2)%3).
-      for (int f = 0; f < nf; ++f) {
-        const Tri& t = faces[f];
-        for (int c = 0; c < 3; ++c) {
-          const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
-          if (on_border[i]) continue;
-          const Vec3 eij = pos[j] - pos[i], eik = pos[k] - pos[i];
-          const double th = tan_half_angle(eij, eik);
-          w[3 * f + c] += th / std::max(eij.norm(), options.min_edge_length);
-          w[he.twin[3 * f + (c + 2) % 3]] += th / std::max(eik.norm(), options.min_edge_length);
-        }
-      }
     }
+    laplacian_weights(patch, he, on_border, options.min_edge_length, lap);
+    std::vector<double>& w = lap.w;
+    const std::vector<Tri>* lap_faces = lap.faces;
 
     // Cotangent weights are symmetric (w_ij = w_ji), so with the border fixed the system is
     // symmetric positive definite and is solved by Cholesky; mean-value weights are not (LU).
     const bool symmetric = result.weights == InteriorWeights::IntrinsicCotan;
-    std::vector<double> row_max_w;  // per vertex, the largest weight of its row (symmetric floor)
-
-    // Assembles the system for half-edge weights ww and solves it into result.uv.
     SymbolicCache symbolic;
-    // One solve, by Cholesky when `spd` and the weights allow it; false when the Cholesky
-    // factorization failed (nothing is changed then).
-    auto solve_once = [&](const std::vector<double>& ww, bool spd) {
-      // Symmetric assembly: the floor of edge ij is the larger of its two rows' floors, so the
-      // matrix stays symmetric; a row without a usable weight falls back to the general path.
-      if (spd) {
-        row_max_w.assign(nv, 0.0);
-        for (int i = 0; i < nv && spd; ++i) {
-          for (int k = lap_he->out_offset[i]; k < lap_he->out_offset[i + 1]; ++k) {
-            const double x = ww[lap_he->out[k]];
-            if (!std::isfinite(x)) spd = false;
-            row_max_w[i] = std::max(row_max_w[i], x);
-          }
-          if (interior_index[i] >= 0 && !(row_max_w[i] > 0)) spd = false;
-        }
-      }
-      std::vector<Eigen::Triplet<double>> triplets;
-      triplets.reserve(lap_he->out.size() + ni);
-      Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(ni, 2);
-      for (int i = 0; i < nv; ++i) {
-        const int r = interior_index[i];
-        if (r < 0) continue;
-        const int begin = lap_he->out_offset[i], end = lap_he->out_offset[i + 1];
-        double wmax = 0;
-        bool finite = true;
-        for (int k = begin; k < end; ++k) {
-          const double x = ww[lap_he->out[k]];
-          finite = finite && std::isfinite(x);
-          wmax = std::max(wmax, x);
-        }
-        // No usable angle at all around i (every face degenerate), or overflow: uniform weights.
-        const bool uniform = !finite || !(wmax > 0);
-        const double floor_w = kRelativeWeightFloor * wmax;
-        double diag = 0;
-        for (int k = begin; k < end; ++k) {
-          const int h = lap_he->out[k];
-          const int j = he_to(*lap_faces, h);
-          const double x = spd ? std::max(ww[h], kRelativeWeightFloor * std::max(wmax, row_max_w[j]))
-                               : uniform ? 1.0
-                                         : std::max(ww[h], floor_w);
-          diag += x;
-          if (interior_index[j] >= 0) {
-            if (!spd || interior_index[j] <= r) triplets.emplace_back(r, interior_index[j], -x);
-          } else {
-            rhs.row(r) += x * result.uv[j].transpose();
-          }
-        }
-        triplets.emplace_back(r, r, diag);
-      }
-      Eigen::SparseMatrix<double> A(ni, ni);
-      A.setFromTriplets(triplets.begin(), triplets.end());  // spd: the lower triangle only
-      triplets = {};
-      context.report("parameterize: factorize", 0.2);
-      context.check_cancel();
-
-      Eigen::MatrixX2d x;
-      if (spd) {
-        if (!solve_cholesky(A, rhs, context, cholesky, x)) return false;
-        if (result.cholesky_ordering.empty()) result.cholesky_ordering = cholesky.llt.ordering();
-      } else {
-        x = options.ordering == LuOrdering::SymmetricAmd ? solve_symmetric_amd(A, rhs, context, symbolic)
-                                                         : solve_colamd(A, rhs, context);
-      }
-      if (!x.allFinite())
-        throw SolverError("parameterize_square: the " + std::string(spd ? "cotangent" : "mean-value") + " solve (" +
-                          std::to_string(ni) + " interior vertices) gave no finite solution");
-      for (int v = 0; v < nv; ++v)
-        if (interior_index[v] >= 0) result.uv[v] = x.row(interior_index[v]).transpose();
-      return true;
-    };
     bool use_cholesky = symmetric;  // false once a Cholesky factorization failed
     auto solve_with = [&](const std::vector<double>& ww) {
-      if (use_cholesky && solve_once(ww, true)) return;
+      if (use_cholesky && solve_rows(lap, ww, interior_index, ni, true, options.ordering, context, cholesky, symbolic,
+                                     &result.cholesky_ordering, result.uv))
+        return;
       use_cholesky = false;
-      solve_once(ww, false);
+      solve_rows(lap, ww, interior_index, ni, false, options.ordering, context, cholesky, symbolic,
+                 &result.cholesky_ordering, result.uv);
     };
     if (plain_uv_given)
       result.uv = options.plain->uv;
@@ -832,6 +888,62 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
     context.warn("parameterize_square: " + std::to_string(result.flipped_faces) + " flipped and " +
                  std::to_string(result.zero_area_faces) + " zero-area UV faces of " + std::to_string(nf));
   return result;
+}
+
+struct HeldSolver::Impl {
+  const PatchMesh& patch;
+  HalfEdges he;
+  Laplacian lap;
+  std::vector<Vec2> border_uv;
+  std::vector<char> on_border;
+  Context context;
+  Impl(const PatchMesh& p, const Context& c) : patch(p), he(validate_patch(p, {})), context(c) {}
+};
+
+HeldSolver::HeldSolver(const PatchMesh& patch, InteriorWeights weights, const Context& context)
+    : impl_(std::make_unique<Impl>(patch, context)) {
+  Impl& m = *impl_;
+  const int nv = static_cast<int>(patch.positions.size());
+  const SquareParamOptions defaults;
+  m.border_uv.assign(nv, Vec2::Zero());
+  place_border(patch, defaults.min_border_spacing, m.border_uv);
+  m.on_border.assign(nv, 0);
+  for (int v : patch.boundary) m.on_border[v] = 1;
+  laplacian_triangulation(patch, m.he, weights, defaults.min_edge_length, m.lap);
+  laplacian_weights(patch, m.he, m.on_border, defaults.min_edge_length, m.lap);
+}
+
+HeldSolver::~HeldSolver() = default;
+
+void HeldSolver::solve(const std::vector<char>& free, std::vector<Vec2>& uv) const {
+  const Impl& m = *impl_;
+  const int nv = static_cast<int>(m.on_border.size());
+  if (static_cast<int>(free.size()) != nv || static_cast<int>(uv.size()) != nv)
+    throw InvalidInput("HeldSolver::solve: " + std::to_string(free.size()) + " free flags and " +
+                       std::to_string(uv.size()) + " (u, v) for a patch of " + std::to_string(nv) + " vertices");
+  std::vector<Vec2> full = uv;
+  std::vector<int> interior_index(nv, -1);
+  int ni = 0;
+  for (int v = 0; v < nv; ++v) {
+    if (m.on_border[v]) {
+      full[v] = m.border_uv[v];
+    } else if (free[v]) {
+      interior_index[v] = ni++;
+    } else if (!uv[v].allFinite() || uv[v].minCoeff() < 0 || uv[v].maxCoeff() > 1) {
+      throw InvalidInput("HeldSolver::solve: held vertex " + std::to_string(v) + " is outside the square");
+    }
+  }
+  if (ni == 0) return;
+  CholeskyCache cholesky;
+  SymbolicCache symbolic;
+  const SquareParamOptions defaults;
+  if (m.lap.weights != InteriorWeights::IntrinsicCotan ||
+      !solve_rows(m.lap, m.lap.w, interior_index, ni, true, defaults.ordering, m.context, cholesky, symbolic, nullptr,
+                  full))
+    solve_rows(m.lap, m.lap.w, interior_index, ni, false, defaults.ordering, m.context, cholesky, symbolic, nullptr,
+               full);
+  for (int v = 0; v < nv; ++v)
+    if (interior_index[v] >= 0) uv[v] = full[v];
 }
 
 void count_uv_faces(const std::vector<Tri>& faces, SquareParam& sp) {

@@ -3,6 +3,7 @@
 // Sander et al. 2001 L2 stretch (paper 3.2).
 
 #include <array>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -137,6 +138,28 @@ void count_uv_faces(const std::vector<Tri>& faces, SquareParam& sp);
 /// \throws SolverError if the factorization fails or the solution is not finite.
 SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions& options = {},
                                 const Context& context = {});
+
+/// Solves of a few interior vertices of a patch at a time, every other vertex held (a local repair
+/// of a map): the weights are built once, and each solve assembles and factors only its own rows.
+/// A solve gives those vertices what parameterize_square gives them with the same weights and
+/// every other interior vertex pinned where it is held. The patch must outlive the solver.
+class HeldSolver {
+ public:
+  /// \pre as parameterize_square (checked: InvalidInput).
+  HeldSolver(const PatchMesh& patch, InteriorWeights weights, const Context& context = {});
+  ~HeldSolver();
+  HeldSolver(const HeldSolver&) = delete;
+  HeldSolver& operator=(const HeldSolver&) = delete;
+  /// uv[v] solved for every interior vertex v with free[v] (border vertices are skipped; the
+  /// border is where parameterize_square puts it), the other interior vertices held at uv[v].
+  /// \throws InvalidInput when a held (u, v) is not finite or outside the unit square;
+  /// SolverError as parameterize_square.
+  void solve(const std::vector<char>& free, std::vector<Vec2>& uv) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// L2 stretch (Sander, Snyder, Gortler, Hoppe 2001). Per face, with S_s, S_t the partial
 /// derivatives of the (linear) UV-to-3D map, L2_f = sqrt((|S_s|^2 + |S_t|^2) / 2); per patch
