@@ -160,20 +160,36 @@ int main(int argc, char** argv) {
       for (const std::string& w : qs::pipeline::check_inputs(inputs)) std::cerr << "qs-dissect: warning: " << w << "\n";
     qs::Context ctx;
     ctx.threads = threads;
+    // Wall time per stage, in the order the stages first ran (a stage that runs again, in a second
+    // dissection, adds to its first entry); the time before the first stage is "setup" (the
+    // pose test and any registration).
+    std::vector<std::pair<std::string, double>> stage_seconds{{"setup", 0.0}};
+    size_t stage_at = 0;
+    auto stage_start = t1;
+    auto stage_to = [&](const std::string& stage) {
+      const auto now = std::chrono::steady_clock::now();
+      stage_seconds[stage_at].second += std::chrono::duration<double>(now - stage_start).count();
+      stage_start = now;
+      stage_at = std::find_if(stage_seconds.begin(), stage_seconds.end(),
+                              [&](const auto& e) { return e.first == stage; }) - stage_seconds.begin();
+      if (stage_at == stage_seconds.size()) stage_seconds.emplace_back(stage, 0.0);
+    };
     // Each stage once at its start, then at every quarter it passes, never backwards or twice.
     std::string last_stage;
     int last_quarter = -1;
-    if (!quiet && !json)
-      ctx.progress = [&](const std::string& stage, double f) {
-        const int pct = static_cast<int>(std::floor(std::clamp(f, 0.0, 1.0) * 100));
-        const int quarter = pct / 25;
-        if (stage == last_stage && quarter <= last_quarter) return;
-        if (stage != last_stage) last_quarter = -1;
-        std::cerr << "qs-dissect: " << stage << " " << pct << "%\n";
-        last_stage = stage;
-        last_quarter = quarter;
-      };
+    ctx.progress = [&](const std::string& stage, double f) {
+      if (stage != stage_seconds[stage_at].first) stage_to(stage);
+      if (quiet || json) return;
+      const int pct = static_cast<int>(std::floor(std::clamp(f, 0.0, 1.0) * 100));
+      const int quarter = pct / 25;
+      if (stage == last_stage && quarter <= last_quarter) return;
+      if (stage != last_stage) last_quarter = -1;
+      std::cerr << "qs-dissect: " << stage << " " << pct << "%\n";
+      last_stage = stage;
+      last_quarter = quarter;
+    };
     const qs::pipeline::DissectResult result = qs::pipeline::dissect(inputs, config, ctx);
+    stage_to("setup");
     const auto t2 = std::chrono::steady_clock::now();
     qs::pipeline::write_dissection(result, folder);
     const auto t3 = std::chrono::steady_clock::now();
@@ -187,7 +203,10 @@ int main(int argc, char** argv) {
     times << std::fixed << std::setprecision(3) << "  time: read+validate " << read_s << " s, dissect "
           << result.dissect_seconds << " s, ";
     if (config.refine_maps && result.meshes.size() > 1) times << "refine maps " << result.refine_seconds << " s, ";
-    times << "write " << write_s << " s\n";
+    times << "write " << write_s << " s\n  stages:";
+    for (size_t k = 0; k < stage_seconds.size(); ++k)
+      times << (k ? ", " : " ") << stage_seconds[k].first << " " << std::setprecision(2) << stage_seconds[k].second << " s";
+    times << "\n";
     if (json) std::cout << json_summary(result, outdir, read_s, write_s);
     else if (!quiet) std::cout << text.str() << times.str();
     if (!report_file.empty())

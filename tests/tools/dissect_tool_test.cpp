@@ -55,13 +55,21 @@ TEST_F(DissectTool, WritesTheChartAndTheJsonContract) {
   }
   // The same input and options give byte-identical files.
   const fs::path out2 = dir_ / "out2";
-  ASSERT_EQ(run_tool("qs-dissect", blob + " --tau 1.5 -q -o " + out2.string()).exit, 0);
+  ASSERT_EQ(run_tool("qs-dissect", blob + " --tau 1.5 -q -o " + out2.string() + " --report " +
+                                       (dir_ / "report2.txt").string())
+                .exit,
+            0);
   auto bytes = [](const fs::path& p) {
     std::ifstream f(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(f), {});
   };
   EXPECT_EQ(bytes(out / "dissection.json"), bytes(out2 / "dissection.json"));
   EXPECT_EQ(bytes(out / "blob.chart.ply"), bytes(out2 / "blob.chart.ply"));
+  // The report's wall time per stage, with or without the progress on stderr.
+  for (const char* report : {"report.txt", "report2.txt"}) {
+    EXPECT_THAT(bytes(dir_ / report), HasSubstr("\n  stages: setup ")) << report;
+    EXPECT_THAT(bytes(dir_ / report), HasSubstr(", quinary subdivision ")) << report;
+  }
 }
 
 // The maps (geodesic seed curves and intrinsic cotangent weights, the defaults), each turned off

@@ -285,7 +285,9 @@ try {
     }
     check(await page.evaluate(() => !window.__studio.editors[0].unsaved && document.querySelector('.editor .unsaved-mark').classList.contains('hidden')),
       'after saving, nothing is marked unsaved');
-    // finding: features without seeds were a dead end
+    // finding: features without seeds were a dead end. The save reloads the mesh list after it
+    // says "saved": the list is clicked once it shows the saved file.
+    await page.waitForFunction(() => /spot_2k\.landmarks\.json \(4 seeds, 1 features\)/.test(document.querySelector('#meshes li[data-mesh="spot_2k.obj"] .hint.lm')?.textContent ?? ''), { timeout: 10000 });
     await page.click('#meshes li[data-mesh="fish_blub_2k.obj"] button.open');
     await page.waitForFunction(() => window.__studio.editors.length === 2 && window.__studio.editors[1].ready, { timeout: 30000 });
     const F = '.editor[data-mesh="fish_blub_2k.obj"]';
