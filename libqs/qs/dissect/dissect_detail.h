@@ -387,6 +387,13 @@ constexpr int kTransferRepairRounds = 6;
 /// against its re-tessellation 0.26 -> 0.43% mean) before the node keeps its own map.
 constexpr int kTransferBlendRings = 3;
 constexpr int kTransferBlendAttempts = 1;
+/// Through a registration, where a map that stays folded serves the split as it is (Transfer::Folded)
+/// and its cuts tangle the children's maps, a tangle left after kTransferBlendAttempts on at most
+/// this share of the node's vertices gets one attempt more (over 4x the rings): smpl_man (100k
+/// faces) against its pose re-tessellated to 140k then mends the nodes around its left heel (11 of
+/// 6,396 vertices left), whose folded leaf had the whole set dissected again. Larger tangles mended
+/// that way cut elsewhere (the posed horse: 46-276 vertices left, 2.6 -> 19% max error).
+constexpr double kTransferSmallTangle = 0.01;
 /// same_pose_maps: after a repair, the untangler frees the vertices the repair left off their
 /// targets and this many rings around them (4 rings: the same result, slower).
 constexpr int kTransferPolishRings = 2;

@@ -141,9 +141,10 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
 
   int folded = 0;  // faces the nearest points fold, before the repair
   for (const Tri& t : pm.faces) folded += signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) <= param::kZeroUvArea;
-  // Where folds remain, the own map's shape around them, over more rings each attempt.
+  // Where folds remain, the own map's shape around them, over more rings each attempt; through a
+  // registration, a small tangle that outlasts those attempts gets one more (kTransferSmallTangle).
   std::optional<param::SquareParam> repaired;
-  for (int attempt = 0; attempt <= kTransferBlendAttempts; ++attempt) {
+  for (int attempt = 0;; ++attempt) {
     const std::optional<std::vector<int>> left = repair(uv);
     if (!left) break;
     if (left->empty()) {
@@ -153,6 +154,8 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
       if (sp.bijective()) repaired = std::move(sp);
       break;
     }
+    const bool small = pose.registered() && static_cast<double>(left->size()) <= kTransferSmallTangle * n;
+    if (attempt > kTransferBlendAttempts || (attempt == kTransferBlendAttempts && !small)) break;
     blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
   // No bijective map near the targets (mesh 0's map folds there: a leg squeezed to zero uv area).
