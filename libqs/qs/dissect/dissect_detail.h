@@ -406,7 +406,8 @@ constexpr int kTransferPolishRings = 2;
 /// are mended by solves of the node's own weights (p.weights) over the folded vertices
 /// (kTransferLocalRounds), then over the free vertices around them, every other interior vertex
 /// pinned, a ring wider each round (kTransferRepairRounds); where folds remain, p's own map is
-/// blended in around them and the repair runs again (kTransferBlendAttempts). p's own map may
+/// blended in around them and the repair runs again (kTransferBlendAttempts; through a
+/// registration once more for a small tangle, kTransferSmallTangle). p's own map may
 /// fold (the take-over can mend a node that folds in this mesh), and so may ref's (its (u, v) are
 /// read as they are). With `untangle` (DissectOptions::same_pose_untangle), a repaired map is
 /// polished: the vertices the repair moved off their nearest-point (u, v), and
