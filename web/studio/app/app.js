@@ -574,17 +574,25 @@ class Editor {
         + 'or delete the placed seeds to let qs choose them automatically', true);
       return false;
     }
+    let r;
     try {
-      const r = await postJSON(`/api/landmarks?name=${encodeURIComponent(this.name)}`, body);
-      this.saved = this.serialize();
-      this.say(`saved ${r.file}: ${r.seeds} seeds${r.seeds ? '' : ' (chosen automatically in a run)'}, ${r.features} feature${r.features === 1 ? '' : 's'}`);
-      this.changed(false);
-      await loadMeshes();
-      return true;
+      r = await postJSON(`/api/landmarks?name=${encodeURIComponent(this.name)}`, body);
     } catch (e) {
       this.say(`not saved: ${e.message}`, true);
       return false;
     }
+    this.saved = this.serialize();
+    this.changed(false);
+    // The mesh list shows the saved file before the editor says "saved"; a list that cannot be
+    // reloaded does not undo the save.
+    let listed = '';
+    try {
+      await loadMeshes();
+    } catch (e) {
+      listed = ` (the mesh list was not reloaded: ${e.message})`;
+    }
+    this.say(`saved ${r.file}: ${r.seeds} seeds${r.seeds ? '' : ' (chosen automatically in a run)'}, ${r.features} feature${r.features === 1 ? '' : 's'}${listed}`, !!listed);
+    return true;
   }
 }
 
