@@ -575,6 +575,7 @@ class Editor {
       return false;
     }
     let r;
+    this.say('saving…');
     try {
       r = await postJSON(`/api/landmarks?name=${encodeURIComponent(this.name)}`, body);
     } catch (e) {
