@@ -155,7 +155,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
       break;
     }
     const bool small = pose.registered() && static_cast<double>(left->size()) <= kTransferSmallTangle * n;
-    if (attempt > kTransferBlendAttempts || (attempt == kTransferBlendAttempts && !small)) break;
+    if (attempt >= kTransferBlendAttempts + (small ? 1 : 0)) break;
     blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
   // No bijective map near the targets (mesh 0's map folds there: a leg squeezed to zero uv area).

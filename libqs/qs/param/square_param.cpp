@@ -891,13 +891,12 @@ SquareParam parameterize_square(const PatchMesh& patch, const SquareParamOptions
 }
 
 struct HeldSolver::Impl {
-  const PatchMesh& patch;
   HalfEdges he;
-  Laplacian lap;
+  Laplacian lap;  ///< may point into the caller's patch (mean-value weights)
   std::vector<Vec2> border_uv;
   std::vector<char> on_border;
   Context context;
-  Impl(const PatchMesh& p, const Context& c) : patch(p), he(validate_patch(p, {})), context(c) {}
+  Impl(const PatchMesh& p, const Context& c) : he(validate_patch(p, {})), context(c) {}
 };
 
 HeldSolver::HeldSolver(const PatchMesh& patch, InteriorWeights weights, const Context& context)
