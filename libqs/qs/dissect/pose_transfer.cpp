@@ -144,8 +144,10 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   // Where folds remain, the own map's shape around them, over more rings each attempt; through a
   // registration, a small tangle that outlasts those attempts gets one more (kTransferSmallTangle).
   std::optional<param::SquareParam> repaired;
+  size_t tangle = 0;  // vertices the last repair left folded
   for (int attempt = 0;; ++attempt) {
     const std::optional<std::vector<int>> left = repair(uv);
+    tangle = left ? left->size() : 0;
     if (!left) break;
     if (left->empty()) {
       param::SquareParam sp = p.sp;
@@ -176,6 +178,15 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     return Transfer::Taken;
   }
   if (!untangle) return as_targets();
+  // Through a registration, a small tangle that outlasted every attempt: the repaired map, folded
+  // only there, serves the split, whose cuts then follow the targets everywhere else. The
+  // untangler's pull of the own map over the whole node costs much on a fine second mesh and
+  // brings the cuts no closer (docs/pose-pairs.md).
+  if (!repaired && tangle > 0 && pose.registered() && static_cast<double>(tangle) <= kTransferSmallTangle * n) {
+    p.sp.uv = std::move(uv);
+    param::count_uv_faces(pm.faces, p.sp);
+    return Transfer::Folded;
+  }
   // The untangler (the map pulled toward the targets under an injectivity barrier). After a
   // repair, from the repaired map, free only where it left the targets (kTransferPolishRings
   // rings around): the repair's solves of the own weights put those vertices by the own map's
