@@ -392,10 +392,14 @@ constexpr int kTransferBlendAttempts = 1;
 /// this share of the node's vertices gets one attempt more (over 4x the rings): smpl_man (100k
 /// faces) against its pose re-tessellated to 140k then mends the nodes around its left heel (11 of
 /// 6,396 vertices left), whose folded leaf had the whole set dissected again. Larger tangles mended
-/// that way cut elsewhere (the posed horse: 46-276 vertices left, 2.6 -> 19% max error). A small
-/// tangle that outlasts that attempt too keeps the repaired map, folded there, for the split
-/// (Transfer::Folded) instead of the untangler's pull over the whole node.
+/// that way cut elsewhere (the posed horse: 46-276 vertices left, 2.6 -> 19% max error).
 constexpr double kTransferSmallTangle = 0.01;
+/// Through a registration, a small tangle (kTransferSmallTangle) that outlasts every attempt on a
+/// node of at least this many vertices keeps the repaired map, folded there, for the split
+/// (Transfer::Folded) instead of the untangler's pull of the own map over the whole node, which
+/// is slow there (a coarse first mesh against a fine second one) and measured no closer; on
+/// smaller nodes the pull is cheap and measured slightly closer (docs/pose-pairs.md).
+constexpr int kTransferUntangleVertices = 10000;
 /// same_pose_maps: after a repair, the untangler frees the vertices the repair left off their
 /// targets and this many rings around them (4 rings: the same result, slower).
 constexpr int kTransferPolishRings = 2;
@@ -417,7 +421,8 @@ constexpr int kTransferPolishRings = 2;
 /// barrier (Polished); where folds remain after the repair, p's own map, or its
 /// stretch-minimized map (minimized_leaf) when the own map folds, is pulled toward them over the
 /// whole node instead (Untangled), except through a registration where the repair left a small
-/// tangle (kTransferSmallTangle): then p.sp takes the repaired map, folded only there (Folded).
+/// tangle on a large node (kTransferUntangleVertices): then p.sp takes the repaired map, folded
+/// only there (Folded).
 /// When no bijective map results, p.sp takes the nearest-point (u, v) as they are, folded, if
 /// `pose` is a registration (Folded: the map serves the split only, whose cuts then run where
 /// ref's do); otherwise, or when no vertex has a nearest point, p keeps its own map (Own).

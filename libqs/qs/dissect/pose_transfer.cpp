@@ -178,11 +178,12 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     return Transfer::Taken;
   }
   if (!untangle) return as_targets();
-  // Through a registration, a small tangle that outlasted every attempt: the repaired map, folded
-  // only there, serves the split, whose cuts then follow the targets everywhere else. The
-  // untangler's pull of the own map over the whole node costs much on a fine second mesh and
-  // brings the cuts no closer (docs/pose-pairs.md).
-  if (!repaired && tangle > 0 && pose.registered() && static_cast<double>(tangle) <= kTransferSmallTangle * n) {
+  // Through a registration, a small tangle that outlasted every attempt on a large node: the
+  // repaired map, folded only there, serves the split, whose cuts then follow the targets
+  // everywhere else. The untangler's pull of the own map over a whole large node costs much, and
+  // the cuts it gives measured no closer there (kTransferUntangleVertices).
+  if (!repaired && tangle > 0 && pose.registered() && static_cast<double>(tangle) <= kTransferSmallTangle * n &&
+      n >= kTransferUntangleVertices) {
     p.sp.uv = std::move(uv);
     param::count_uv_faces(pm.faces, p.sp);
     return Transfer::Folded;
