@@ -166,10 +166,13 @@ int main(int argc, char** argv) {
     std::vector<std::pair<std::string, double>> stage_seconds{{"setup", 0.0}};
     size_t stage_at = 0;
     auto stage_start = t1;
-    auto stage_to = [&](const std::string& stage) {
+    auto close_stage = [&] {
       const auto now = std::chrono::steady_clock::now();
       stage_seconds[stage_at].second += std::chrono::duration<double>(now - stage_start).count();
       stage_start = now;
+    };
+    auto stage_to = [&](const std::string& stage) {
+      close_stage();
       stage_at = std::find_if(stage_seconds.begin(), stage_seconds.end(),
                               [&](const auto& e) { return e.first == stage; }) - stage_seconds.begin();
       if (stage_at == stage_seconds.size()) stage_seconds.emplace_back(stage, 0.0);
@@ -189,7 +192,7 @@ int main(int argc, char** argv) {
       last_quarter = quarter;
     };
     const qs::pipeline::DissectResult result = qs::pipeline::dissect(inputs, config, ctx);
-    stage_to("setup");
+    close_stage();
     const auto t2 = std::chrono::steady_clock::now();
     qs::pipeline::write_dissection(result, folder);
     const auto t3 = std::chrono::steady_clock::now();

@@ -143,6 +143,10 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   for (const Tri& t : pm.faces) folded += signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) <= param::kZeroUvArea;
   // Where folds remain, the own map's shape around them, over more rings each attempt; through a
   // registration, a small tangle that outlasts those attempts gets one more (kTransferSmallTangle).
+  // A tangle on at most kTransferSmallTangle of the node's vertices, through a registration.
+  auto small_tangle = [&](size_t vertices) {
+    return pose.registered() && static_cast<double>(vertices) <= kTransferSmallTangle * n;
+  };
   std::optional<param::SquareParam> repaired;
   size_t tangle = 0;  // vertices the last repair left folded
   for (int attempt = 0;; ++attempt) {
@@ -156,8 +160,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
       if (sp.bijective()) repaired = std::move(sp);
       break;
     }
-    const bool small = pose.registered() && static_cast<double>(left->size()) <= kTransferSmallTangle * n;
-    if (attempt >= kTransferBlendAttempts + (small ? 1 : 0)) break;
+    if (attempt >= kTransferBlendAttempts + (small_tangle(tangle) ? 1 : 0)) break;
     blend_own(uv, *left, kTransferBlendRings << (attempt + 1));
   }
   // No bijective map near the targets (mesh 0's map folds there: a leg squeezed to zero uv area).
@@ -182,8 +185,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   // repaired map, folded only there, serves the split, whose cuts then follow the targets
   // everywhere else. The untangler's pull of the own map over a whole large node costs much, and
   // the cuts it gives measured no closer there (kTransferUntangleVertices).
-  if (!repaired && tangle > 0 && pose.registered() && static_cast<double>(tangle) <= kTransferSmallTangle * n &&
-      n >= kTransferUntangleVertices) {
+  if (!repaired && tangle > 0 && small_tangle(tangle) && n >= kTransferUntangleVertices) {
     p.sp.uv = std::move(uv);
     param::count_uv_faces(pm.faces, p.sp);
     return Transfer::Folded;
