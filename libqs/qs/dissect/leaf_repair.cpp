@@ -52,8 +52,23 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
     // squeezed protrusion): up to kUntangleBatches batches of 10 sweeps, until no fold is left.
     // The sweeps visit only the region's free vertices (in vertex order), not the whole patch.
     std::vector<int> moving;
+    std::vector<char> moves(nv, 0);
     for (int v = 0; v < nv; ++v)
-      if (mark[v] && !pinned[v] && !nb[v].empty()) moving.push_back(v);
+      if (mark[v] && !pinned[v] && !nb[v].empty()) moving.push_back(v), moves[v] = 1;
+    // Only the faces of moving vertices change in this round: the others' folds are counted once,
+    // and the whole map is counted at the round's end.
+    auto bad = [&](const Tri& t) {
+      const Vec2 &a = cur.uv[t[0]], &b = cur.uv[t[1]], &c = cur.uv[t[2]];  // as count_uv_faces
+      const double area = 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+      return std::abs(area) <= param::kZeroUvArea || area < 0;
+    };
+    std::vector<int> changing;
+    long still = 0;  // folded faces that this round cannot change
+    for (size_t f = 0; f < pm.faces.size(); ++f) {
+      const Tri& t = pm.faces[f];
+      if (moves[t[0]] || moves[t[1]] || moves[t[2]]) changing.push_back(static_cast<int>(f));
+      else still += bad(t);
+    }
     for (int batch = 0; batch < kUntangleBatches; ++batch) {
       for (int sweep = 0; sweep < 10; ++sweep)
         for (int v : moving) {
@@ -61,9 +76,11 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
           for (int w : nb[v]) c += cur.uv[w];
           cur.uv[v] = c / static_cast<double>(nb[v].size());
         }
-      param::count_uv_faces(pm.faces, cur);
-      if (cur.bijective()) break;
+      long folded = still;
+      for (int f : changing) folded += bad(pm.faces[static_cast<size_t>(f)]);
+      if (folded == 0) break;
     }
+    param::count_uv_faces(pm.faces, cur);
     if (cur.flipped_faces + cur.zero_area_faces < best.flipped_faces + best.zero_area_faces) best = cur;
   }
   return best;
