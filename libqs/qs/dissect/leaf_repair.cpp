@@ -57,7 +57,9 @@ param::SquareParam untangle(const param::PatchMesh& pm, const param::SquareParam
       if (mark[v] && !pinned[v] && !nb[v].empty()) moving.push_back(v), moves[v] = 1;
     // Only the faces of moving vertices change in this round: the others' folds are counted once,
     // and the whole map is counted at the round's end.
-    auto bad = [&](const Tri& t) { return signed_area(cur.uv[t[0]], cur.uv[t[1]], cur.uv[t[2]]) <= param::kZeroUvArea; };
+    auto bad = [&](const Tri& t) {
+      return signed_area(cur.uv[t[0]], cur.uv[t[1]], cur.uv[t[2]]) <= param::kZeroUvArea;
+    };
     std::vector<int> changing;
     long still = 0;  // folded faces that this round cannot change
     for (size_t f = 0; f < pm.faces.size(); ++f) {

@@ -142,13 +142,13 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   int folded = 0;  // faces the nearest points fold, before the repair
   for (const Tri& t : pm.faces) folded += signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) <= param::kZeroUvArea;
   // Where folds remain, the own map's shape around them, over more rings each attempt; through a
-  // registration, a small tangle that outlasts those attempts gets one more (kTransferSmallTangle).
-  // A tangle on at most kTransferSmallTangle of the node's vertices, through a registration.
+  // registration, a small tangle (at most kTransferSmallTangle of the node's vertices) that
+  // outlasts those attempts gets one more.
   auto small_tangle = [&](size_t vertices) {
     return pose.registered() && static_cast<double>(vertices) <= kTransferSmallTangle * n;
   };
   std::optional<param::SquareParam> repaired;
-  size_t tangle = 0;  // vertices the last repair left folded
+  size_t tangle = 0;  // vertices the last repair left folded (0 once a repair unfolded the map)
   for (int attempt = 0;; ++attempt) {
     const std::optional<std::vector<int>> left = repair(uv);
     tangle = left ? left->size() : 0;
@@ -185,7 +185,7 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
   // repaired map, folded only there, serves the split, whose cuts then follow the targets
   // everywhere else. The untangler's pull of the own map over a whole large node costs much, and
   // the cuts it gives measured no closer there (kTransferUntangleVertices).
-  if (!repaired && tangle > 0 && small_tangle(tangle) && n >= kTransferUntangleVertices) {
+  if (tangle > 0 && small_tangle(tangle) && n >= kTransferUntangleVertices) {
     p.sp.uv = std::move(uv);
     param::count_uv_faces(pm.faces, p.sp);
     return Transfer::Folded;
