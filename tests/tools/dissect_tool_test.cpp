@@ -289,6 +289,8 @@ TEST_F(DissectTool, WindingSeedOrderIsReorderedAndReported) {
 // The horse against its pose, re-tessellated (qs-family pose, seed 1): on the re-tessellation the
 // shortest loop puts feature tip7 (a weak extremity on the head) on the other side, and no loop
 // through the seeds brings it back; the set takes that mesh's arrangement instead of refusing.
+// The pair is one surface, registered: the refinement pulls toward the registration 100 times as
+// strongly as pose_pull says, with 4 times the steps per side.
 TEST_F(DissectTool, FeatureSidesTakeTheArrangementEveryMeshCanReach) {
   const fs::path horse = qs::testing::shared_meshes_dir() / "horse_5k.obj";
   if (!fs::exists(horse)) GTEST_SKIP() << "no " << horse << " (the shared test meshes)";
@@ -298,7 +300,13 @@ TEST_F(DissectTool, FeatureSidesTakeTheArrangementEveryMeshCanReach) {
   ASSERT_EQ(r.exit, 0) << r.out;
   r = run_tool("qs-dissect", horse.string() + " " + (dir_ / "posed_r.obj").string() + " --landmarks " +
                                  (dir_ / "posed.source.landmarks.json").string() + " " +
-                                 (dir_ / "posed_r.landmarks.json").string() + " -o " + (dir_ / "out").string());
+                                 (dir_ / "posed_r.landmarks.json").string() + " -o " + (dir_ / "out").string() +
+                                 " --report " + (dir_ / "report.txt").string());
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("bijective: yes"));
+  std::ifstream in(dir_ / "report.txt");
+  const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(report, HasSubstr("registration: "));
+  EXPECT_THAT(report, HasSubstr("'s nearest points (one pose), weight 1000\n"));
+  EXPECT_THAT(report, HasSubstr("(Newton steps per side: at most 20)"));
 }

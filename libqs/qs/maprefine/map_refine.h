@@ -24,6 +24,16 @@ inline constexpr double kPullLength = 0.01;
 inline constexpr double kDefaultPosePull = 10.0;
 /// ... and its RefineOptions::border_iterations with that pull (docs/algorithms.md, "Map refinement").
 inline constexpr int kPoseBorderIterations = 5;
+/// Through a registration (RefineOptions::poses) the pipeline multiplies that pull by
+/// kRegisteredPullScale and those steps by kRegisteredStepScale, and takes at least
+/// kRegisteredBorderSweeps passes over the sides (unless none): the first mesh carried through a
+/// registration is a closer map than the dissection's own, so the pull outweighs the distortion
+/// (left to keep the map injective), and a side moves far enough to follow it, settling once its
+/// neighbours have moved. Nearest points after a similarity are not trusted so far: two people in
+/// one pose correspond by their shapes, not by nearest points (docs/pose-pairs.md).
+inline constexpr double kRegisteredPullScale = 100.0;
+inline constexpr int kRegisteredStepScale = 4;
+inline constexpr int kRegisteredBorderSweeps = 2;
 
 struct RefineOptions {
   int reference = 0;         ///< the mesh of the set that is not moved. \pre 0 <= reference < #meshes

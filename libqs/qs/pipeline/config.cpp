@@ -86,7 +86,7 @@ const std::vector<Entry>& schema() {
       {"refine_across_borders", +[](DissectConfig& c) -> bool& { return c.refine.across_borders; }, 0, 1,
        "map refinement: move the patch curves of every mesh but the first too"},
       {"refine_border_sweeps", +[](DissectConfig& c) -> int& { return c.refine.border_sweeps; }, 0, 20,
-       "map refinement: passes over the shared patch sides"},
+       "map refinement: passes over the shared patch sides (through a registration at least 2 unless 0)"},
       {"refine_border_iterations", +[](DissectConfig& c) -> int& { return c.refine.border_iterations; }, 0, 1000,
        "map refinement: Newton steps per glued pair of patches"},
       {"refine_corners", +[](DissectConfig& c) -> bool& { return c.refine.move_corners; }, 0, 1,
@@ -96,9 +96,11 @@ const std::vector<Entry>& schema() {
       {"refine_corner_iterations", +[](DissectConfig& c) -> int& { return c.refine.corner_iterations; }, 0, 1000,
        "map refinement: Newton steps per corner star"},
       {"pose_pull", +[](DissectConfig& c) -> double& { return c.pose_pull; }, 0, 1e6,
-       "in one pose: weight of the refinement's pull toward the first mesh's nearest points (0: off)"},
+       "in one pose: weight of the refinement's pull toward the first mesh's nearest points (0: off; 100 times "
+       "this through a registration)"},
       {"pose_border_iterations", +[](DissectConfig& c) -> int& { return c.pose_border_iterations; }, 0, 1000,
-       "in one pose: Newton steps per glued pair of patches (in place of refine_border_iterations)"},
+       "in one pose: Newton steps per glued pair of patches (in place of refine_border_iterations; 4 times this "
+       "through a registration)"},
   };
   return entries;
 }

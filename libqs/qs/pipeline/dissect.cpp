@@ -123,7 +123,17 @@ SetResult dissect_meshes(const std::vector<dissect::MeshToDissect>& meshes, cons
   out.one_pose = opt.same_pose || out.set.same_pose_detected;
   refine_opt.pose_pull = out.one_pose ? config.pose_pull : 0;
   refine_opt.poses = out.set.poses;
-  if (refine_opt.pose_pull > 0) refine_opt.border_iterations = config.pose_border_iterations;
+  if (refine_opt.pose_pull > 0) {
+    refine_opt.border_iterations = config.pose_border_iterations;
+    const bool registered =
+        std::any_of(out.set.poses.begin(), out.set.poses.end(), [](const auto& p) { return p.registered(); });
+    if (registered) {
+      refine_opt.pose_pull *= maprefine::kRegisteredPullScale;
+      refine_opt.border_iterations *= maprefine::kRegisteredStepScale;
+      if (refine_opt.border_sweeps > 0)
+        refine_opt.border_sweeps = std::max(refine_opt.border_sweeps, maprefine::kRegisteredBorderSweeps);
+    }
+  }
   if (config.refine_maps && out.set.meshes.size() > 1) {
     const auto t2 = std::chrono::steady_clock::now();
     out.refine = maprefine::refine_maps(out.set.meshes, refine_opt, ctx);

@@ -55,7 +55,8 @@ struct DissectConfig {
   /// dissection (maprefine::refine_maps with `refine`).
   bool refine_maps = true;
   /// The refinement's options. Its pose_pull and border_iterations are replaced by pose_pull and
-  /// pose_border_iterations below when the meshes are in one pose (told or detected).
+  /// pose_border_iterations below when the meshes are in one pose (told or detected); through a
+  /// registration those are scaled and border_sweeps raised (maprefine::kRegisteredPullScale).
   maprefine::RefineOptions refine;
   /// Meshes in one pose: weight of the refinement's pull toward the first mesh's nearest points
   /// (0: off), and the Newton steps per glued pair of patches with it. \pre >= 0
