@@ -171,9 +171,6 @@ def same_side(dissection, mb, posed):
     agree = sum(w for w, x, y in zip(wb, image, sb) if x & y)
     return agree / sum(wb)
 
-rows = [l.rstrip('\n').split('\t') for l in open(sys.argv[1])]
-f = lambda s: f"{s['mean_percent']:.2f} / {s['p95_percent']:.2f} / {s['max_percent']:.2f}%"
-print()
 def registration(d):
     """The registration's inverse alone (qs-bench-registration), as 'mean / p95 / max%', or ''."""
     try:
@@ -184,6 +181,9 @@ def registration(d):
         pass
     return ''
 
+rows = [l.rstrip('\n').split('\t') for l in open(sys.argv[1])]
+f = lambda s: f"{s['mean_percent']:.2f} / {s['p95_percent']:.2f} / {s['max_percent']:.2f}%"
+print()
 print('| pair | exit | time | patches | qs: mean / p95 / max | registration alone | level 4: mean / p95 / max | baseline: mean / p95 / max | same side of the seed loop | same patch | corners (mean) |')
 print('|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
 for name, rc, secs, d, mb, posed in rows:
