@@ -788,13 +788,23 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   const auto not_found = qs::dissect::dissect_set(fin, o);
   EXPECT_FALSE(not_found.same_pose_detected);
   EXPECT_EQ(not_found.same_pose_splits, 0);
-  // On by default (qs-dissect's detection), off with 0; one mesh given twice is not posed (its
-  // map is the identity).
+  // On by default (qs-dissect's detection), off with 0; one mesh given twice is one pose, and its
+  // second chart is the first's up to rounding (the map is the identity).
   EXPECT_EQ(qs::dissect::dissect_set(in).pose_distance, d_same->mean);
   qs::dissect::DissectOptions off;
   off.same_pose_detect = 0;
   EXPECT_EQ(qs::dissect::dissect_set(in, off).pose_distance, -1);
-  EXPECT_FALSE(qs::dissect::dissect_set({in[0], in[0]}, o).same_pose_detected);
+  const auto twice = qs::dissect::dissect_set({in[0], in[0]}, o);
+  EXPECT_TRUE(twice.same_pose_detected);
+  ASSERT_EQ(twice.meshes.size(), 2u);
+  EXPECT_EQ(twice.meshes[1].chart.face_patch, twice.meshes[0].chart.face_patch);
+  const auto& uv0 = twice.meshes[0].chart.face_uv;
+  const auto& uv1 = twice.meshes[1].chart.face_uv;
+  ASSERT_EQ(uv1.size(), uv0.size());
+  double apart = 0;
+  for (size_t f = 0; f < uv0.size(); ++f)
+    for (int k = 0; k < 3; ++k) apart = std::max(apart, (uv1[f][k] - uv0[f][k]).norm());
+  EXPECT_LT(apart, 1e-9);
 
   in[1].seeds.reset();
   in[1].seed_points.reset();

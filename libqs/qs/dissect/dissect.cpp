@@ -213,22 +213,15 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
                                    const Context& context) {
   // Same pose found by measurement (DissectOptions::same_pose_detect).
   std::optional<PoseDistance> measured;
-  bool detected = false, identical = true;
+  bool detected = false;
   if (!options.same_pose && options.same_pose_detect > 0 && meshes.size() > 1) {
     measured = pose_distance(meshes, context);
-    if (measured) {
-      // One mesh given several times maps by the identity already; nothing to pose.
-      for (size_t i = 1; i < meshes.size() && identical; ++i)
-        identical = meshes[i].mesh->positions == meshes[0].mesh->positions &&
-                    meshes[i].mesh->faces == meshes[0].mesh->faces &&
-                    landmark_positions(meshes[i]) == landmark_positions(meshes[0]);
-      detected = measured->mean <= options.same_pose_detect &&
-                 measured->p99 <= kSamePoseTail * options.same_pose_detect && !identical;
-    }
+    detected = measured && measured->mean <= options.same_pose_detect &&
+               measured->p99 <= kSamePoseTail * options.same_pose_detect;
   }
   DissectOptions used = options;
   double fit = -1, distortion = -1;
-  if (measured && !detected && !identical && options.register_poses && used.pose_registrations.empty()) {
+  if (measured && !detected && options.register_poses && used.pose_registrations.empty()) {
     if (auto poses = register_poses(meshes, context, fit, distortion)) {
       used.pose_registrations = std::move(*poses);
       detected = true;

@@ -131,7 +131,7 @@ struct DissectOptions {
   /// Turn same_pose on when every mesh, moved onto the first by the landmarks' similarity, lies at
   /// a mean distance of at most this fraction of the first mesh's diagonal from it, and 99% of
   /// its area within kSamePoseTail times that (pose_distance; needs seeds in every mesh; one mesh
-  /// given twice is not posed). 0: off. \pre >= 0
+  /// given twice is one pose, and its copies' charts are the first's). 0: off. \pre >= 0
   double same_pose_detect = kSamePoseDetect;
   /// Meshes of one surface in other poses (their landmarks' geodesic distances within 5% of the
   /// first mesh's) and not in one pose: the first mesh is registered onto each other mesh

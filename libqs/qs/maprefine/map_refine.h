@@ -85,8 +85,7 @@ struct RefineOptions {
 struct MeshRefineReport {
   bool reference = false;       ///< this mesh was the reference (not moved)
   /// Its chart equals the reference's (the same mesh, seeds and features given twice): its map to
-  /// the reference is the identity, which the refinement (a smoothed metric) could only disturb,
-  /// so it is left as dissected.
+  /// the reference is the identity, which needs no refinement, so it is left as dissected.
   bool identity = false;
   int free_vertices = 0;        ///< chart vertices that were free to move
   int held_vertices = 0;        ///< patch-border vertices, seeds, features, inconsistent wedges

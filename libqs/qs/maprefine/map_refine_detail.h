@@ -82,10 +82,10 @@ class UvLocator {
   std::vector<int> offsets_, grid_;
 };
 
-// One patch of the reference mesh: its surface's metric in (u, v) per face corner (the uv-area
-// weighted mean of the metrics of the patch's faces around the vertex, each with its eigenvalues
-// clamped to [1e-6, 1e6] times the patch's mean, so that uv slivers do not dominate), and a
-// uniform grid over the unit square for point location (about one cell per face).
+// One patch of the reference mesh: its surface's metric in (u, v), constant on each face (neither
+// smoothed nor clamped, so that a chart equal to the reference's is the energy's minimum; a face
+// of zero uv area, which point location skips, has the patch's mean), and a uniform grid over the
+// unit square for point location (about one cell per face).
 class ReferencePatch {
  public:
   ReferencePatch(const dissect::Chart& chart, std::vector<int> faces);
@@ -96,12 +96,12 @@ class ReferencePatch {
     Vec3 bary;
     const int best = locator_->locate(q, hint, bary);
     if (best < 0) return Eigen::Matrix2d::Identity() * (area_ > 0 ? area_ : 1.0);
-    return bary[0] * wedge_[best][0] + bary[1] * wedge_[best][1] + bary[2] * wedge_[best][2];
+    return metric_[best];
   }
 
  private:
   std::vector<int> faces_;
-  std::vector<std::array<Eigen::Matrix2d, 3>> wedge_;
+  std::vector<Eigen::Matrix2d> metric_;
   double area_ = 0;
   std::optional<UvLocator> locator_;
 };

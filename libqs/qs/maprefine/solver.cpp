@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <unordered_map>
 
 #include "qs/core/parallel.h"
 #include "qs/param/sparse_cholesky.h"
@@ -18,20 +17,6 @@ namespace qs::maprefine {
 namespace detail {
 
 namespace {
-
-// Eigenvalues of a symmetric 2x2 matrix clamped into [lo, hi] (closed form).
-Eigen::Matrix2d clamp_metric(const Eigen::Matrix2d& m, double lo, double hi) {
-  const double a = m(0, 0), b = 0.5 * (m(0, 1) + m(1, 0)), c = m(1, 1);
-  const double mean = 0.5 * (a + c), r = std::hypot(0.5 * (a - c), b);
-  const double l1 = mean + r, l2 = mean - r;
-  const double c1 = std::clamp(l1, lo, hi), c2 = std::clamp(l2, lo, hi);
-  if (c1 == l1 && c2 == l2) return m;
-  if (r <= 1e-300) return 0.5 * (c1 + c2) * Eigen::Matrix2d::Identity();
-  // Eigenvector of l1: (b, l1 - a) or (l1 - c, b), whichever is longer.
-  Vec2 e1 = std::abs(l1 - a) > std::abs(l1 - c) ? Vec2(b, l1 - a) : Vec2(l1 - c, b);
-  e1.normalize();
-  return c1 * e1 * e1.transpose() + c2 * (Eigen::Matrix2d::Identity() - e1 * e1.transpose());
-}
 
 // Smallest alpha > 0 at which det(Ds + alpha dDs) = 0, or +inf.
 double flip_step(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& da, const Vec2& db, const Vec2& dc) {
@@ -72,8 +57,7 @@ Vec6 corner_uv(const PatchProblem& prob, size_t t, const std::vector<Vec2>& uv) 
 
 ReferencePatch::ReferencePatch(const dissect::Chart& chart, std::vector<int> faces) : faces_(std::move(faces)) {
   const size_t nf = faces_.size();
-  wedge_.resize(nf);
-  std::vector<Eigen::Matrix2d> metric(nf, Eigen::Matrix2d::Zero());
+  metric_.assign(nf, Eigen::Matrix2d::Zero());
   std::vector<double> uv_area(nf, 0.0);
   double total_uv = 0;
   for (size_t i = 0; i < nf; ++i) {
@@ -91,29 +75,14 @@ ReferencePatch::ReferencePatch(const dissect::Chart& chart, std::vector<int> fac
     const double auv = 0.5 * ds.determinant();
     if (auv > param::kZeroUvArea) {
       const Mat32 g = e * ds.inverse();
-      metric[i] = g.transpose() * g;
+      metric_[i] = g.transpose() * g;
       uv_area[i] = auv;
       total_uv += auv;
     }
   }
   const double mean = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
-  std::unordered_map<int, std::pair<Eigen::Matrix2d, double>> acc;
-  acc.reserve(nf);
-  for (size_t i = 0; i < nf; ++i) {
-    if (uv_area[i] <= 0) continue;
-    const Eigen::Matrix2d m = clamp_metric(metric[i], 1e-6 * mean, 1e6 * mean);
-    for (int v : chart.mesh.faces[faces_[i]]) {
-      auto& a = acc.try_emplace(v, Eigen::Matrix2d::Zero(), 0.0).first->second;
-      a.first += uv_area[i] * m;
-      a.second += uv_area[i];
-    }
-  }
   for (size_t i = 0; i < nf; ++i)
-    for (int k = 0; k < 3; ++k) {
-      const auto it = acc.find(chart.mesh.faces[faces_[i]][k]);
-      wedge_[i][k] = it != acc.end() && it->second.second > 0 ? Eigen::Matrix2d(it->second.first / it->second.second)
-                                                               : Eigen::Matrix2d(mean * Eigen::Matrix2d::Identity());
-    }
+    if (!(uv_area[i] > 0)) metric_[i] = mean * Eigen::Matrix2d::Identity();
   // Location (faces with a positive uv area only; a point outside every face of its cell takes
   // the least outside of them).
   std::vector<std::array<Vec2, 3>> tris(nf);
