@@ -82,10 +82,10 @@ class UvLocator {
   std::vector<int> offsets_, grid_;
 };
 
-// One patch of the reference mesh: its surface's metric in (u, v), constant on each face (neither
-// smoothed nor clamped, so that a chart equal to the reference's is the energy's minimum; a face
-// of zero uv area, which point location skips, has the patch's mean), and a uniform grid over the
-// unit square for point location (about one cell per face).
+// One patch of the reference mesh: its surface's metric in (u, v), constant on each face of
+// positive uv area (neither smoothed nor clamped, so that a chart equal to the reference's is the
+// energy's minimum), and a uniform grid over the unit square for point location (about one cell
+// per face).
 class ReferencePatch {
  public:
   ReferencePatch(const dissect::Chart& chart, std::vector<int> faces);

@@ -58,8 +58,10 @@ Vec6 corner_uv(const PatchProblem& prob, size_t t, const std::vector<Vec2>& uv) 
 ReferencePatch::ReferencePatch(const dissect::Chart& chart, std::vector<int> faces) : faces_(std::move(faces)) {
   const size_t nf = faces_.size();
   metric_.assign(nf, Eigen::Matrix2d::Zero());
-  std::vector<double> uv_area(nf, 0.0);
-  double total_uv = 0;
+  // Location (faces with a positive uv area only; a point outside every face of its cell takes
+  // the least outside of them): the other faces' metric is never read.
+  std::vector<std::array<Vec2, 3>> tris(nf);
+  std::vector<char> positive(nf, 0);
   for (size_t i = 0; i < nf; ++i) {
     const int f = faces_[i];
     const auto& t = chart.mesh.faces[f];
@@ -72,24 +74,12 @@ ReferencePatch::ReferencePatch(const dissect::Chart& chart, std::vector<int> fac
     ds.col(0) = uv[1] - uv[0];
     ds.col(1) = uv[2] - uv[0];
     area_ += 0.5 * e.col(0).cross(e.col(1)).norm();
-    const double auv = 0.5 * ds.determinant();
-    if (auv > param::kZeroUvArea) {
+    tris[i] = uv;
+    if (0.5 * ds.determinant() > param::kZeroUvArea) {
       const Mat32 g = e * ds.inverse();
       metric_[i] = g.transpose() * g;
-      uv_area[i] = auv;
-      total_uv += auv;
+      positive[i] = 1;
     }
-  }
-  const double mean = total_uv > 0 && area_ > 0 ? area_ / total_uv : 1.0;
-  for (size_t i = 0; i < nf; ++i)
-    if (!(uv_area[i] > 0)) metric_[i] = mean * Eigen::Matrix2d::Identity();
-  // Location (faces with a positive uv area only; a point outside every face of its cell takes
-  // the least outside of them).
-  std::vector<std::array<Vec2, 3>> tris(nf);
-  std::vector<char> positive(nf, 0);
-  for (size_t i = 0; i < nf; ++i) {
-    tris[i] = chart.face_uv[faces_[i]];
-    positive[i] = uv_area[i] > 0;
   }
   locator_.emplace(std::move(tris), positive, false);
 }
