@@ -1057,15 +1057,16 @@ TEST(RefineBeforeSplit, RefinePatchHoldsTheBorderAndStaysBijective) {
   };
   const std::vector<Vec2> start = moved;
   const double before = err(moved);
-  // Nothing held inside: the reference's own map is the only isometric one. The face metric and
-  // the composition see the reference exactly and find it (to the solver's tolerance, here
-  // RefineOptions::tolerance); the clamped vertex-averaged metric comes close. A node's own,
-  // coarser tolerance (the default) stops a few steps earlier, still close.
+  // Nothing held inside: the reference's own map is the only isometric one. The composition sees
+  // the reference exactly and finds it (to the solver's tolerance, here a tight one). A node's
+  // own, coarser tolerance (the default) stops a few steps earlier, still close.
   {
     mr::NodeRefineOptions exact;
-    exact.tolerance = 0;
+    exact.tolerance = 0;  // RefineOptions::tolerance
+    mr::RefineOptions tight;
+    tight.tolerance = 1e-6;
     auto free = moved;
-    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), {}, exact));
+    ASSERT_TRUE(mr::refine_patch(pm, uv, pm, free, std::vector<char>(uv.size(), 0), tight, exact));
     EXPECT_LT(err(free), 1e-4 * before)
         << "mean uv distance to the reference's map: " << before << " -> " << err(free);
     auto coarse = moved;

@@ -39,7 +39,7 @@ struct RefineOptions {
   int reference = 0;         ///< the mesh of the set that is not moved. \pre 0 <= reference < #meshes
   int iterations = 30;       ///< Newton steps per patch at most. \pre >= 0
   /// A patch stops when a step lowers its energy by less than this fraction. \pre >= 0
-  double tolerance = 1e-5;
+  double tolerance = 1e-4;
   int threads = 0;           ///< 0: all cores; the result does not depend on it
   /// Move the patch curves too: every side shared by two patches (and no other side of theirs),
   /// in patch order, is refined on the two squares glued into one chart on [0,2] x [0,1] (the
