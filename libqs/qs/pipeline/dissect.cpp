@@ -296,14 +296,10 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << std::setprecision(4) << sets.max_stretch << "\n";
   if (sets.pose_distance >= 0) {
     const double limit = opt.same_pose_detect, tail = dissect::kSamePoseTail * limit;
-    const bool near = sets.pose_distance <= limit && sets.pose_distance_p99 <= tail;
     text << "pose: the surfaces lie " << std::setprecision(3) << 100 * sets.pose_distance
          << "% of the diagonal apart after the landmarks' similarity (mean; 99% of the area within "
          << 100 * sets.pose_distance_p99 << "%; one pose: at most " << 100 * limit << "% and " << 100 * tail
-         << "%): "
-         << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)"
-             : near                                        ? "one mesh given again (its map is the identity)"
-                                                           : "not one pose")
+         << "%): " << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)" : "not one pose")
          << "\n";
   }
   if (sets.registration_fit >= 0)
@@ -311,7 +307,9 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << std::setprecision(3) << 100 * sets.registration_fit << "% of the diagonal on 99% of the area, distortion "
          << std::setprecision(4) << sets.registration_distortion << " (one pose: at most "
          << 100 * dissect::kRegisteredFit << "% and " << dissect::kRegisteredDistortion << "): "
-         << (sets.poses.empty() ? "not used" : "one pose through the registrations") << "\n";
+         << (sets.poses.empty() ? "not used (a landmark at the tip of every limb that moved helps it fit)"
+                                : "one pose through the registrations")
+         << "\n";
   if (one_pose && inputs.size() > 1) {
     if (sets.same_pose_fallback.empty())
       text << "same pose: " << sets.same_pose_loops << " of " << inputs.size() - 1 << " seed loops routed by pose, "
