@@ -21,6 +21,7 @@
 
 #include "qs/core/error.h"
 #include "qs/core/mesh.h"
+#include "qs/core/weighted.h"
 #include "qs/dissect/dissection.h"
 #include "qs/family/surface_map.h"
 #include "qs/io/read_mesh.h"
@@ -42,14 +43,7 @@ Stats summarize(std::vector<std::pair<double, double>> e) {
   double sum = 0, total = 0;
   for (const auto& [d, w] : e) sum += d * w, total += w;
   std::sort(e.begin(), e.end());
-  Stats s{sum / total, e.back().first, e.back().first};
-  double acc = 0;
-  for (const auto& [d, w] : e)
-    if ((acc += w) >= 0.95 * total) {
-      s.p95 = d;
-      break;
-    }
-  return s;
+  return Stats{sum / total, qs::value_at_weight(e, 0.95 * total), e.back().first};
 }
 
 // Each vertex's image (its nearest point of `b` from at[i], facing as A's face there) against

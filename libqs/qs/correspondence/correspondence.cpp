@@ -11,6 +11,7 @@
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
 #include "qs/core/parallel.h"
+#include "qs/core/weighted.h"
 #include "qs/landmarks/landmarks.h"
 #include "qs/io/read_mesh.h"
 #include "qs/mesh/validate.h"
@@ -334,12 +335,7 @@ Distortion distortion_of(const TriMesh& a, const std::vector<Image>& image, doub
   if (!(area > 0)) return out;
   out.mean = sum / area;
   std::sort(energy.begin(), energy.end());
-  double below = 0;
-  for (const auto& [e, w] : energy)
-    if ((below += w) >= 0.5 * area) {
-      out.median = e;
-      break;
-    }
+  out.median = value_at_weight(energy, 0.5 * area);
   return out;
 }
 

@@ -14,6 +14,7 @@
 
 #include "qs/core/error.h"
 #include "qs/core/parallel.h"
+#include "qs/core/weighted.h"
 
 namespace qs::metro {
 
@@ -635,12 +636,7 @@ VertexDistance vertex_distance(const TriMesh& a, const SurfaceDistance& to_a, co
   std::sort(ab.begin(), ab.end());
   VertexDistance out;
   for (const auto& [d, w] : ab) out.mean += w * d;
-  double below = 0;
-  for (const auto& [d, w] : ab) {
-    out.quantile = d;
-    below += w;
-    if (below >= fraction) break;
-  }
+  out.quantile = value_at_weight(ab, fraction);
   return out;
 }
 
