@@ -15,7 +15,9 @@
 #   usage: bench/pose_pairs.sh [MESH_DIR] [OUT_DIR]   (defaults: ../shared/meshes, out/bench-pose-pairs)
 #   env:   QS_TOOLS (default build/tools), SAMPLES (default 30000), SEED (pose seed, default 1),
 #          POSE_ARGS (extra qs-family pose options), DISSECT_ARGS (extra qs-dissect options),
-#          MESHES_LIST (default: the meshes below, smallest first)
+#          MESHES_LIST (default: the meshes below, smallest first), FEATURES (give qs-dissect the
+#          seeds and only the first N features, as a user whose landmarks leave limbs free; default
+#          all)
 # Landmarks: the SMPL bodies use bench/correspondence/smpl.landmarks.json (finger tips, big toes;
 # nose, head top, heels); the other meshes get 4 seeds and 2-6 features at their extremities
 # (qs-family pose chooses them, seeds in the order of their shortest loop).
@@ -29,6 +31,7 @@ SAMPLES=${SAMPLES:-30000}
 SEED=${SEED:-1}
 read -r -a POSE <<< "${POSE_ARGS:-}"
 read -r -a EXTRA <<< "${DISSECT_ARGS:-}"
+FEATURES=${FEATURES:-}
 LIST=${MESHES_LIST:-"pig_4k.off camel_4k_fixed.obj horse_5k.obj cow2_9k.off lion_sumner_10k.obj elephant_12k.obj
 cat_sumner_14k.obj smpl_man_14k.obj smpl_woman_14k.obj polygirl_20k.off armadillo_29k.obj"}
 mkdir -p "$OUT"
@@ -47,9 +50,12 @@ STAGES=("--exact loop" "--exact splits" "--exact maps" "--exact maps --no-refine
 attribution() {
   local name=$1 dir=$2 line=$1 k=0 rc level args
   [ -x "$BENCH/qs-bench-stage-attribution" ] || return 0
+  local la lb
+  la=$(given "$5" "$(dirname "$dir")")
+  lb=$(given "$6" "$(dirname "$dir")")
   for level in "${STAGES[@]}"; do
     read -r -a args <<< "$level"
-    "$BENCH/qs-bench-stage-attribution" "$3" "$4" --landmarks "$5" "$6" "${args[@]}" -o "$dir-$k" > "$dir-$k.log" 2>&1
+    "$BENCH/qs-bench-stage-attribution" "$3" "$4" --landmarks "$la" "$lb" "${args[@]}" -o "$dir-$k" > "$dir-$k.log" 2>&1
     rc=$?
     if [ -f "$dir-$k/dissection.json" ] &&
        "$TOOLS/qs-metro" --correspondence "$dir-$k" --samples "$SAMPLES" --json -o "$dir-$k.corr.json" \
@@ -63,10 +69,27 @@ attribution() {
   printf '%s\n' "$line" >> "$ATTRIBUTION"
 }
 
+# given LANDMARKS DIR: the landmark file qs-dissect gets (with FEATURES, a copy in DIR with the
+# seeds and the first FEATURES features only).
+given() {
+  if [ -z "$FEATURES" ]; then echo "$1"; return; fi
+  local out
+  out="$2/few-$(basename "$1")"
+  python3 - "$1" "$out" "$FEATURES" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f = dict(list(d.get('features', {}).items())[:int(sys.argv[3])])
+json.dump({'seeds': d['seeds'], 'features': f}, open(sys.argv[2], 'w'))
+PY
+  echo "$out"
+}
+
 # pair NAME DIR A B LANDMARKS_A LANDMARKS_B MAP_B POSED_OBJ
 pair() {
   local name=$1 dir=$2 a=$3 b=$4 la=$5 lb=$6 mb=$7 posed=$8
   local t0 t1 rc secs
+  la=$(given "$la" "$(dirname "$dir")")
+  lb=$(given "$lb" "$(dirname "$dir")")
   t0=$(date +%s.%N)
   "$TOOLS/qs-dissect" "$a" "$b" --landmarks "$la" "$lb" -o "$dir" --quiet --report "$dir.report.txt" "${EXTRA[@]}" \
       > "$dir.dissect.log" 2>&1

@@ -65,14 +65,22 @@ std::vector<std::pair<std::string, Vec3>> landmark_positions(const MeshToDissect
   return out;
 }
 
+// matched_extremities for a registration that does not fit: at most this many tips, matched within
+// this relative difference of geodesic coordinates (as kIntrinsicLoopIsometry).
+constexpr int kExtremities = 16;
+constexpr double kExtremityMatch = 0.05;
+
 // DissectOptions::register_poses: the first mesh registered onto every other one, when the set is
 // one surface in other poses (landmark_discrepancy within kIntrinsicLoopIsometry) and every
-// registration fits (kRegisteredFit, kRegisteredDistortion); nullopt otherwise. The worst fit and
-// distortion go to `fit` and `distortion` (-1 when nothing was registered).
+// registration fits (kRegisteredFit, kRegisteredDistortion); nullopt otherwise. A registration that
+// does not fit is tried again with the tips of A's protrusions held too (matched_extremities). The
+// worst fit and distortion go to `fit` and `distortion` (-1 when nothing was registered), the most
+// tips held in a registration kept to `tips`.
 std::optional<std::vector<registration::Pose>> register_poses(const std::vector<MeshToDissect>& meshes,
                                                               const Context& context, double& fit,
-                                                              double& distortion) {
+                                                              double& distortion, int& tips) {
   fit = distortion = -1;
+  tips = 0;
   std::vector<std::vector<NamedLandmark>> l(meshes.size());
   for (size_t i = 0; i < meshes.size(); ++i) l[i] = mesh_landmarks(meshes[i]);
   if (l[0].empty()) return std::nullopt;
@@ -92,19 +100,44 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   }
   std::vector<registration::Pose> poses(meshes.size());
   fit = distortion = 0;
+  auto fits = [](const registration::Registration& r) {
+    return r.p99_distance <= kRegisteredFit && r.distortion <= kRegisteredDistortion;
+  };
   for (size_t i = 1; i < meshes.size(); ++i) {
     std::vector<registration::LandmarkPair> pairs;
-    for (size_t k = 0; k < l[i].size(); ++k) pairs.push_back({l[0][k].position, l[i][k].position});
+    std::vector<int> li;
+    for (size_t k = 0; k < l[i].size(); ++k) {
+      pairs.push_back({l[0][k].position, l[i][k].position});
+      li.push_back(l[i][k].vertex);
+    }
     registration::Registration r;
     try {
       r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
+      // Limbs that the landmarks leave free can bend the wrong way: their tips, matched by
+      // geodesic coordinates, are held too.
+      if (!fits(r)) {
+        const GeodesicCoordinates ci = geodesic_coordinates(*meshes[i].mesh, li);
+        const auto matched =
+            matched_extremities(*meshes[0].mesh, c0, *meshes[i].mesh, ci, kExtremities, kExtremityMatch);
+        if (!matched.empty()) {
+          std::vector<registration::LandmarkPair> more = pairs;
+          for (const auto& [p, q] : matched)
+            more.push_back({meshes[0].mesh->positions[p], meshes[i].mesh->positions[q]});
+          registration::Registration again =
+              registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, more, {}, context);
+          if (fits(again)) {
+            r = std::move(again);
+            tips = std::max(tips, static_cast<int>(matched.size()));
+          }
+        }
+      }
     } catch (const InternalError& e) {  // a solve that failed: the set keeps the path of other poses
       context.info(std::string("registration: ") + e.what());
       return std::nullopt;
     }
     fit = std::max(fit, r.p99_distance);
     distortion = std::max(distortion, r.distortion);
-    if (!(r.p99_distance <= kRegisteredFit && r.distortion <= kRegisteredDistortion)) return std::nullopt;
+    if (!fits(r)) return std::nullopt;
     poses[i] = registration::Pose(*meshes[0].mesh, std::move(r));
   }
   return poses;
@@ -221,8 +254,9 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   }
   DissectOptions used = options;
   double fit = -1, distortion = -1;
+  int tips = 0;
   if (measured && !detected && options.register_poses && used.pose_registrations.empty()) {
-    if (auto poses = register_poses(meshes, context, fit, distortion)) {
+    if (auto poses = register_poses(meshes, context, fit, distortion, tips)) {
       used.pose_registrations = std::move(*poses);
       detected = true;
     }
@@ -232,6 +266,7 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   out.poses = used.pose_registrations;
   out.registration_fit = fit;
   out.registration_distortion = distortion;
+  out.registration_tips = out.poses.empty() ? 0 : tips;
   out.pose_distance = measured ? measured->mean : -1;
   out.pose_distance_p99 = measured ? measured->p99 : -1;
   out.same_pose_detected = detected;

@@ -82,4 +82,85 @@ SeedLoop trace_intrinsic_loop(const TriMesh& mesh, const std::array<int, 4>& see
       avoid);
 }
 
+namespace {
+
+// matched_extremities takes no point nearer to the landmarks and the points already taken than
+// this fraction of the first point's distance.
+constexpr double kStop = 0.25;
+// ... and takes a match only when every vertex of B away from it differs at least twice as much
+// and at least this fraction of the tolerance (a mirror image of an exact match differs by 0).
+constexpr double kDistinct = 0.2;
+
+// Relative root-mean-square difference of two coordinate rows (against `x`'s size).
+double coordinate_difference(const double* x, const double* y, int dims) {
+  double d = 0, n = 0;
+  for (int l = 0; l < dims; ++l) {
+    d += (x[l] - y[l]) * (x[l] - y[l]);
+    n += x[l] * x[l];
+  }
+  return n > 0 && std::isfinite(d) ? std::sqrt(d / n) : std::numeric_limits<double>::infinity();
+}
+
+// The vertex of `c` whose row differs least from `x` among those with within[v]; -1 when none.
+int best_match(const GeodesicCoordinates& c, const double* x, int dims, const std::vector<char>& within,
+               double& difference) {
+  int best = -1;
+  difference = std::numeric_limits<double>::infinity();
+  const int nv = static_cast<int>(c.values.size() / std::max(c.dims, 1));
+  for (int v = 0; v < nv; ++v) {
+    if (!within.empty() && !within[v]) continue;
+    const double d = coordinate_difference(x, c.at(v), dims);
+    if (d < difference) {
+      difference = d;
+      best = v;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> matched_extremities(const TriMesh& a, const GeodesicCoordinates& ca, const TriMesh& b,
+                                                     const GeodesicCoordinates& cb, int count, double tolerance) {
+  std::vector<std::pair<int, int>> out;
+  const int dims = ca.dims;
+  if (dims == 0 || cb.dims != dims) return out;
+  const int na = a.num_vertices(), nb = b.num_vertices();
+  const routing::Graph ga = routing::build_graph(a), gb = routing::build_graph(b);
+  routing::Dijkstra da(ga), db(gb);
+  const double scale_a = 1.0 / std::sqrt(std::max(surface_area(a), 1e-300));
+  const double scale_b = 1.0 / std::sqrt(std::max(surface_area(b), 1e-300));
+  // Distance to the nearest landmark or point taken, per vertex of A.
+  std::vector<double> nearest(na, std::numeric_limits<double>::infinity());
+  for (int v = 0; v < na; ++v)
+    for (int l = 0; l < dims; ++l) nearest[v] = std::min(nearest[v], ca.at(v)[l]);
+  double first = -1;
+  for (int k = 0; k < count; ++k) {
+    int p = -1;
+    for (int v = 0; v < na; ++v)
+      if (std::isfinite(nearest[v]) && (p < 0 || nearest[v] > nearest[p])) p = v;
+    if (p < 0 || !(nearest[p] > 0)) break;
+    if (first < 0) first = nearest[p];
+    if (nearest[p] < kStop * first) break;
+    const double radius = 0.5 * nearest[p];
+    std::vector<double> from_p = da.all_distances(p);
+    for (double& d : from_p) d *= scale_a;
+    for (int v = 0; v < na; ++v) nearest[v] = std::min(nearest[v], from_p[v]);
+    double best = 0;
+    const int q = best_match(cb, ca.at(p), dims, {}, best);
+    if (q < 0 || !(best <= tolerance)) continue;
+    std::vector<double> from_q = db.all_distances(q);
+    std::vector<char> far(nb, 0);
+    for (int v = 0; v < nb; ++v) far[v] = from_q[v] * scale_b > radius;
+    double second = 0;
+    const int sv = best_match(cb, ca.at(p), dims, far, second);
+    if (sv >= 0 && !(second >= std::max(2 * best, kDistinct * tolerance))) continue;
+    double back = 0;
+    const int r = best_match(ca, cb.at(q), dims, {}, back);
+    if (r < 0 || !(from_p[r] <= radius)) continue;
+    out.emplace_back(p, q);
+  }
+  return out;
+}
+
 }  // namespace qs::dissect

@@ -308,7 +308,11 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << std::setprecision(4) << sets.registration_distortion << " (one pose: at most "
          << 100 * dissect::kRegisteredFit << "% and " << dissect::kRegisteredDistortion << "): "
          << (sets.poses.empty() ? "not used (a landmark at the tip of every limb that moved helps it fit)"
-                                : "one pose through the registrations")
+             : sets.registration_tips > 0
+                 ? "one pose through the registrations, with " + std::to_string(sets.registration_tips) +
+                       " more points held (the first mesh's points farthest from the landmarks, matched by their "
+                       "distances along the surface to them)"
+                 : std::string("one pose through the registrations"))
          << "\n";
   if (one_pose && inputs.size() > 1) {
     if (sets.same_pose_fallback.empty())
