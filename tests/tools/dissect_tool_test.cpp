@@ -291,8 +291,9 @@ TEST_F(DissectTool, WindingSeedOrderIsReorderedAndReported) {
 // diagonal, not 1%); it is tried again with the horse's points farthest from the landmarks held
 // too, matched by their distances along the surface, and then fits: the set is one pose and the
 // correspondence follows (1.39% of the diagonal off on average through the common (u,v), 25%
-// at most, without them; under 1% and 10% with them). The cat with its four seeds alone (at four
-// paws; head and tail free) does not fit either way, and the report says what would help.
+// at most, without them; under 1% and 10% with them). The cat in another pose (seed 12) with
+// its four seeds alone (at four paws; head and tail free) does not fit either way, and the report
+// says what would help.
 TEST_F(DissectTool, ARegistrationThatDoesNotFitIsTriedWithTheFarthestPointsHeld) {
   const fs::path horse = qs::testing::shared_meshes_dir() / "horse_5k.obj";
   const fs::path cat = qs::testing::shared_meshes_dir() / "cat_sumner_14k.obj";
@@ -321,7 +322,7 @@ TEST_F(DissectTool, ARegistrationThatDoesNotFitIsTriedWithTheFarthestPointsHeld)
   EXPECT_LT(error["max_percent"].get<double>(), 10.0);
 
   const fs::path cat_posed = dir_ / "cat.obj";
-  r = run_tool("qs-family", "pose " + cat.string() + " --seed 1 -q -o " + cat_posed.string());
+  r = run_tool("qs-family", "pose " + cat.string() + " --seed 12 -q -o " + cat_posed.string());
   ASSERT_EQ(r.exit, 0) << r.out;
   const fs::path seeds = dir_ / "seeds.landmarks.json";
   std::ofstream(seeds) << R"({"seeds": [7179, 3545, 2875, 1817]})";

@@ -87,8 +87,10 @@ namespace {
 // matched_extremities takes no point nearer to the landmarks and the points already taken than
 // this fraction of the first point's distance.
 constexpr double kStop = 0.25;
-// ... and takes a match only when every vertex of B away from it differs at least twice as much
-// and at least this fraction of the tolerance (a mirror image of an exact match differs by 0).
+// ... and takes a match only when every vertex of B away from it differs at least this many
+// times as much (the other of two symmetric limbs)...
+constexpr double kAmbiguous = 1.5;
+// ... and at least this fraction of the tolerance (a mirror image of an exact match differs by 0).
 constexpr double kDistinct = 0.2;
 
 // Relative root-mean-square difference of two coordinate rows (against `x`'s size).
@@ -154,7 +156,7 @@ std::vector<std::pair<int, int>> matched_extremities(const TriMesh& a, const Geo
     for (int v = 0; v < nb; ++v) far[v] = from_q[v] * scale_b > radius;
     double second = 0;
     const int sv = best_match(cb, ca.at(p), dims, far, second);
-    if (sv >= 0 && !(second >= std::max(2 * best, kDistinct * tolerance))) continue;
+    if (sv >= 0 && !(second >= std::max(kAmbiguous * best, kDistinct * tolerance))) continue;
     double back = 0;
     const int r = best_match(ca, cb.at(q), dims, {}, back);
     if (r < 0 || !(from_p[r] <= radius)) continue;

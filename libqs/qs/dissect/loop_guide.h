@@ -45,12 +45,12 @@ SeedLoop trace_intrinsic_loop(const TriMesh& mesh, const std::array<int, 4>& see
 /// Points at the ends of A's protrusions matched to B's vertices by their geodesic coordinates,
 /// for a shape in two poses whose landmarks leave limbs free. A's points are farthest-point
 /// samples of the edge-path distance to its landmarks (and to the points already taken), at most
-/// `count`, none nearer than a quarter of the first's distance. A point p of A goes to the vertex q of B
-/// whose coordinates differ least from p's (relative root-mean-square difference, at most
-/// `tolerance`) when the match is unambiguous: every vertex of B farther than half p's distance to
-/// the landmarks from q differs at least twice as much and at least a fifth of `tolerance` (the
-/// other of two symmetric limbs), and p
-/// is the best match of q's coordinates on A up to that distance. (a vertex, b vertex) pairs.
+/// `count`, none nearer than a quarter of the first's distance. A point p of A goes to the vertex
+/// q of B whose coordinates differ least from p's (relative root-mean-square difference, at most
+/// `tolerance`) when the match is unambiguous: every vertex of B farther than half p's distance
+/// to the landmarks from q differs at least 1.5 times as much and at least a fifth of
+/// `tolerance` (the other of two symmetric limbs), and p is the best match of q's coordinates on
+/// A up to that distance. (a vertex, b vertex) pairs.
 /// \pre ca and cb have the same landmarks, in the same order, as coordinates of a and b.
 std::vector<std::pair<int, int>> matched_extremities(const TriMesh& a, const GeodesicCoordinates& ca, const TriMesh& b,
                                                      const GeodesicCoordinates& cb, int count, double tolerance);
