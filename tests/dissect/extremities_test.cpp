@@ -2,6 +2,8 @@
 // their geodesic distances to the landmarks, unambiguous matches only.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "../common/shared_meshes.h"
