@@ -16,8 +16,8 @@
 #   env:   QS_TOOLS (default build/tools), SAMPLES (default 30000), SEED (pose seed, default 1),
 #          POSE_ARGS (extra qs-family pose options), DISSECT_ARGS (extra qs-dissect options),
 #          MESHES_LIST (default: the meshes below, smallest first), FEATURES (give qs-dissect the
-#          seeds and only the first N features, as a user whose landmarks leave limbs free; default
-#          all)
+#          seeds and only the first N features by name, as a user whose landmarks leave limbs free;
+#          default all)
 # Landmarks: the SMPL bodies use bench/correspondence/smpl.landmarks.json (finger tips, big toes;
 # nose, head top, heels); the other meshes get 4 seeds and 2-6 features at their extremities
 # (qs-family pose chooses them, seeds in the order of their shortest loop).
@@ -70,7 +70,7 @@ attribution() {
 }
 
 # given LANDMARKS DIR: the landmark file qs-dissect gets (with FEATURES, a copy in DIR with the
-# seeds and the first FEATURES features only).
+# seeds and the first FEATURES features by name only, so that every mesh keeps the same ones).
 given() {
   if [ -z "$FEATURES" ]; then echo "$1"; return; fi
   local out
@@ -78,7 +78,7 @@ given() {
   python3 - "$1" "$out" "$FEATURES" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-f = dict(list(d.get('features', {}).items())[:int(sys.argv[3])])
+f = {k: d['features'][k] for k in sorted(d.get('features', {}))[:int(sys.argv[3])]}
 json.dump({'seeds': d['seeds'], 'features': f}, open(sys.argv[2], 'w'))
 PY
   echo "$out"
