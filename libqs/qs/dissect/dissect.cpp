@@ -75,7 +75,7 @@ constexpr double kExtremityMatch = 0.05;
 // registration fits (kRegisteredFit, kRegisteredDistortion); nullopt otherwise. A registration that
 // does not fit is tried again with the tips of A's protrusions held too (matched_extremities). The
 // worst fit and distortion go to `fit` and `distortion` (-1 when nothing was registered), the most
-// tips held in a registration kept to `tips`.
+// points held in such a retry to `tips` (kept or not).
 std::optional<std::vector<registration::Pose>> register_poses(const std::vector<MeshToDissect>& meshes,
                                                               const Context& context, double& fit,
                                                               double& distortion, int& tips) {
@@ -125,10 +125,8 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
             more.push_back({meshes[0].mesh->positions[p], meshes[i].mesh->positions[q]});
           registration::Registration again =
               registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, more, {}, context);
-          if (fits(again)) {
-            r = std::move(again);
-            tips = std::max(tips, static_cast<int>(matched.size()));
-          }
+          tips = std::max(tips, static_cast<int>(matched.size()));
+          if (fits(again)) r = std::move(again);
         }
       }
     } catch (const InternalError& e) {  // a solve that failed: the set keeps the path of other poses
@@ -266,7 +264,7 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   out.poses = used.pose_registrations;
   out.registration_fit = fit;
   out.registration_distortion = distortion;
-  out.registration_tips = out.poses.empty() ? 0 : tips;
+  out.registration_tips = tips;
   out.pose_distance = measured ? measured->mean : -1;
   out.pose_distance_p99 = measured ? measured->p99 : -1;
   out.same_pose_detected = detected;

@@ -329,9 +329,9 @@ struct DissectionSet {
   std::vector<registration::Pose> poses;
   double registration_fit = -1;
   double registration_distortion = -1;
-  /// Points held in a registration besides the landmarks (the first mesh's points farthest from
-  /// them, the tips of its protrusions first, matched by geodesic distances to the landmarks, when
-  /// the landmarks alone did not fit): the most over the meshes; 0 when none.
+  /// Points held besides the landmarks in a second try of a registration that did not fit (the
+  /// first mesh's points farthest from them, the tips of its protrusions first, matched by
+  /// geodesic distances to the landmarks), kept or not: the most over the meshes; 0 when none.
   int registration_tips = 0;
   /// The seeds' cyclic order used (seed k of the result is seed seed_order[k] as given): the
   /// set's shortest loop (shortest_seed_order), and the three orders' loop lengths (0 when the

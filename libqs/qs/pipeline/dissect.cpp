@@ -307,7 +307,12 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << std::setprecision(3) << 100 * sets.registration_fit << "% of the diagonal on 99% of the area, distortion "
          << std::setprecision(4) << sets.registration_distortion << " (one pose: at most "
          << 100 * dissect::kRegisteredFit << "% and " << dissect::kRegisteredDistortion << "): "
-         << (sets.poses.empty() ? "not used (a landmark at the tip of every limb that moved helps it fit)"
+         << (sets.poses.empty()
+                 ? (sets.registration_tips > 0 ? "not used, nor with " + std::to_string(sets.registration_tips) +
+                                                     " more points held (a landmark at the tip of every limb that "
+                                                     "moved helps it fit)"
+                                               : std::string("not used (a landmark at the tip of every limb that "
+                                                             "moved helps it fit)"))
              : sets.registration_tips > 0
                  ? "one pose through the registrations, with " + std::to_string(sets.registration_tips) +
                        " more points held (the first mesh's points farthest from the landmarks, matched by their "
