@@ -19,6 +19,14 @@ inline int vertex_towards(const TriMesh& m, const Vec3& d) {
   return best;
 }
 
+/// The vertex nearest to p (the first on ties).
+inline int nearest_vertex(const TriMesh& m, const Vec3& p) {
+  int best = 0;
+  for (int v = 1; v < m.num_vertices(); ++v)
+    if ((m.positions[v] - p).squaredNorm() < (m.positions[best] - p).squaredNorm()) best = v;
+  return best;
+}
+
 /// A regular tetrahedron, outward, vertices 0-3 (faces 0-3), moved by `offset`.
 inline TriMesh tetrahedron(const Vec3& offset = Vec3::Zero()) {
   TriMesh m;

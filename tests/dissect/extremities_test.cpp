@@ -7,22 +7,13 @@
 #include <filesystem>
 
 #include "../common/shared_meshes.h"
+#include "../common/test_support.h"
 #include "qs/dissect/loop_guide.h"
 #include "qs/family/pose.h"
 #include "qs/io/read_mesh.h"
 #include "qs/shapes/shapes.h"
 
-namespace {
-
-// The vertex of `m` nearest to p.
-int nearest_vertex(const qs::TriMesh& m, const qs::Vec3& p) {
-  int best = 0;
-  for (int v = 1; v < m.num_vertices(); ++v)
-    if ((m.positions[v] - p).squaredNorm() < (m.positions[best] - p).squaredNorm()) best = v;
-  return best;
-}
-
-}  // namespace
+using qs::test::nearest_vertex;
 
 // The horse in another pose (four limbs bent or turned), landmarks on its body that leave the
 // limbs free: the points found are matched where the pose took them (one connectivity: vertex i

@@ -10,8 +10,10 @@
 #include "qs/family/family.h"
 #include "qs/family/pose.h"
 #include "qs/shapes/shapes.h"
+#include "../common/test_support.h"
 
 using qs::Vec3;
+using qs::test::nearest_vertex;
 
 namespace {
 
@@ -26,13 +28,6 @@ const qs::TriMesh& animal() {
     return qs::family::generate_family(o).shapes[0].mesh;
   }();
   return mesh;
-}
-
-int nearest_vertex(const qs::TriMesh& m, const Vec3& p) {
-  int best = 0;
-  for (int v = 1; v < m.num_vertices(); ++v)
-    if ((m.positions[v] - p).norm() < (m.positions[best] - p).norm()) best = v;
-  return best;
 }
 
 }  // namespace

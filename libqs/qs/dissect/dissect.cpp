@@ -87,7 +87,8 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   // One surface: the landmarks' geodesic distances, every mesh's against the first's.
   std::vector<int> l0;
   for (const NamedLandmark& x : l[0]) l0.push_back(x.vertex);
-  const GeodesicCoordinates c0 = geodesic_coordinates(*meshes[0].mesh, l0);
+  std::vector<GeodesicCoordinates> c(meshes.size());  // kept for the retries below
+  c[0] = geodesic_coordinates(*meshes[0].mesh, l0);
   for (size_t i = 1; i < meshes.size(); ++i) {
     if (l[i].size() != l[0].size()) return std::nullopt;
     std::vector<int> li;
@@ -95,8 +96,8 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
       if (l[i][k].name != l[0][k].name) return std::nullopt;
       li.push_back(l[i][k].vertex);
     }
-    if (!(landmark_discrepancy(c0, l0, geodesic_coordinates(*meshes[i].mesh, li), li) <= detail::kIntrinsicLoopIsometry))
-      return std::nullopt;
+    c[i] = geodesic_coordinates(*meshes[i].mesh, li);
+    if (!(landmark_discrepancy(c[0], l0, c[i], li) <= detail::kIntrinsicLoopIsometry)) return std::nullopt;
   }
   std::vector<registration::Pose> poses(meshes.size());
   fit = distortion = 0;
@@ -105,20 +106,15 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   };
   for (size_t i = 1; i < meshes.size(); ++i) {
     std::vector<registration::LandmarkPair> pairs;
-    std::vector<int> li;
-    for (size_t k = 0; k < l[i].size(); ++k) {
-      pairs.push_back({l[0][k].position, l[i][k].position});
-      li.push_back(l[i][k].vertex);
-    }
+    for (size_t k = 0; k < l[i].size(); ++k) pairs.push_back({l[0][k].position, l[i][k].position});
     registration::Registration r;
     try {
       r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
       // Limbs that the landmarks leave free can bend the wrong way: their tips, matched by
       // geodesic coordinates, are held too.
       if (!fits(r)) {
-        const GeodesicCoordinates ci = geodesic_coordinates(*meshes[i].mesh, li);
         const auto matched =
-            matched_extremities(*meshes[0].mesh, c0, *meshes[i].mesh, ci, kExtremities, kExtremityMatch);
+            matched_extremities(*meshes[0].mesh, c[0], *meshes[i].mesh, c[i], kExtremities, kExtremityMatch);
         if (!matched.empty()) {
           std::vector<registration::LandmarkPair> more = pairs;
           for (const auto& [p, q] : matched)

@@ -302,23 +302,23 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << "%): " << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)" : "not one pose")
          << "\n";
   }
-  if (sets.registration_fit >= 0)
+  if (sets.registration_fit >= 0) {
+    const std::string more = std::to_string(sets.registration_tips) + " more points held";
     text << "registration: the first mesh deformed onto the others as rigidly as possible lies within "
          << std::setprecision(3) << 100 * sets.registration_fit << "% of the diagonal on 99% of the area, distortion "
          << std::setprecision(4) << sets.registration_distortion << " (one pose: at most "
-         << 100 * dissect::kRegisteredFit << "% and " << dissect::kRegisteredDistortion << "): "
-         << (sets.poses.empty()
-                 ? (sets.registration_tips > 0 ? "not used, nor with " + std::to_string(sets.registration_tips) +
-                                                     " more points held (a landmark at the tip of every limb that "
-                                                     "moved helps it fit)"
-                                               : std::string("not used (a landmark at the tip of every limb that "
-                                                             "moved helps it fit)"))
-             : sets.registration_tips > 0
-                 ? "one pose through the registrations, with " + std::to_string(sets.registration_tips) +
-                       " more points held (the first mesh's points farthest from the landmarks, matched by their "
-                       "distances along the surface to them)"
-                 : std::string("one pose through the registrations"))
-         << "\n";
+         << 100 * dissect::kRegisteredFit << "% and " << dissect::kRegisteredDistortion << "): ";
+    if (sets.poses.empty())
+      text << "not used" << (sets.registration_tips > 0 ? ", nor with " + more : "")
+           << " (a landmark at the tip of every limb that moved helps it fit)\n";
+    else
+      text << "one pose through the registrations"
+           << (sets.registration_tips > 0 ? ", with " + more +
+                                                " (the first mesh's points farthest from the landmarks, matched by "
+                                                "their distances along the surface to them)"
+                                          : "")
+           << "\n";
+  }
   if (one_pose && inputs.size() > 1) {
     if (sets.same_pose_fallback.empty())
       text << "same pose: " << sets.same_pose_loops << " of " << inputs.size() - 1 << " seed loops routed by pose, "
