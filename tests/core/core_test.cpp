@@ -2,9 +2,11 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "qs/core/atomic_file.h"
 #include "qs/core/error.h"
+#include "qs/core/geometry2d.h"
 #include "qs/core/mesh.h"
 
 namespace fs = std::filesystem;
@@ -49,4 +51,25 @@ TEST(Mesh, BoundingBoxAndArea) {
   m.faces = {{0, 1, 2}};
   EXPECT_DOUBLE_EQ(qs::face_area(m, 0), 1.0);
   EXPECT_DOUBLE_EQ(qs::bounding_box(m.positions).diagonal(), std::sqrt(5.0));
+}
+
+// The hierarchy only skips segments: every distance is polyline_distance's, bit for bit, on
+// random walks (long, short, with repeated points) and on points near and far from them.
+TEST(PolylineDistance, EqualsTheDirectScanBitForBit) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> step(0.0, 1.0);
+  std::uniform_real_distribution<double> box(-40.0, 40.0);
+  for (const int points : {1, 2, 3, 9, 10, 17, 200, 1500}) {
+    std::vector<qs::Vec3> line{qs::Vec3(0, 0, 0)};
+    for (int k = 1; k < points; ++k)
+      line.push_back(k % 7 == 3 ? line.back() : line.back() + qs::Vec3(step(rng), step(rng), step(rng)));
+    const qs::PolylineDistance to_line(line);
+    for (int q = 0; q < 400; ++q) {
+      const qs::Vec3 p = q % 2 ? line[static_cast<size_t>(q) % line.size()] + 0.01 * qs::Vec3(step(rng), step(rng), step(rng))
+                               : qs::Vec3(box(rng), box(rng), box(rng));
+      const double direct = qs::polyline_distance(p, line);
+      ASSERT_EQ(to_line(p), direct) << points << " points, query " << q;
+    }
+    EXPECT_EQ(to_line(line.back()), 0.0);
+  }
 }

@@ -262,10 +262,12 @@ SeedLoop trace_guided_loop(const TriMesh& mesh, const std::array<int, 4>& seeds,
   if (!(sigma > 0)) throw InvalidInput("trace_guided_loop: sigma must be > 0");
   for (int i = 0; i < 4; ++i)
     if (guides[i].empty()) throw InvalidInput("trace_guided_loop: guide " + std::to_string(i) + " is empty");
+  const std::array<PolylineDistance, 4> to_guide{PolylineDistance(guides[0]), PolylineDistance(guides[1]),
+                                                 PolylineDistance(guides[2]), PolylineDistance(guides[3])};
   return trace_weighted_loop(
       mesh, seeds,
       [&](int i, int v, int w) {
-        const double r = polyline_distance(0.5 * (mesh.positions[v] + mesh.positions[w]), guides[i]) / sigma;
+        const double r = to_guide[i](0.5 * (mesh.positions[v] + mesh.positions[w])) / sigma;
         return 1 + r * r;
       },
       avoid);
