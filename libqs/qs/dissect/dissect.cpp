@@ -88,7 +88,7 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   std::vector<int> l0;
   for (const NamedLandmark& x : l[0]) l0.push_back(x.vertex);
   std::vector<GeodesicCoordinates> c(meshes.size());  // kept for the retries below
-  c[0] = geodesic_coordinates(*meshes[0].mesh, l0);
+  c[0] = geodesic_coordinates(*meshes[0].mesh, l0, context);
   for (size_t i = 1; i < meshes.size(); ++i) {
     if (l[i].size() != l[0].size()) return std::nullopt;
     std::vector<int> li;
@@ -96,7 +96,7 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
       if (l[i][k].name != l[0][k].name) return std::nullopt;
       li.push_back(l[i][k].vertex);
     }
-    c[i] = geodesic_coordinates(*meshes[i].mesh, li);
+    c[i] = geodesic_coordinates(*meshes[i].mesh, li, context);
     if (!(landmark_discrepancy(c[0], l0, c[i], li) <= detail::kIntrinsicLoopIsometry)) return std::nullopt;
   }
   std::vector<registration::Pose> poses(meshes.size());
@@ -320,7 +320,7 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
   // The seeds' cyclic order of the set's shortest loop (the same permutation for every mesh).
-  const SeedOrderChoice order = shortest_seed_order(meshes);
+  const SeedOrderChoice order = shortest_seed_order(meshes, 0.05, context);
   if (order.changed()) {
     std::vector<MeshToDissect> reordered = meshes;
     for (size_t i = 0; i < meshes.size(); ++i)

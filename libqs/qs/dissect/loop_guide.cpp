@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "qs/core/error.h"
+#include "qs/core/parallel.h"
 #include "qs/dissect/seed_routing_detail.h"
 
 namespace qs::dissect {
@@ -21,18 +22,19 @@ double landmark_discrepancy(const GeodesicCoordinates& a, const std::vector<int>
   return sum > 0 && std::isfinite(diff) ? diff / sum : std::numeric_limits<double>::infinity();
 }
 
-GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks) {
+GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks,
+                                         const Context& context) {
   const routing::Graph g = routing::build_graph(mesh);
-  routing::Dijkstra dijkstra(g);
   const int nv = mesh.num_vertices();
   const double scale = 1.0 / std::sqrt(std::max(surface_area(mesh), 1e-300));
   GeodesicCoordinates out;
   out.dims = static_cast<int>(landmarks.size());
   out.values.resize(static_cast<size_t>(nv) * out.dims);
-  for (int l = 0; l < out.dims; ++l) {
+  parallel_for(out.dims, inside_parallel_loop() ? 1 : 0, context, [&](int l) {
+    routing::Dijkstra dijkstra(g);
     const std::vector<double> dist = dijkstra.all_distances(landmarks[l]);
     for (int v = 0; v < nv; ++v) out.values[static_cast<size_t>(v) * out.dims + l] = dist[v] * scale;
-  }
+  });
   return out;
 }
 

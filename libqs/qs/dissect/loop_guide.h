@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "qs/core/context.h"
 #include "qs/core/mesh.h"
 #include "qs/dissect/seed_loop.h"
 
@@ -19,8 +20,10 @@ struct GeodesicCoordinates {
   const double* at(int v) const { return values.data() + static_cast<size_t>(v) * dims; }
 };
 
-/// \pre landmarks index into mesh.positions.
-GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks);
+/// \pre landmarks index into mesh.positions. The landmarks in parallel on the context's threads
+/// (the same values on any thread count).
+GeodesicCoordinates geodesic_coordinates(const TriMesh& mesh, const std::vector<int>& landmarks,
+                                         const Context& context = {});
 
 /// How far two meshes are from one shape in two poses: their landmarks' geodesic distances to each
 /// other (a and b: coordinates of the landmark vertices la and lb, in the same order) differ by

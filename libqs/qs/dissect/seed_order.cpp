@@ -36,7 +36,8 @@ std::optional<std::array<int, 4>> seed_vertices(const MeshToDissect& m) {
 
 }  // namespace
 
-SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, double margin) {
+SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, double margin,
+                                    const Context& context) {
   SeedOrderChoice out;
   if (meshes.empty()) return out;
   std::vector<std::array<int, 4>> vertices;
@@ -48,7 +49,7 @@ SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, do
   for (size_t i = 0; i < meshes.size(); ++i) {
     const auto& m = meshes[i];
     const std::vector<int> v(vertices[i].begin(), vertices[i].end());
-    const GeodesicCoordinates c = geodesic_coordinates(*m.mesh, v);
+    const GeodesicCoordinates c = geodesic_coordinates(*m.mesh, v, context);
     for (size_t o = 0; o < kOrders.size(); ++o) {
       const auto& q = kOrders[o];
       double len = 0;

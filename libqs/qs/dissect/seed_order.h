@@ -7,6 +7,7 @@
 #include <array>
 #include <vector>
 
+#include "qs/core/context.h"
 #include "qs/core/mesh.h"
 
 namespace qs::dissect {
@@ -26,6 +27,7 @@ struct SeedOrderChoice {
 /// shortest by more than `margin` (a fraction: 0.05 = 5%), so that near ties never flip.
 /// Meshes without seeds (automatic seeds) leave the order as given.
 /// \pre every mesh validated (closed, manifold); seeds in range.
-SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, double margin = 0.05);
+SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, double margin = 0.05,
+                                    const Context& context = {});
 
 }  // namespace qs::dissect

@@ -399,7 +399,7 @@ int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops, std::vector<doub
   };
   const TriMesh m0 = meshes_[0].trimesh();
   const std::vector<int> l0 = landmarks(0);
-  const GeodesicCoordinates c0 = geodesic_coordinates(m0, l0);
+  const GeodesicCoordinates c0 = geodesic_coordinates(m0, l0, ctx_);
   const auto reference = loop_coordinates(c0, loops[0]);
   const std::vector<int> want = meshes_[0].feature_sides(loops[0]);
   std::vector<char> routed(nm, 0);
@@ -408,7 +408,7 @@ int SetDissector::route_intrinsic(std::vector<SeedLoop>& loops, std::vector<doub
     const size_t i = static_cast<size_t>(t) + 1;
     const TriMesh mi = meshes_[i].trimesh();
     const std::vector<int> li = landmarks(i);
-    const GeodesicCoordinates ci = geodesic_coordinates(mi, li);
+    const GeodesicCoordinates ci = geodesic_coordinates(mi, li, ctx_);
     // Geodesic coordinates correspond only between near-isometric surfaces (one shape in two
     // poses); other shapes keep their own shortest loops.
     discrepancy[i] = landmark_discrepancy(c0, l0, ci, li);
