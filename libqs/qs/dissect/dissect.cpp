@@ -249,7 +249,8 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   DissectOptions used = options;
   double fit = -1, distortion = -1;
   int tips = 0;
-  if (measured && !detected && options.register_poses && used.pose_registrations.empty()) {
+  const bool part_moved = detected && measured->p99 > kPartMoved * measured->mean;
+  if (measured && (!detected || part_moved) && options.register_poses && used.pose_registrations.empty()) {
     if (auto poses = register_poses(meshes, context, fit, distortion, tips)) {
       used.pose_registrations = std::move(*poses);
       detected = true;
@@ -264,6 +265,7 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   out.pose_distance = measured ? measured->mean : -1;
   out.pose_distance_p99 = measured ? measured->p99 : -1;
   out.same_pose_detected = detected;
+  out.pose_part_moved = part_moved;
   return out;
 }
 

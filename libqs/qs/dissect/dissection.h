@@ -51,6 +51,12 @@ inline constexpr double kRegisteredDistortion = 1.25;
 /// One pose also needs 99% of the area within this multiple of same_pose_detect: a shape whose
 /// limbs moved (a pose change) lies close on average but far at the limbs (docs/algorithms.md).
 inline constexpr double kSamePoseTail = 2.0;
+/// A set within both bounds whose 99% quantile is over this multiple of its mean distance has
+/// the distance in a small part (a limb turned about itself, which lies where it lay): it is
+/// registered as other poses are, and keeps one pose by the similarity when that does not fit.
+/// Re-tessellations and two bodies in one pose spread the distance evenly (docs/pose-pairs.md,
+/// "A part moved in place").
+inline constexpr double kPartMoved = 10.0;
 
 /// The options of a dissection. The defaults are qs-dissect's except for the two hooks, which
 /// qs::pipeline::dissect sets (they are empty here: the dissect module does not depend on
@@ -323,6 +329,8 @@ struct DissectionSet {
   double pose_distance = -1;
   double pose_distance_p99 = -1;  ///< the 99% quantile (-1: not measured)
   bool same_pose_detected = false;
+  /// Within the bounds, but the distance in a small part (kPartMoved): the registration was tried.
+  bool pose_part_moved = false;
   /// DissectOptions::register_poses: the registrations that put the set in one pose (empty when
   /// not registered; else one per mesh, the first the identity), their largest distance from the
   /// meshes (99% of the area within, a fraction of a mesh's diagonal) and largest distortion.

@@ -299,8 +299,13 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
     text << "pose: the surfaces lie " << std::setprecision(3) << 100 * sets.pose_distance
          << "% of the diagonal apart after the landmarks' similarity (mean; 99% of the area within "
          << 100 * sets.pose_distance_p99 << "%; one pose: at most " << 100 * limit << "% and " << 100 * tail
-         << "%): " << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)" : "not one pose")
-         << "\n";
+         << "%): ";
+    if (sets.pose_part_moved)
+      text << "within both, but the 99% quantile is " << std::setprecision(2) << sets.pose_distance_p99 / sets.pose_distance
+           << " times the mean (over " << dissect::kPartMoved << ": a part moved in place, as a limb turned about itself): "
+           << (sets.poses.empty() ? "one pose (as --same-pose), the registration not fitting" : "registered") << "\n";
+    else
+      text << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)" : "not one pose") << "\n";
   }
   if (sets.registration_fit >= 0) {
     const std::string more = std::to_string(sets.registration_tips) + " more points held";
