@@ -65,7 +65,8 @@ TEST(PolylineDistance, EqualsTheDirectScanBitForBit) {
       line.push_back(k % 7 == 3 ? line.back() : line.back() + qs::Vec3(step(rng), step(rng), step(rng)));
     const qs::PolylineDistance to_line(line);
     for (int q = 0; q < 400; ++q) {
-      const qs::Vec3 p = q % 2 ? line[static_cast<size_t>(q) % line.size()] + 0.01 * qs::Vec3(step(rng), step(rng), step(rng))
+      const qs::Vec3 jitter(step(rng), step(rng), step(rng));
+      const qs::Vec3 p = q % 2 ? line[static_cast<size_t>(q) % line.size()] + 0.01 * jitter
                                : qs::Vec3(box(rng), box(rng), box(rng));
       const double direct = qs::polyline_distance(p, line);
       ASSERT_EQ(to_line(p), direct) << points << " points, query " << q;

@@ -301,8 +301,9 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
          << 100 * sets.pose_distance_p99 << "%; one pose: at most " << 100 * limit << "% and " << 100 * tail
          << "%): ";
     if (sets.pose_part_moved)
-      text << "within both, but the 99% quantile is " << std::setprecision(2) << sets.pose_distance_p99 / sets.pose_distance
-           << " times the mean (over " << dissect::kPartMoved << ": a part moved in place, as a limb turned about itself): "
+      text << "within both, but the 99% quantile is " << std::setprecision(2)
+           << sets.pose_distance_p99 / sets.pose_distance << " times the mean (over " << dissect::kPartMoved
+           << ": a part moved in place, as a limb turned about itself): "
            << (sets.poses.empty() ? "one pose (as --same-pose), the registration not fitting" : "registered") << "\n";
     else
       text << (sets.same_pose_detected && sets.poses.empty() ? "one pose (as --same-pose)" : "not one pose") << "\n";
