@@ -339,6 +339,10 @@ TEST_F(CorrespondenceTool, OneMeshGivenTwiceMapsByTheIdentity) {
   RunResult r = run_tool("qs-dissect", src.string() + " " + copy + " --landmarks " + lm + " " + lm + " --quiet -o " +
                                            d() + "/twice --report " + d() + "/twice.txt");
   ASSERT_EQ(r.exit, 0) << r.out;
+  // The rounding between the two is no part that moved: not registered.
+  const std::string report = read_bytes(d() + "/twice.txt");
+  EXPECT_THAT(report, HasSubstr("): one pose (as --same-pose)\n"));
+  EXPECT_THAT(report, Not(HasSubstr("registration: ")));
   r = run_tool("qs-metro", "--correspondence " + d() + "/twice --samples 20000 --json -o " + d() + "/twice.json");
   ASSERT_EQ(r.exit, 0) << r.out;
   std::ifstream in(d() + "/twice.json");

@@ -249,7 +249,8 @@ DissectionSet dissect_set_in_order(const std::vector<MeshToDissect>& meshes, con
   DissectOptions used = options;
   double fit = -1, distortion = -1;
   int tips = 0;
-  const bool part_moved = detected && measured->p99 > kPartMoved * measured->mean;
+  const bool part_moved =
+      detected && measured->p99 > kPartMoved * measured->mean && measured->p99 > kPartMovedFloor;
   if (measured && (!detected || part_moved) && options.register_poses && used.pose_registrations.empty()) {
     if (auto poses = register_poses(meshes, context, fit, distortion, tips)) {
       used.pose_registrations = std::move(*poses);

@@ -55,8 +55,11 @@ inline constexpr double kSamePoseTail = 2.0;
 /// the distance in a small part (a limb turned about itself, which lies where it lay): it is
 /// registered as other poses are, and keeps one pose by the similarity when that does not fit.
 /// Re-tessellations and two bodies in one pose spread the distance evenly (docs/pose-pairs.md,
-/// "A part moved in place").
+/// "A part moved in place") ...
 inline constexpr double kPartMoved = 10.0;
+/// ... and the 99% quantile must be over this fraction of the diagonal: the rounding that
+/// separates one mesh given twice is no part that moved.
+inline constexpr double kPartMovedFloor = 0.001;
 
 /// The options of a dissection. The defaults are qs-dissect's except for the two hooks, which
 /// qs::pipeline::dissect sets (they are empty here: the dissect module does not depend on
