@@ -46,28 +46,31 @@ double segment_parameter(const V& p, const V& a, const V& b) {
   return std::clamp((p - a).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
 }
 
+/// The squared distance from p to the segment [a, b]. V: Vec2 or Vec3.
+template <class V>
+double segment_distance2(const V& p, const V& a, const V& b) {
+  const V d = b - a;
+  return (a + segment_parameter(p, a, b) * d - p).squaredNorm();
+}
+
 /// The distance from p to the segment [a, b]. V: Vec2 or Vec3.
 template <class V>
 double segment_distance(const V& p, const V& a, const V& b) {
-  const V d = b - a;
-  return (a + segment_parameter(p, a, b) * d - p).norm();
+  return std::sqrt(segment_distance2(p, a, b));
 }
 
 /// The distance from p to the polyline `line` (its segments; one point: that point).
 /// \pre line not empty.
 inline double polyline_distance(const Vec3& p, const std::vector<Vec3>& line) {
   double best = (line.front() - p).squaredNorm();
-  for (size_t k = 0; k + 1 < line.size(); ++k) {
-    const Vec3 d = line[k + 1] - line[k];
-    best = std::min(best, (line[k] + segment_parameter(p, line[k], line[k + 1]) * d - p).squaredNorm());
-  }
+  for (size_t k = 0; k + 1 < line.size(); ++k) best = std::min(best, segment_distance2(p, line[k], line[k + 1]));
   return std::sqrt(best);
 }
 
 /// polyline_distance to one line for many points: a hierarchy of boxes over runs of its segments
 /// prunes the segments that cannot be nearest. The same value as polyline_distance, bit for bit
-/// (the same terms, and a run is skipped only when its box is farther than the best so far by a
-/// margin above rounding).
+/// (the same segment_distance2 terms, and a run is skipped only when its box is farther than the
+/// best so far by a margin above rounding).
 class PolylineDistance {
  public:
   /// \pre line not empty; it must outlive this object.
@@ -89,10 +92,7 @@ class PolylineDistance {
       if (d2 > best * (1 + 1e-9)) continue;
       const Node& n = nodes_[i];
       if (n.left < 0) {
-        for (int k = n.begin; k < n.end; ++k) {
-          const Vec3 e = line_[k + 1] - line_[k];
-          best = std::min(best, (line_[k] + segment_parameter(p, line_[k], line_[k + 1]) * e - p).squaredNorm());
-        }
+        for (int k = n.begin; k < n.end; ++k) best = std::min(best, segment_distance2(p, line_[k], line_[k + 1]));
         continue;
       }
       const double l = box(nodes_[n.left]), r = box(nodes_[n.left + 1]);
