@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
     ctx.threads = threads;
     // Wall time per stage, in the order the stages first ran (a stage that runs again, in a second
     // dissection, adds to its first entry); the time before the first stage is "setup" (the
-    // pose test and any registration).
+    // landmarks and the pose test).
     std::vector<std::pair<std::string, double>> stage_seconds{{"setup", 0.0}};
     size_t stage_at = 0;
     auto stage_start = t1;

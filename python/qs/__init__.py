@@ -210,8 +210,8 @@ def dissect(meshes, landmarks=None, *, threads=0, progress=None, allow_folded=Fa
       order. Seeds correspond by order, features by name; either every mesh has seeds or none.
       Landmark files beside the meshes are not looked up: read them with qs.read_landmarks.
     threads: 0 for all hardware threads; the result does not depend on it.
-    progress: None or a callable progress(stage, fraction); stages "seed loops", "quinary
-      subdivision", "leaf repairs", "refine maps".
+    progress: None or a callable progress(stage, fraction); stages "registration" (one surface
+      in other poses only), "seed loops", "quinary subdivision", "leaf repairs", "refine maps".
     allow_folded: return a result whose uv faces stay folded instead of raising qs.SolverError
       (qs-dissect writes such a result, then exits with 4).
     **options: the dissection's options by their --config names, defaults as in qs-dissect

@@ -84,6 +84,7 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   std::vector<std::vector<NamedLandmark>> l(meshes.size());
   for (size_t i = 0; i < meshes.size(); ++i) l[i] = mesh_landmarks(meshes[i]);
   if (l[0].empty()) return std::nullopt;
+  context.report("registration", 0.0);
   // One surface: the landmarks' geodesic distances, every mesh's against the first's.
   std::vector<int> l0;
   for (const NamedLandmark& x : l[0]) l0.push_back(x.vertex);
@@ -133,6 +134,7 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
     distortion = std::max(distortion, r.distortion);
     if (!fits(r)) return std::nullopt;
     poses[i] = registration::Pose(*meshes[0].mesh, std::move(r));
+    context.report("registration", static_cast<double>(i) / static_cast<double>(meshes.size() - 1));
   }
   return poses;
 }

@@ -535,6 +535,7 @@ DissectionSet SetDissector::run() {
   std::map<std::string, std::vector<int>> refined_faces;  // node name -> faces added per mesh
   std::vector<size_t> refined_total(nm, 0);                // faces added per mesh
   std::deque<std::vector<Node>> queue(roots.begin(), roots.end());
+  ctx_.report("quinary subdivision", 0.0);  // the roots' maps and splits are this stage's
   // Progress: the share of the surface area in finished leaves (cuts add faces, not area).
   double total_area = 0, done_area = 0;
   std::vector<double> max_area;   // per mesh: opt_.max_patch_area times its surface area
