@@ -4,9 +4,10 @@
 # kept, so vertex i <-> vertex i is the exact map), and against that pose re-tessellated
 # (`--retessellate --keep-shape`: a "surface" map onto the posed mesh). Every pair is dissected
 # with qs-dissect as a user would (the landmarks given) and measured with `qs-metro
-# --correspondence` (chart map and level-4 common remesh) beside the similarity + nearest-point
-# baseline and the registration alone (`qs-bench-registration`: B's points through the registration's
-# inverse, as qs-dissect takes them); then the seed loop's agreement: the share of the area whose
+# --correspondence` (chart map, level-4 common remesh and what an exact map loses through that
+# remesh) beside the similarity + nearest-point baseline and the registration alone
+# (`qs-bench-registration`: B's points through the registration's inverse, as qs-dissect takes
+# them); then the seed loop's agreement: the share of the area whose
 # exact image lies on the same side of the other mesh's seed loop (level-0 patch), and the same
 # patch (leaf) share.
 # Last, another person in another pose: smpl_man_14k against the posed smpl_woman_14k (and its
@@ -207,18 +208,18 @@ def registration(d):
 rows = [l.rstrip('\n').split('\t') for l in open(sys.argv[1])]
 f = lambda s: f"{s['mean_percent']:.2f} / {s['p95_percent']:.2f} / {s['max_percent']:.2f}%"
 print()
-print('| pair | exit | time | patches | qs: mean / p95 / max | registration alone | level 4: mean / p95 / max | baseline: mean / p95 / max | same side of the seed loop | same patch | corners (mean) |')
-print('|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
+print('| pair | exit | time | patches | qs: mean / p95 / max | registration alone | level 4: mean / p95 / max | level 4, an exact map: mean / p95 / max | baseline: mean / p95 / max | same side of the seed loop | same patch | corners (mean) |')
+print('|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
 for name, rc, secs, d, mb, posed in rows:
     if d == '-':
-        print(f'| {name} | {rc} | {secs} s | | not measured | | | | | | |')
+        print(f'| {name} | {rc} | {secs} s | | not measured | | | | | | | |')
         continue
     doc = json.load(open(d + '.corr.json'))
     p = doc['pairs'][0]
     q = json.load(open(d + '.corr-L4.json'))['pairs'][0]
-    e, b, e4 = p['dissection'], p['baseline'], q['dissection']
+    e, b, e4, r4 = p['dissection'], p['baseline'], q['dissection'], q['remesh_alone']
     side = same_side(d, mb, posed)
-    print(f"| {name} | {rc} | {secs} s | {doc['patches']} | {f(e)} | {registration(d)} | {f(e4)} | {f(b)} | {100 * side:.1f}% | "
+    print(f"| {name} | {rc} | {secs} s | {doc['patches']} | {f(e)} | {registration(d)} | {f(e4)} | {f(r4)} | {f(b)} | {100 * side:.1f}% | "
           f"{100 * p['same_patch_share']:.1f}% | {p.get('corner_distance_mean_percent', 0):.2f}% |")
 
 # What each stage costs: B's stages replaced one more at a time by A's (the levels of STAGES).

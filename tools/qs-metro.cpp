@@ -287,6 +287,9 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
          << "  patch corners: " << corners << "  " << distortion_text(pm)
          << "  baseline (similarity on " << pm.baseline_landmarks << " landmarks + nearest point): "
          << stats_text(pm.baseline) << "\n";
+    if (level > 0)
+      text << "  the remesh alone (each exact image through B's remesh at its own (u, v): an exact map's error): "
+           << stats_text(pm.remesh) << "\n";
     if (pm.truth_tolerance > 0) {
       char tol[160];
       std::snprintf(tol, sizeof tol, "%.3f%% (mean %.4f%%)", pm.truth_tolerance, pm.truth_tolerance_mean);
@@ -332,6 +335,7 @@ int run_correspondence(const std::string& folder_name, const std::vector<std::st
                      {"baseline_landmarks", pm.baseline_landmarks},
                      {"truth_tolerance_percent", pm.truth_tolerance},
                      {"truth_tolerance_mean_percent", pm.truth_tolerance_mean}});
+    if (level > 0) pairs.back()["remesh_alone"] = stats_json(pm.remesh);
     if (map_folder) pairs.back()["error_map"] = map_json;
     if (error_map.worst > 0) {
       // Where the map is worst, and whether the patch layout put the point in another patch.

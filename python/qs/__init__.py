@@ -456,7 +456,8 @@ def correspondence_error(dissection, maps=None, *, samples=100000, seed=1, level
     diagonal), "same_patch_share", "corner_distance_mean_percent", "corner_distance_max_percent",
     "distortion" (on, dissection_mean, dissection_median, dissection_folded_faces, truth_mean,
     truth_median, truth_folded_faces), "baseline_landmarks", "truth_tolerance_percent",
-    "truth_tolerance_mean_percent"; with vertex_errors=True also "vertex_error",
+    "truth_tolerance_mean_percent"; with level >= 1 also "remesh_alone" (as "dissection": an exact
+    map's error through that remesh); with vertex_errors=True also "vertex_error",
     "vertex_baseline_error" ((n,) float64, % of the diagonal), "vertex_patch" and
     "vertex_exact_patch" ((n,) int32; -1 for an unused vertex).
 

@@ -888,6 +888,7 @@ PYBIND11_MODULE(_qs, m) {
       p["baseline_landmarks"] = pm.baseline_landmarks;
       p["truth_tolerance_percent"] = pm.truth_tolerance;
       p["truth_tolerance_mean_percent"] = pm.truth_tolerance_mean;
+      if (pm.level > 0) p["remesh_alone"] = stats(pm.remesh);
       if (vertex_errors) {
         p["vertex_error"] = doubles(pm.vertex_error);
         p["vertex_baseline_error"] = doubles(pm.vertex_baseline_error);

@@ -91,6 +91,9 @@ TEST_F(CorrespondenceTool, MeasuresAFamilyPairAgainstItsMapFiles) {
   r = run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 5000 --level 4");
   ASSERT_EQ(r.exit, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("mapped through B's level-4 remesh"));
+  EXPECT_THAT(r.out, HasSubstr("\n  the remesh alone (each exact image through B's remesh at its own (u, v): an exact "
+                               "map's error): mean "));
+  EXPECT_THAT(p.dump(), testing::Not(HasSubstr("remesh_alone")));  // level 0 has no remesh
   EXPECT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --level 13").exit, 1);
   // The same run twice gives the same bytes.
   ASSERT_EQ(run_tool("qs-metro", "--correspondence " + d() + "/pair --samples 20000 --json -o " + d() + "/c2.json").exit, 0);

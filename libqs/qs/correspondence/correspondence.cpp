@@ -464,7 +464,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   const double total = cumulative[nf];
   if (!(total > 0)) throw InvalidInput("correspondence: " + truth.mesh(a).name + " has zero area");
   const long n = options.samples;
-  std::vector<double> err(n), base_err(n);
+  std::vector<double> err(n), base_err(n), remesh_err(n);
   std::vector<double> same(n);
   const Box3 box = bounding_box(cb.mesh.positions);
   const double diag = box.diagonal();
@@ -473,15 +473,27 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   struct PointMeasure {
     double error, baseline;
     int exact_patch;
+    double remesh;  // at level n >= 1: the exact image against B's remesh at the image's own (u, v)
   };
   auto measure_point = [&](const Vec3& x, int patch, const Vec2& st, const landmarks::SurfacePoint& on_input,
                            int& hint) {
     const Vec3 mapped = map_point(patch, st, hint);
     const Vec3 exact = landmarks::position_of(mb, truth.map(a, b, on_input));
     const Vec3 moved = (similarity * x.homogeneous()).head<3>();
+    const auto at_exact = on_b_chart.closest(exact);
+    double remesh = 0;
+    if (options.level > 0) {
+      const Tri& t = cb.mesh.faces[at_exact.face];
+      const auto w = landmarks::closest_on_triangle(exact, cb.mesh.positions[t[0]], cb.mesh.positions[t[1]],
+                                                    cb.mesh.positions[t[2]]);
+      const auto& fuv = cb.face_uv[at_exact.face];
+      const Vec2 own = (w[0] * fuv[0] + w[1] * fuv[1] + w[2] * fuv[2]).cwiseMax(0.0).cwiseMin(1.0);
+      int own_hint = -1;
+      remesh = 100 * (map_point(cb.face_patch[at_exact.face], own, own_hint) - exact).norm() / diag;
+    }
     return PointMeasure{100 * (mapped - exact).norm() / diag,
                         100 * (on_b_chart.closest(moved).point - exact).norm() / diag,
-                        cb.face_patch[on_b_chart.closest(exact).face]};
+                        cb.face_patch[at_exact.face], remesh};
   };
 
   constexpr long kChunk = 1024;
@@ -506,6 +518,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
       const PointMeasure m =
           measure_point(x, patch, st, surface_point_at(truth.mesh(a).mesh, ca_closest.face, ca_closest.point), hint);
       err[k] = m.error;
+      remesh_err[k] = m.remesh;
       same[k] = m.exact_patch == patch ? 1.0 : 0.0;
       base_err[k] = m.baseline;
     }
@@ -554,6 +567,7 @@ PairMeasure measure_pair(const GroundTruth& truth, const std::vector<DissectedIn
   pm.diagonal = diag;
   pm.dissection = stats(err);
   pm.baseline = stats(base_err);
+  pm.remesh = stats(remesh_err);
   double s = 0;
   for (double v : same) s += v;
   pm.same_patch_share = s / n;

@@ -106,6 +106,10 @@ struct PairMeasure {
   double diagonal = 0;            ///< of B's chart (the length the percentages refer to)
   ErrorStats dissection;          ///< the dissection's map A -> B vs the exact image
   ErrorStats baseline;            ///< similarity on the landmarks + nearest point of B
+  /// At level n >= 1, the remesh's own share: each sample's exact image against the point of B's
+  /// level-n remesh at that image's own (patch, u, v) on B's chart, i.e. the error an exact map
+  /// would have through this remesh (zero at level 0).
+  ErrorStats remesh;
   double same_patch_share = 0;    ///< share of A's area whose exact image is in the same patch of B
   /// Distance between corresponding patch corners: the exact image on B of each of A's patch
   /// corners (base-domain vertices) against B's corner of the same (patch, corner), in % of the
