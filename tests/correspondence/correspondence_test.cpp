@@ -64,6 +64,13 @@ qs::dissect::DissectionSet dissect_shapes(const std::vector<const qs::family::Fa
   return qs::dissect::dissect_set(in);
 }
 
+// One generated shape dissected with itself, and the identity as its truth.
+struct SelfPair {
+  qs::family::Family fam = small_family(1, 4);
+  qs::dissect::DissectionSet set = dissect_shapes({&fam.shapes[0], &fam.shapes[0]});
+  cr::GroundTruth truth{{plain_truth(fam.shapes[0].mesh, "a"), plain_truth(fam.shapes[0].mesh, "b")}};
+};
+
 std::vector<cr::DissectedInput> inputs_of(const qs::dissect::DissectionSet& set) {
   std::vector<cr::DissectedInput> in;
   for (const auto& d : set.meshes) in.push_back({&d.chart, cr::dissection_landmarks(d)});
@@ -199,12 +206,10 @@ TEST(GroundTruth, ASphereMapMustCoverTheSphereOncePositively) {
 }
 
 TEST(Measure, AMeshAgainstItselfIsExact) {
-  const auto fam = small_family(1, 4);
-  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[0]});
-  const cr::GroundTruth truth({plain_truth(fam.shapes[0].mesh, "a"), plain_truth(fam.shapes[0].mesh, "b")});
+  const SelfPair self;
   cr::MeasureOptions o;
   o.samples = 20000;
-  const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  const auto pm = cr::measure_pair(self.truth, inputs_of(self.set), 0, 1, o);
   EXPECT_EQ(pm.samples, 20000);
   EXPECT_LT(pm.dissection.max, 1e-9);
   EXPECT_LT(pm.baseline.max, 1e-6);
@@ -222,14 +227,12 @@ TEST(Measure, AMeshAgainstItselfIsExact) {
 // Through a remesh an exact map is off by the remesh's own error, which `remesh` measures: for
 // the identity the two agree, and at level 0 there is none.
 TEST(Measure, TheRemeshAloneIsWhatAnExactMapLosesThroughTheRemesh) {
-  const auto fam = small_family(1, 4);
-  const auto set = dissect_shapes({&fam.shapes[0], &fam.shapes[0]});
-  const cr::GroundTruth truth({plain_truth(fam.shapes[0].mesh, "a"), plain_truth(fam.shapes[0].mesh, "b")});
+  const SelfPair self;
   cr::MeasureOptions o;
   o.samples = 5000;
-  EXPECT_EQ(cr::measure_pair(truth, inputs_of(set), 0, 1, o).remesh.max, 0);
+  EXPECT_EQ(cr::measure_pair(self.truth, inputs_of(self.set), 0, 1, o).remesh.max, 0);
   o.level = 2;
-  const auto pm = cr::measure_pair(truth, inputs_of(set), 0, 1, o);
+  const auto pm = cr::measure_pair(self.truth, inputs_of(self.set), 0, 1, o);
   EXPECT_GT(pm.remesh.mean, 0.01);  // a level-2 remesh cuts across the curved surface
   EXPECT_NEAR(pm.remesh.mean, pm.dissection.mean, 1e-9 * pm.dissection.mean);
   EXPECT_NEAR(pm.remesh.p95, pm.dissection.p95, 1e-9 * pm.dissection.p95);

@@ -325,7 +325,7 @@ DissectionSet dissect_set(const std::vector<MeshToDissect>& meshes, const Dissec
   for (const auto& m : meshes)
     if (m.mesh == nullptr) throw InvalidInput("dissect_set: a mesh is null");
   // The seeds' cyclic order of the set's shortest loop (the same permutation for every mesh).
-  const SeedOrderChoice order = shortest_seed_order(meshes, 0.05, context);
+  const SeedOrderChoice order = shortest_seed_order(meshes, kSeedOrderMargin, context);
   if (order.changed()) {
     std::vector<MeshToDissect> reordered = meshes;
     for (size_t i = 0; i < meshes.size(); ++i)

@@ -23,11 +23,14 @@ struct SeedOrderChoice {
   bool changed() const { return order != std::array<int, 4>{0, 1, 2, 3}; }
 };
 
+/// shortest_seed_order's margin: a given order within 5% of the shortest loop stays.
+inline constexpr double kSeedOrderMargin = 0.05;
+
 /// The set's shortest cyclic order. The given order is kept unless its loop is longer than the
 /// shortest by more than `margin` (a fraction: 0.05 = 5%), so that near ties never flip.
 /// Meshes without seeds (automatic seeds) leave the order as given.
 /// \pre every mesh validated (closed, manifold); seeds in range.
-SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, double margin = 0.05,
+SeedOrderChoice shortest_seed_order(const std::vector<MeshToDissect>& meshes, double margin = kSeedOrderMargin,
                                     const Context& context = {});
 
 }  // namespace qs::dissect
