@@ -400,6 +400,15 @@ constexpr double kTransferSmallTangle = 0.01;
 /// is slow there (a coarse first mesh against a fine second one) and measured no closer; on
 /// smaller nodes the pull is cheap and measured slightly closer (docs/pose-pairs.md).
 constexpr int kTransferUntangleVertices = 10000;
+/// Through a registration, a node map untangled from the node's own map (Transfer::Untangled) with
+/// a face under this share of the square per share of the node's area gives way to the
+/// nearest-point (u, v) as they are (Transfer::Folded). Measured on a posed horse: such maps came
+/// at 10^-12 to 10^-7 and cut the children where nothing corresponds (19% of the diagonal off),
+/// the others at 4 x 10^-4 and above (docs/pose-pairs.md).
+constexpr double kUntangledSqueeze = 1e-6;
+/// The smallest ratio, over the faces of `pm` with a positive area, of a face's signed uv area to
+/// its share of the patch's area (1 everywhere for a map that keeps area ratios).
+double smallest_area_share(const param::PatchMesh& pm, const std::vector<Vec2>& uv);
 /// same_pose_maps: after a repair, the untangler frees the vertices the repair left off their
 /// targets and this many rings around them (4 rings: the same result, slower).
 constexpr int kTransferPolishRings = 2;
@@ -422,7 +431,8 @@ constexpr int kTransferPolishRings = 2;
 /// stretch-minimized map (minimized_leaf) when the own map folds, is pulled toward them over the
 /// whole node instead (Untangled), except through a registration where the repair left a small
 /// tangle on a large node (kTransferUntangleVertices): then p.sp takes the repaired map, folded
-/// only there (Folded).
+/// only there (Folded); through a registration an untangled map squeezed below
+/// kUntangledSqueeze is not kept either.
 /// When no bijective map results, p.sp takes the nearest-point (u, v) as they are, folded, if
 /// `pose` is a registration (Folded: the map serves the split only, whose cuts then run where
 /// ref's do); otherwise, or when no vertex has a nearest point, p keeps its own map (Own).

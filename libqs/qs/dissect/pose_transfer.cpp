@@ -3,6 +3,7 @@
 // curves on every surface (see transfer_node_map in dissect_detail.h).
 
 #include <algorithm>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -13,6 +14,23 @@
 #include "qs/metro/metro.h"
 
 namespace qs::dissect::detail {
+
+double smallest_area_share(const param::PatchMesh& pm, const std::vector<Vec2>& uv) {
+  double total = 0;
+  std::vector<double> area(pm.faces.size());
+  for (size_t f = 0; f < pm.faces.size(); ++f) {
+    const Tri& t = pm.faces[f];
+    area[f] = 0.5 * (pm.positions[t[1]] - pm.positions[t[0]]).cross(pm.positions[t[2]] - pm.positions[t[0]]).norm();
+    total += area[f];
+  }
+  double smallest = std::numeric_limits<double>::infinity();
+  for (size_t f = 0; f < pm.faces.size(); ++f) {
+    if (!(area[f] > 0)) continue;
+    const Tri& t = pm.faces[f];
+    smallest = std::min(smallest, signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) * total / area[f]);
+  }
+  return smallest;
+}
 
 Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_ref, const registration::Pose& pose,
                            double reach, const NodeMapPuller& untangle, const Context& context, Param& p) {
@@ -223,6 +241,10 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     p.sp = std::move(*repaired);
     return Transfer::Taken;
   }
+  // Through a registration, an untangled own map squeezed to nothing somewhere gives way to the
+  // targets: the pull of a map that folds against them can crush faces to 10^-11 of their share
+  // of the square, and cuts through such a region run anywhere (kUntangledSqueeze).
+  if (!repaired && pose.registered() && smallest_area_share(pm, sp.uv) < kUntangledSqueeze) return as_targets();
   p.sp = std::move(sp);
   return repaired ? Transfer::Polished : Transfer::Untangled;
 }
