@@ -402,9 +402,8 @@ constexpr double kTransferSmallTangle = 0.01;
 constexpr int kTransferUntangleVertices = 10000;
 /// Through a registration, a node map untangled from the node's own map (Transfer::Untangled) with
 /// a face under this share of the square per share of the node's area gives way to the
-/// nearest-point (u, v) as they are (Transfer::Folded). Measured on a posed horse: such maps came
-/// at 10^-12 to 10^-7 and cut the children where nothing corresponds (19% of the diagonal off),
-/// the others at 4 x 10^-4 and above (docs/pose-pairs.md).
+/// nearest-point (u, v) as they are (Transfer::Folded): cuts through such a crushed region run
+/// where nothing corresponds (docs/pose-pairs.md, "An untangled map squeezed to nothing").
 constexpr double kUntangledSqueeze = 1e-6;
 /// The smallest ratio, over the faces of `pm` with a positive area, of a face's signed uv area to
 /// its share of the patch's area (1 everywhere for a map that keeps area ratios).

@@ -242,8 +242,8 @@ Transfer transfer_node_map(const Param& ref, const metro::SurfaceDistance& on_re
     return Transfer::Taken;
   }
   // Through a registration, an untangled own map squeezed to nothing somewhere gives way to the
-  // targets: the pull of a map that folds against them can crush faces to 10^-11 of their share
-  // of the square, and cuts through such a region run anywhere (kUntangledSqueeze).
+  // targets: the pull of a map that folds against them can crush faces, and cuts through such a
+  // region run anywhere (kUntangledSqueeze).
   if (!repaired && pose.registered() && smallest_area_share(pm, sp.uv) < kUntangledSqueeze) return as_targets();
   p.sp = std::move(sp);
   return repaired ? Transfer::Polished : Transfer::Untangled;
