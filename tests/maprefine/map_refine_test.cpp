@@ -782,6 +782,7 @@ TEST(PoseDistance, SeparatesOnePoseFromAFamily) {
   EXPECT_GT(found.same_pose_splits, 0);
   qs::dissect::DissectOptions shallow = o;
   shallow.max_depth = 0;
+  shallow.register_poses = false;  // the detection alone (the registration fits the moved limb)
   const auto limb_set = qs::dissect::dissect_set({in[0], posed}, shallow);
   EXPECT_FALSE(limb_set.same_pose_detected);
   EXPECT_EQ(limb_set.pose_distance_p99, d_limb->p99);

@@ -73,9 +73,10 @@ constexpr double kExtremityMatch = 0.05;
 // DissectOptions::register_poses: the first mesh registered onto every other one, when the set is
 // one surface in other poses (landmark_discrepancy within kIntrinsicLoopIsometry) and every
 // registration fits (kRegisteredFit, kRegisteredDistortion); nullopt otherwise. A registration that
-// does not fit is tried again with the tips of A's protrusions held too (matched_extremities). The
-// worst fit and distortion go to `fit` and `distortion` (-1 when nothing was registered), the most
-// points held in such a retry to `tips` (kept or not).
+// does not fit within kRegisteredTight is tried again with the tips of A's protrusions held too
+// (matched_extremities), the closer kept. The worst fit and distortion go to `fit` and
+// `distortion` (-1 when nothing was registered), the most points held to `tips`: in a kept
+// retry, or, when the set is not registered, in any retry.
 std::optional<std::vector<registration::Pose>> register_poses(const std::vector<MeshToDissect>& meshes,
                                                               const Context& context, double& fit,
                                                               double& distortion, int& tips) {
@@ -102,6 +103,7 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
   }
   std::vector<registration::Pose> poses(meshes.size());
   fit = distortion = 0;
+  int tried = 0;  // the most points held in a retry
   auto fits = [](const registration::Registration& r) {
     return r.p99_distance <= kRegisteredFit && r.distortion <= kRegisteredDistortion;
   };
@@ -112,8 +114,8 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
     try {
       r = registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, pairs, {}, context);
       // Limbs that the landmarks leave free can bend the wrong way: their tips, matched by
-      // geodesic coordinates, are held too.
-      if (!fits(r)) {
+      // geodesic coordinates, are held too, and the closer fit is kept.
+      if (r.p99_distance > kRegisteredTight || !fits(r)) {
         const auto matched =
             matched_extremities(*meshes[0].mesh, c[0], *meshes[i].mesh, c[i], kExtremities, kExtremityMatch);
         if (!matched.empty()) {
@@ -122,17 +124,24 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
             more.push_back({meshes[0].mesh->positions[p], meshes[i].mesh->positions[q]});
           registration::Registration again =
               registration::register_surface(*meshes[0].mesh, *meshes[i].mesh, more, {}, context);
-          tips = std::max(tips, static_cast<int>(matched.size()));
-          if (fits(again)) r = std::move(again);
+          tried = std::max(tried, static_cast<int>(matched.size()));
+          if (fits(again) && (!fits(r) || again.p99_distance < r.p99_distance)) {
+            r = std::move(again);
+            tips = std::max(tips, static_cast<int>(matched.size()));
+          }
         }
       }
     } catch (const InternalError& e) {  // a solve that failed: the set keeps the path of other poses
       context.info(std::string("registration: ") + e.what());
+      tips = tried;
       return std::nullopt;
     }
     fit = std::max(fit, r.p99_distance);
     distortion = std::max(distortion, r.distortion);
-    if (!fits(r)) return std::nullopt;
+    if (!fits(r)) {
+      tips = tried;
+      return std::nullopt;
+    }
     poses[i] = registration::Pose(*meshes[0].mesh, std::move(r));
     context.report("registration", static_cast<double>(i) / static_cast<double>(meshes.size() - 1));
   }

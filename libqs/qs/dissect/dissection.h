@@ -48,6 +48,10 @@ inline constexpr double kRegisteredFit = 0.01;
 /// ... and its distortion (symmetric Dirichlet / 4, 1: isometric) is at most this (pose pairs:
 /// 1.00-1.15; the examples' shapes onto each other: 1.17-6.7, and 3-8% apart).
 inline constexpr double kRegisteredDistortion = 1.25;
+/// A registration that fits but not within this fraction of the diagonal is tried again with more
+/// points held (the farthest from the landmarks), and the closer of the two kept: a free limb bent
+/// the wrong way can still fit within kRegisteredFit.
+inline constexpr double kRegisteredTight = 0.002;
 /// One pose also needs 99% of the area within this multiple of same_pose_detect: a shape whose
 /// limbs moved (a pose change) lies close on average but far at the limbs (docs/algorithms.md).
 inline constexpr double kSamePoseTail = 2.0;
@@ -340,9 +344,10 @@ struct DissectionSet {
   std::vector<registration::Pose> poses;
   double registration_fit = -1;
   double registration_distortion = -1;
-  /// Points held besides the landmarks in a second try of a registration that did not fit (the
-  /// first mesh's points farthest from them, the tips of its protrusions first, matched by
-  /// geodesic distances to the landmarks), kept or not: the most over the meshes; 0 when none.
+  /// Points held besides the landmarks in a second try of a registration that did not fit closely
+  /// (the first mesh's points farthest from them, the tips of its protrusions first, matched by
+  /// geodesic distances to the landmarks): the most over the kept tries, or, when the set is not
+  /// registered, over all tries; 0 when none.
   int registration_tips = 0;
   /// The seeds' cyclic order used (seed k of the result is seed seed_order[k] as given): the
   /// set's shortest loop (shortest_seed_order), and the three orders' loop lengths (0 when the

@@ -32,6 +32,27 @@ constexpr int kAndersonDepth = 5;
 /// be turned this far from the query's (cos).
 constexpr double kFacingCos = 0.3;
 
+/// The stages whose pull weight is at least this also pull A toward B's points (the cover): in
+/// the weaker stages the limbs bend as rigid parts and the cover would not change them.
+constexpr double kCoverFrom = 1e-2;
+
+/// B's points that pull A's nearest points (the pull the other way): with the pull toward B
+/// alone, A may slide off a protruding part of B (a muzzle, a fingertip) and leave it uncovered.
+struct Cover {
+  std::vector<Vec3> point, normal;
+  std::vector<double> area;  ///< each point's share of B's area, in all 1
+  explicit Cover(const TriMesh& b) : point(b.positions), normal(vertex_normals(b.positions, b.faces)) {
+    area.assign(point.size(), 0.0);
+    double total = 0;
+    for (const Tri& t : b.faces) {
+      const double ar = 0.5 * (point[t[1]] - point[t[0]]).cross(point[t[2]] - point[t[0]]).norm();
+      for (int v : t) area[v] += ar / 3;
+      total += ar;
+    }
+    for (double& ar : area) ar /= total;
+  }
+};
+
 template <class F>
 void for_blocks(int n, int threads, const Context& context, F&& body) {
   parallel_for((n + kBlock - 1) / kBlock, threads, context, [&](int b) {
@@ -65,6 +86,11 @@ Located locate(const TriMesh& mesh, const metro::SurfaceDistance& tree, const Ve
   if (c.face < 0) return {};
   const Tri& t = mesh.faces[c.face];
   return {c.face, landmarks::closest_on_triangle(x, mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]])};
+}
+
+/// The weights of the point of triangle t (corners in p) nearest to x.
+std::array<double, 3> closest_weights(const Tri& t, const Vec3& x, const std::vector<Vec3>& p) {
+  return landmarks::closest_on_triangle(x, p[t[0]], p[t[1]], p[t[2]]);
 }
 
 /// The vertex of a located point's face with the largest weight.
@@ -131,9 +157,18 @@ class Deformation {
   std::vector<Eigen::Quaterniond>& rotations() { return quat_; }
   const std::vector<Eigen::Matrix3d>& rotation_matrices() const { return rot_; }
 
-  /// One stage: pull weight mu, `iterations` local/global rounds from the current positions.
-  void stage(double mu, int iterations, const metro::SurfaceDistance& on_b) {
+  /// One stage: pull weight mu, `iterations` local/global rounds from the current positions. Each
+  /// vertex is pulled toward its nearest point of B (on_b) and, given a cover, toward the cover's
+  /// points whose nearest points of A lie on its faces, the two targets weighed by area.
+  void stage(double mu, int iterations, const metro::SurfaceDistance& on_b, const Cover* cover) {
     const int n = n_;
+    double total_area = 0;
+    for (double ar : area_) total_area += ar;
+    // Each cover point's nearest point of the moving A (face -1: none facing), found again each
+    // round (keeping them for a few rounds measured worse).
+    std::vector<Located> found(cover ? cover->point.size() : 0);
+    std::vector<Vec3> shift(n);
+    std::vector<double> share(n);
     // The system of this stage: rigidity + pull + holds (lower triangle).
     std::vector<Eigen::Triplet<double>> lower;
     lower.reserve(start_[n] + n + 9 * held_.size());
@@ -163,6 +198,26 @@ class Deformation {
     // Local step at x: each vertex's rotation, its pull's target, and the energy that the
     // global step lowers (with these rotations and targets).
     auto local = [&]() {
+      if (cover) {
+        const metro::SurfaceDistance on_x(TriMesh{x, faces_}, "the registered A");
+        for_blocks(static_cast<int>(found.size()), threads_, context_, [&](int j) {
+          const auto c = on_x.closest_facing(cover->point[j], cover->normal[j], kFacingCos);
+          found[j] = c.face < 0 ? Located{} : Located{c.face, closest_weights(faces_[c.face], cover->point[j], x)};
+        });
+      }
+      std::fill(shift.begin(), shift.end(), Vec3::Zero());
+      std::fill(share.begin(), share.end(), 0.0);
+      for (size_t j = 0; j < found.size(); ++j) {
+        if (found[j].face < 0) continue;
+        const Tri& t = faces_[found[j].face];
+        const auto& w = found[j].w;
+        const Vec3 at = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
+        const double ar = cover->area[j] * total_area;
+        for (int r = 0; r < 3; ++r) {
+          shift[t[r]] += ar * w[r] * (cover->point[j] - at);
+          share[t[r]] += ar * w[r];
+        }
+      }
       const std::vector<Vec3> normal = vertex_normals(x, faces_);
       for_blocks(n, threads_, context_, [&](int i) {
         Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
@@ -173,6 +228,10 @@ class Deformation {
         auto c = on_b.closest_facing(x[i], normal[i], kFacingCos, hint_[i]);
         if (c.face < 0) c = on_b.closest(x[i]);
         target_[i] = c.point;
+        if (share[i] > 0) {  // the cover's target, weighing at most as much as the nearest point's
+          const double w = std::min(share[i], area_[i]);
+          target_[i] = (area_[i] * target_[i] + w * (x[i] + shift[i] / share[i])) / (area_[i] + w);
+        }
         double e = 2 * pull * area_[i] * (x[i] - target_[i]).squaredNorm();
         for (int p = start_[i]; p < start_[i + 1]; ++p)
           e += weight_[p] * ((x[i] - x[nbr_[p]]) - rot_[i] * (rest_[i] - rest_[nbr_[p]])).squaredNorm();
@@ -298,17 +357,20 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
   // A large B: every stage but the last two pulls toward a coarser tessellation of B (the early
   // stages only bend the limbs into place; the nearest points on the fine B cost more).
   const bool coarse_b = options.coarse_faces > 0 && b.num_faces() > 2 * options.coarse_faces;
+  const TriMesh b_coarse = coarse_b ? mesh::simplify(b, options.coarse_faces) : TriMesh{};
   const std::optional<metro::SurfaceDistance> on_coarse_b =
-      coarse_b ? std::optional<metro::SurfaceDistance>(std::in_place, mesh::simplify(b, options.coarse_faces), "B")
-               : std::nullopt;
+      coarse_b ? std::optional<metro::SurfaceDistance>(std::in_place, b_coarse, "B") : std::nullopt;
+  const Cover cover(coarse_b ? b_coarse : b);
+  auto cover_in = [&](size_t stage) { return options.stages[stage] >= kCoverFrom ? &cover : nullptr; };
   auto pull_toward = [&](size_t stage) -> const metro::SurfaceDistance& {
     return on_coarse_b && stage + 2 < options.stages.size() ? *on_coarse_b : on_b;
   };
   Deformation fine(a, moved_by_similarity(a.positions), landmarks, options.threads, context);
   const std::vector<Vec3>& rest = fine.rest();
   // A large A: every stage but the last on a coarser tessellation of A, carried over to A for the
-  // last. The pull's weight against the rigidity grows with the vertex count (it is per unit area
-  // over the mean vertex area), so the coarse stages' weights are scaled by the count's ratio.
+  // last, which keeps the shape that the cover settled without the cover. The pull's weight
+  // against the rigidity grows with the vertex count (it is per unit area over the mean vertex
+  // area), so the coarse stages' weights are scaled by the count's ratio.
   size_t first_fine = 0;
   int last_iterations = options.iterations;
   if (options.coarse_faces > 0 && a.num_faces() > 2 * options.coarse_faces && options.stages.size() > 1) {
@@ -316,13 +378,14 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     Deformation coarse(coarse_a, moved_by_similarity(coarse_a.positions), landmarks, options.threads, context);
     const double ratio = static_cast<double>(n) / coarse_a.num_vertices();
     first_fine = options.stages.size() - 1;
-    for (size_t s = 0; s < first_fine; ++s) coarse.stage(options.stages[s] * ratio, options.iterations, pull_toward(s));
+    for (size_t s = 0; s < first_fine; ++s)
+      coarse.stage(options.stages[s] * ratio, options.iterations, pull_toward(s), cover_in(s));
     carry(coarse, TriMesh{coarse.rest(), coarse_a.faces}, fine);
     last_iterations = (options.iterations + 1) / 2;
   }
   for (size_t s = first_fine; s < options.stages.size(); ++s)
     fine.stage(options.stages[s], s + 1 == options.stages.size() ? last_iterations : options.iterations,
-               pull_toward(s));
+               pull_toward(s), first_fine > 0 ? nullptr : cover_in(s));
   const std::vector<Vec3>& x = fine.positions();
   const std::vector<Eigen::Matrix3d>& rot = fine.rotation_matrices();
 

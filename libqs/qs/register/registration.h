@@ -3,7 +3,9 @@
 // landmarks' similarity, then deformed as rigidly as possible (cotangent ARAP, Sorkine and Alexa
 // 2007) while its landmarks are held at B's and every vertex is pulled toward its nearest point of
 // B facing as it does, the pull growing from stage to stage (annealed non-rigid ICP, Amberg et al.
-// 2007); each stage's local/global rounds are Anderson-accelerated (Peng et al. 2018). A large A
+// 2007); in the stronger stages B's points also pull their nearest points of A, so that A covers
+// B's protruding parts instead of sliding off them. Each stage's local/global rounds are
+// Anderson-accelerated (Peng et al. 2018). A large A
 // runs the early stages on a coarser tessellation of itself, then the last on A. The registered A
 // lies on B; its vertices' nearest points of B are a map A -> B that a pose change
 // keeps (docs/pose-pairs.md). Pose maps through the registration: Pose.
