@@ -217,6 +217,31 @@ TEST(Metro, SurfaceDistanceMatchesBruteForce) {
   }
 }
 
+TEST(Metro, ARefitTreeAnswersAsAFreshOne) {
+  TriMesh m = qs::shapes::bumpy_sphere(0.3, 7, 3);
+  qs::metro::SurfaceDistance sd(m);
+  // A large, uneven move: every vertex twisted about z and stretched along x.
+  for (Vec3& p : m.positions) {
+    const double a = 1.2 * p.z();
+    p = Vec3(2.5 * (std::cos(a) * p.x() - std::sin(a) * p.y()), std::sin(a) * p.x() + std::cos(a) * p.y(), p.z());
+  }
+  sd.refit(m);
+  const qs::metro::SurfaceDistance fresh(m);
+  std::vector<int> hints(200, -1);
+  for (int round = 0; round < 2; ++round) {  // the second round starts from the first's hints
+    for (int i = 0; i < 200; ++i) {
+      const double t = 0.61 * i;
+      const Vec3 p(3 * std::cos(t) * std::sin(0.3 * i), 1.3 * std::sin(t), 1.3 * std::cos(0.7 * i));
+      EXPECT_NEAR(sd.closest(p).distance, brute_force_distance(m, p), 1e-12) << i;
+      const Vec3 facing(std::cos(t), std::sin(t), 0.5);
+      const auto a = sd.closest_facing(p, facing, 0.2, hints[static_cast<size_t>(i)]);
+      EXPECT_NEAR(a.distance, fresh.closest_facing(p, facing, 0.2).distance, 1e-12) << i;
+    }
+  }
+  const TriMesh other = qs::shapes::bumpy_sphere(0.3, 7, 2);
+  EXPECT_THROW(sd.refit(other), qs::InvalidInput);
+}
+
 TEST(Metro, ClosestFacingKeepsToTheQuerysSideOfAThinPart) {
   // A thin slab seen from inside its lower sheet: the upper sheet (facing down) is nearer, but
   // only the lower sheet faces up as the query's normal does.

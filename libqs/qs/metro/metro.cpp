@@ -200,22 +200,54 @@ struct SurfaceDistance::Impl {
     double lo[3], hi[3], c[3];
   };
 
+  /// Face f of `mesh` as a triangle: corners, unit normal, degeneracy.
+  static Triangle triangle(const TriMesh& mesh, size_t f) {
+    const Tri& t = mesh.faces[f];
+    Triangle tr;
+    tr.a = to_p3(mesh.positions[static_cast<size_t>(t[0])]);
+    tr.b = to_p3(mesh.positions[static_cast<size_t>(t[1])]);
+    tr.c = to_p3(mesh.positions[static_cast<size_t>(t[2])]);
+    tr.face = static_cast<int>(f);
+    const P3 ab = tr.b - tr.a, ac = tr.c - tr.a, n = cross(ab, ac);
+    // Relative test: |ab x ac| = |ab| |ac| sin(angle); below ~1e-10 of that the interior
+    // branch of the closest-point routine would divide by (almost) zero.
+    tr.degenerate = !(dot(n, n) > 1e-20 * dot(ab, ab) * dot(ac, ac));
+    tr.n = tr.degenerate ? P3{0, 0, 0} : (1 / std::sqrt(dot(n, n))) * n;
+    return tr;
+  }
+
+  /// The same faces at the positions of `mesh`: every triangle and box again, the tree kept.
+  void refit(const TriMesh& mesh) {
+    for (Triangle& tr : tris) tr = triangle(mesh, static_cast<size_t>(tr.face));
+    auto leaf_box = [&](int first, int count, float* lo, float* hi) {
+      double l[3], h[3];
+      for (int k = 0; k < 3; ++k) l[k] = std::numeric_limits<double>::infinity(), h[k] = -l[k];
+      for (int i = first; i < first + count; ++i) {
+        const Triangle& t = tris[static_cast<size_t>(i)];
+        const double cs[3][3] = {{t.a.x, t.b.x, t.c.x}, {t.a.y, t.b.y, t.c.y}, {t.a.z, t.b.z, t.c.z}};
+        for (int k = 0; k < 3; ++k)
+          l[k] = std::min({l[k], cs[k][0], cs[k][1], cs[k][2]}), h[k] = std::max({h[k], cs[k][0], cs[k][1], cs[k][2]});
+      }
+      for (int k = 0; k < 3; ++k) lo[k] = round_down(l[k]), hi[k] = round_up(h[k]);
+    };
+    // A parent's boxes from its children's: children come after their parent in `nodes`.
+    auto refit_child = [&](Node& parent, int c) {
+      if (parent.count[c] > 0) return leaf_box(parent.child[c], parent.count[c], parent.lo[c], parent.hi[c]);
+      const Node& n = nodes[static_cast<size_t>(parent.child[c])];
+      for (int k = 0; k < 3; ++k)
+        parent.lo[c][k] = std::min(n.lo[0][k], n.lo[1][k]), parent.hi[c][k] = std::max(n.hi[0][k], n.hi[1][k]);
+    };
+    for (size_t i = nodes.size(); i-- > 0;)
+      for (int c = 0; c < 2; ++c) refit_child(nodes[i], c);
+    refit_child(root, 0);
+  }
+
   void build(const TriMesh& mesh) {
     const size_t nf = mesh.faces.size();
     std::vector<Triangle> in(nf);
     std::vector<Prim> prims(nf);
     for (size_t f = 0; f < nf; ++f) {
-      const Tri& t = mesh.faces[f];
-      Triangle& tr = in[f];
-      tr.a = to_p3(mesh.positions[static_cast<size_t>(t[0])]);
-      tr.b = to_p3(mesh.positions[static_cast<size_t>(t[1])]);
-      tr.c = to_p3(mesh.positions[static_cast<size_t>(t[2])]);
-      tr.face = static_cast<int>(f);
-      const P3 ab = tr.b - tr.a, ac = tr.c - tr.a, n = cross(ab, ac);
-      // Relative test: |ab x ac| = |ab| |ac| sin(angle); below ~1e-10 of that the interior
-      // branch of the closest-point routine would divide by (almost) zero.
-      tr.degenerate = !(dot(n, n) > 1e-20 * dot(ab, ab) * dot(ac, ac));
-      tr.n = tr.degenerate ? P3{0, 0, 0} : (1 / std::sqrt(dot(n, n))) * n;
+      const Triangle& tr = in[f] = triangle(mesh, f);
       Prim& p = prims[f];
       const double xs[3] = {tr.a.x, tr.b.x, tr.c.x}, ys[3] = {tr.a.y, tr.b.y, tr.c.y},
                    zs[3] = {tr.a.z, tr.b.z, tr.c.z};
@@ -397,6 +429,13 @@ struct SurfaceDistance::Impl {
 SurfaceDistance::SurfaceDistance(const TriMesh& mesh, const char* name) : impl_(std::make_unique<Impl>()) {
   check_mesh(mesh, name);
   impl_->build(mesh);
+}
+void SurfaceDistance::refit(const TriMesh& mesh) {
+  if (mesh.faces.size() != impl_->tris.size())
+    throw InvalidInput("SurfaceDistance::refit: " + std::to_string(mesh.faces.size()) + " faces, the tree has " +
+                       std::to_string(impl_->tris.size()));
+  check_mesh(mesh, "the moved mesh");
+  impl_->refit(mesh);
 }
 SurfaceDistance::~SurfaceDistance() = default;
 SurfaceDistance::SurfaceDistance(SurfaceDistance&&) noexcept = default;

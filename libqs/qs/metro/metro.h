@@ -105,6 +105,10 @@ class SurfaceDistance {
   /// call to call; the same point, faster for a query near the last one's).
   Closest closest_facing(const Vec3& query, const Vec3& facing, double min_cos, int& hint) const;
   double distance(const Vec3& query) const { return closest(query).distance; }
+  /// The same faces moved to the positions of `mesh` (a deforming surface): the boxes are refit,
+  /// the tree kept, so queries stay exact (slower when the surface has moved far) and hints stay
+  /// valid. \throws InvalidInput for another face count or a bad position.
+  void refit(const TriMesh& mesh);
 
   struct Impl;  ///< implementation detail (metro() shares it)
 

@@ -199,9 +199,12 @@ class Deformation {
     // global step lowers (with these rotations and targets).
     auto local = [&]() {
       if (cover) {
-        const metro::SurfaceDistance on_x(TriMesh{x, faces_}, "the registered A");
+        const TriMesh moving{x, faces_};
+        if (on_x_) on_x_->refit(moving);
+        else on_x_.emplace(moving, "the registered A");
+        cover_hint_.resize(found.size(), -1);
         for_blocks(static_cast<int>(found.size()), threads_, context_, [&](int j) {
-          const auto c = on_x.closest_facing(cover->point[j], cover->normal[j], kFacingCos);
+          const auto c = on_x_->closest_facing(cover->point[j], cover->normal[j], kFacingCos, cover_hint_[j]);
           found[j] = c.face < 0 ? Located{} : Located{c.face, closest_weights(faces_[c.face], cover->point[j], x)};
         });
       }
@@ -301,6 +304,9 @@ class Deformation {
   std::vector<Eigen::Quaterniond> quat_;
   std::vector<int> hint_;
   std::vector<double> vertex_energy_;
+  /// The moving A's tree, refit every round of a stage with a cover, and each cover point's hint.
+  std::optional<metro::SurfaceDistance> on_x_;
+  std::vector<int> cover_hint_;
   param::SupernodalCholesky llt_;
   bool analyzed_ = false;
 };
