@@ -242,6 +242,24 @@ TEST(Metro, ARefitTreeAnswersAsAFreshOne) {
   EXPECT_THROW(sd.refit(other), qs::InvalidInput);
 }
 
+TEST(Metro, ATreeBuiltOnSeveralThreadsIsTheSameTree) {
+  // 81,920 faces: over the size from which the build splits its subtrees over threads.
+  const TriMesh m = qs::shapes::bumpy_sphere(0.2, 5, 6);
+  ASSERT_GE(m.num_faces(), 40000);
+  const qs::metro::SurfaceDistance one(m, "mesh", 1), four(m, "mesh", 4);
+  for (int i = 0; i < 500; ++i) {
+    const double t = 0.37 * i;
+    const Vec3 p(1.4 * std::cos(t) * std::sin(0.21 * i), 1.4 * std::sin(t), 1.4 * std::cos(0.53 * i));
+    const auto a = one.closest(p), b = four.closest(p);
+    EXPECT_EQ(a.face, b.face) << i;
+    EXPECT_EQ(a.distance, b.distance) << i;
+    EXPECT_EQ(a.point, b.point) << i;
+    const Vec3 facing(std::sin(t), 0.3, std::cos(t));
+    EXPECT_EQ(one.closest_facing(p, facing, 0.1).face, four.closest_facing(p, facing, 0.1).face) << i;
+  }
+  EXPECT_NEAR(one.distance(Vec3(0.1, 0.2, 0.3)), brute_force_distance(m, Vec3(0.1, 0.2, 0.3)), 1e-12);
+}
+
 TEST(Metro, ClosestFacingKeepsToTheQuerysSideOfAThinPart) {
   // A thin slab seen from inside its lower sheet: the upper sheet (facing down) is nearer, but
   // only the lower sheet faces up as the query's normal does.

@@ -142,7 +142,7 @@ std::optional<std::vector<registration::Pose>> register_poses(const std::vector<
       tips = tried;
       return std::nullopt;
     }
-    poses[i] = registration::Pose(*meshes[0].mesh, std::move(r));
+    poses[i] = registration::Pose(*meshes[0].mesh, std::move(r), thread_count(0, context));
     context.report("registration", static_cast<double>(i) / static_cast<double>(meshes.size() - 1));
   }
   return poses;
@@ -287,7 +287,7 @@ std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& mesh
   if (meshes.size() < 2) return std::nullopt;
   const auto first = landmark_positions(meshes[0]);
   if (first.empty()) return std::nullopt;
-  const metro::SurfaceDistance to_first(*meshes[0].mesh, "the first mesh");
+  const metro::SurfaceDistance to_first(*meshes[0].mesh, "the first mesh", thread_count(0, context));
   PoseDistance worst;
   for (size_t i = 1; i < meshes.size(); ++i) {
     const auto mine = landmark_positions(meshes[i]);
@@ -302,7 +302,7 @@ std::optional<PoseDistance> pose_distance(const std::vector<MeshToDissect>& mesh
     const Eigen::Matrix4d pose = fit_similarity(from, to);
     TriMesh moved = *meshes[i].mesh;
     for (auto& x : moved.positions) x = (pose * x.homogeneous()).head<3>();
-    const metro::SurfaceDistance to_moved(moved, "a moved mesh");
+    const metro::SurfaceDistance to_moved(moved, "a moved mesh", thread_count(0, context));
     const metro::VertexDistance d = metro::vertex_distance(moved, to_moved, *meshes[0].mesh, to_first, 0.99, context);
     worst.mean = std::max(worst.mean, d.mean);
     worst.p99 = std::max(worst.p99, d.quantile);

@@ -674,7 +674,7 @@ DissectionSet SetDissector::run() {
       // cut where mesh 0 is cut (see transfer_node_map).
       if (opt_.same_pose && opt_.same_pose_maps && nm > 1) {
         const TriMesh ref_mesh{ps[0].ex.pm.positions, ps[0].ex.pm.faces};
-        const metro::SurfaceDistance on_ref(ref_mesh, "the first mesh's node");
+        const metro::SurfaceDistance on_ref(ref_mesh, "the first mesh's node", thread_count(0, ctx_));
         std::vector<Transfer> taken(nm, Transfer::Own);
         Context quiet = ctx_.without_progress();
         quiet.log = nullptr;

@@ -155,6 +155,8 @@ struct alignas(64) Node {
 };
 
 constexpr int kLeafSize = 4;
+/// Meshes of at least this many faces build their tree on several threads.
+constexpr size_t kParallelBuildFaces = 20000;
 constexpr int kMaxSahDepth = 40;  ///< deeper, median splits: the depth stays below 40 + 32
 
 inline float round_down(double x) {
@@ -242,34 +244,49 @@ struct SurfaceDistance::Impl {
     refit_child(root, 0);
   }
 
-  void build(const TriMesh& mesh) {
+  /// `threads`: the build's (0: all hardware threads); the same tree on any count.
+  void build(const TriMesh& mesh, int threads) {
     const size_t nf = mesh.faces.size();
+    const int count = nf < kParallelBuildFaces || inside_parallel_loop() ? 1 : thread_count(threads, Context{});
     std::vector<Triangle> in(nf);
     std::vector<Prim> prims(nf);
-    for (size_t f = 0; f < nf; ++f) {
-      const Triangle& tr = in[f] = triangle(mesh, f);
-      Prim& p = prims[f];
-      const double xs[3] = {tr.a.x, tr.b.x, tr.c.x}, ys[3] = {tr.a.y, tr.b.y, tr.c.y},
-                   zs[3] = {tr.a.z, tr.b.z, tr.c.z};
-      const double* cs[3] = {xs, ys, zs};
-      for (int k = 0; k < 3; ++k) {
-        p.lo[k] = std::min({cs[k][0], cs[k][1], cs[k][2]});
-        p.hi[k] = std::max({cs[k][0], cs[k][1], cs[k][2]});
-        p.c[k] = 0.5 * (p.lo[k] + p.hi[k]);
-      }
-    }
+    const int chunks = count > 1 ? 4 * count : 1;
+    Context threads_only;
+    threads_only.threads = count;
+    parallel_for(chunks, count, threads_only, [&](int k) {
+      for (size_t f = nf * static_cast<size_t>(k) / chunks; f < nf * static_cast<size_t>(k + 1) / chunks; ++f)
+        prim(mesh, f, in[f], prims[f]);
+    });
     std::vector<int> order(nf), scratch(nf);
     for (size_t i = 0; i < nf; ++i) order[i] = static_cast<int>(i);
     nodes.clear();
     nodes.reserve(nf / 2 + 8);
-    build_node(prims, order, scratch, 0, static_cast<int>(nf), 0, root, 0);
+    // Subtrees down to this depth are built at once, 2^depth of them on `count` threads.
+    int fork_depth = 0;
+    while ((1 << fork_depth) < count) ++fork_depth;
+    build_node(prims, order, scratch, 0, static_cast<int>(nf), 0, root, 0, nodes, fork_depth);
     tris.resize(nf);
     for (size_t i = 0; i < nf; ++i) tris[i] = in[static_cast<size_t>(order[i])];
   }
 
-  /// Builds the subtree over order[begin, end) and records it as child `slot` of `parent`.
+  /// Face f as a triangle and its box and centre.
+  static void prim(const TriMesh& mesh, size_t f, Triangle& tr, Prim& p) {
+    tr = triangle(mesh, f);
+    const double xs[3] = {tr.a.x, tr.b.x, tr.c.x}, ys[3] = {tr.a.y, tr.b.y, tr.c.y},
+                 zs[3] = {tr.a.z, tr.b.z, tr.c.z};
+    const double* cs[3] = {xs, ys, zs};
+    for (int k = 0; k < 3; ++k) {
+      p.lo[k] = std::min({cs[k][0], cs[k][1], cs[k][2]});
+      p.hi[k] = std::max({cs[k][0], cs[k][1], cs[k][2]});
+      p.c[k] = 0.5 * (p.lo[k] + p.hi[k]);
+    }
+  }
+
+  /// Builds the subtree over order[begin, end) into `out` (depth first) and records it as child
+  /// `slot` of `parent`. Above `fork` levels the two children are built at once, the second into
+  /// a vector of its own appended after the first's: the same nodes in the same order.
   void build_node(const std::vector<Prim>& prims, std::vector<int>& order, std::vector<int>& scratch,
-                  int begin, int end, int depth, Node& parent, int slot) {
+                  int begin, int end, int depth, Node& parent, int slot, std::vector<Node>& out, int fork) {
     double lo[3], hi[3], clo[3], chi[3];
     for (int k = 0; k < 3; ++k) {
       lo[k] = clo[k] = std::numeric_limits<double>::infinity();
@@ -290,16 +307,33 @@ struct SurfaceDistance::Impl {
       parent.count[slot] = end - begin;
       return;
     }
-    const int index = static_cast<int>(nodes.size());
+    const int index = static_cast<int>(out.size());
     parent.child[slot] = index;
     parent.count[slot] = 0;
-    nodes.emplace_back();  // filled in below, once both children are known
+    out.emplace_back();  // filled in below, once both children are known
     const int mid = depth < kMaxSahDepth ? split(prims, order, scratch, begin, end, clo, chi)
                                          : median_split(prims, order, begin, end, clo, chi);
     Node node;
-    build_node(prims, order, scratch, begin, mid, depth + 1, node, 0);
-    build_node(prims, order, scratch, mid, end, depth + 1, node, 1);
-    nodes[static_cast<size_t>(index)] = node;
+    if (fork <= 0) {
+      build_node(prims, order, scratch, begin, mid, depth + 1, node, 0, out, 0);
+      build_node(prims, order, scratch, mid, end, depth + 1, node, 1, out, 0);
+      out[static_cast<size_t>(index)] = node;
+      return;
+    }
+    std::vector<Node> second;
+    Context two;
+    two.threads = 2;
+    parallel_for(2, 2, two, [&](int c) {
+      build_node(prims, order, scratch, c ? mid : begin, c ? end : mid, depth + 1, node, c, c ? second : out, fork - 1);
+    });
+    // The second subtree's node indices follow the first's.
+    const int offset = static_cast<int>(out.size());
+    for (Node& n : second)
+      for (int c = 0; c < 2; ++c)
+        if (n.count[c] == 0) n.child[c] += offset;
+    if (node.count[1] == 0) node.child[1] += offset;
+    out.insert(out.end(), second.begin(), second.end());
+    out[static_cast<size_t>(index)] = node;
   }
 
   /// Halves order[begin, end) at the median box centre along the longest axis of the centres.
@@ -374,14 +408,14 @@ struct SurfaceDistance::Impl {
       std::sort(order.begin() + begin, order.begin() + end);
       return begin + (end - begin) / 2;
     }
-    // Stable partition through the scratch buffer.
-    int left = begin, right = 0;
+    // Stable partition through the scratch buffer (its own range: subtrees may be built at once).
+    int left = begin, right = begin;
     for (int i = begin; i < end; ++i) {
       const int f = order[static_cast<size_t>(i)];
       if (bin_of(prims[static_cast<size_t>(f)], best_axis) < best_bin) order[static_cast<size_t>(left++)] = f;
       else scratch[static_cast<size_t>(right++)] = f;
     }
-    std::copy(scratch.begin(), scratch.begin() + right, order.begin() + left);
+    std::copy(scratch.begin() + begin, scratch.begin() + right, order.begin() + left);
     return left;
   }
 
@@ -426,9 +460,10 @@ struct SurfaceDistance::Impl {
   }
 };
 
-SurfaceDistance::SurfaceDistance(const TriMesh& mesh, const char* name) : impl_(std::make_unique<Impl>()) {
+SurfaceDistance::SurfaceDistance(const TriMesh& mesh, const char* name, int threads)
+    : impl_(std::make_unique<Impl>()) {
   check_mesh(mesh, name);
-  impl_->build(mesh);
+  impl_->build(mesh, threads);
 }
 void SurfaceDistance::refit(const TriMesh& mesh) {
   if (mesh.faces.size() != impl_->tris.size())
@@ -616,7 +651,8 @@ MetroResult metro(const TriMesh& a, const TriMesh& b, const MetroOptions& option
   }
   // The two trees are independent: build them side by side.
   SurfaceDistance::Impl tree_a, tree_b;
-  parallel_for(2, options.threads, ctx, [&](int i) { i == 0 ? tree_a.build(a) : tree_b.build(b); });
+  const int threads = thread_count(options.threads, ctx);
+  parallel_for(2, options.threads, ctx, [&](int i) { i == 0 ? tree_a.build(a, threads) : tree_b.build(b, threads); });
 
   MetroResult res;
   const std::uint64_t seed = splitmix64(options.seed);

@@ -85,7 +85,8 @@ MetroResult metro(const TriMesh& a, const TriMesh& b, const MetroOptions& option
 /// \throws InvalidInput when a precondition fails (messages name the mesh as `name`).
 class SurfaceDistance {
  public:
-  explicit SurfaceDistance(const TriMesh& mesh, const char* name = "mesh");
+  /// `threads`: the build's for a large mesh (0: all hardware threads); the same tree on any count.
+  explicit SurfaceDistance(const TriMesh& mesh, const char* name = "mesh", int threads = 1);
   ~SurfaceDistance();
   SurfaceDistance(SurfaceDistance&&) noexcept;
   SurfaceDistance& operator=(SurfaceDistance&&) noexcept;

@@ -138,7 +138,7 @@ class Deformation {
       for (int p = start_[i]; p < start_[i + 1]; ++p) mean_weight_ += weight_[p] / n;
     }
     // The landmarks held at B's points: A's point of each, as a face and weights.
-    const metro::SurfaceDistance on_a(original, "A");
+    const metro::SurfaceDistance on_a(original, "A", thread_count(threads_, context_));
     for (const LandmarkPair& l : landmarks) {
       const Located at = locate(original, on_a, l.on_a);
       if (at.face >= 0) held_.push_back({faces_[at.face], at.w, l.on_b});
@@ -201,7 +201,7 @@ class Deformation {
       if (cover) {
         const TriMesh moving{x, faces_};
         if (on_x_) on_x_->refit(moving);
-        else on_x_.emplace(moving, "the registered A");
+        else on_x_.emplace(moving, "the registered A", thread_count(threads_, context_));
         cover_hint_.resize(found.size(), -1);
         for_blocks(static_cast<int>(found.size()), threads_, context_, [&](int j) {
           const auto c = on_x_->closest_facing(cover->point[j], cover->normal[j], kFacingCos, cover_hint_[j]);
@@ -359,13 +359,14 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
     return out;
   };
 
-  const metro::SurfaceDistance on_b(b, "B");
+  const int threads = thread_count(options.threads, context);
+  const metro::SurfaceDistance on_b(b, "B", threads);
   // A large B: every stage but the last two pulls toward a coarser tessellation of B (the early
   // stages only bend the limbs into place; the nearest points on the fine B cost more).
   const bool coarse_b = options.coarse_faces > 0 && b.num_faces() > 2 * options.coarse_faces;
   const TriMesh b_coarse = coarse_b ? mesh::simplify(b, options.coarse_faces) : TriMesh{};
   const std::optional<metro::SurfaceDistance> on_coarse_b =
-      coarse_b ? std::optional<metro::SurfaceDistance>(std::in_place, b_coarse, "B") : std::nullopt;
+      coarse_b ? std::optional<metro::SurfaceDistance>(std::in_place, b_coarse, "B", threads) : std::nullopt;
   const Cover cover(coarse_b ? b_coarse : b);
   auto cover_in = [&](size_t stage) { return options.stages[stage] >= kCoverFrom ? &cover : nullptr; };
   auto pull_toward = [&](size_t stage) -> const metro::SurfaceDistance& {
@@ -403,7 +404,7 @@ Registration register_surface(const TriMesh& a, const TriMesh& b, const std::vec
   for (int i = 0; i < n; ++i) out.turn[i] = rot[i] * turn0;
   // Fit: both ways.
   const TriMesh moved{x, a.faces};
-  const metro::SurfaceDistance on_moved(moved, "the registered A");
+  const metro::SurfaceDistance on_moved(moved, "the registered A", threads);
   Context measure = context.without_progress();
   if (options.threads > 0) measure.threads = options.threads;
   const metro::VertexDistance fit = metro::vertex_distance(moved, on_moved, b, on_b, 0.99, measure);
@@ -463,13 +464,13 @@ Pose Pose::from_inverse(const Eigen::Matrix4d& inverse) {
   return out;
 }
 
-Pose::Pose(const TriMesh& a, Registration registration) {
+Pose::Pose(const TriMesh& a, Registration registration, int threads) {
   auto impl = std::make_shared<Impl>();
   impl->a = a;
   impl->moved = TriMesh{std::move(registration.positions), a.faces};
   impl->turns = std::move(registration.turn);
-  impl->on_a.emplace(*impl->a, "A");
-  impl->on_moved.emplace(*impl->moved, "the registered A");
+  impl->on_a.emplace(*impl->a, "A", threads);
+  impl->on_moved.emplace(*impl->moved, "the registered A", threads);
   impl_ = std::move(impl);
 }
 

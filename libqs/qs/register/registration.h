@@ -72,8 +72,9 @@ class Pose {
   explicit Pose(const Eigen::Matrix4d& similarity);
   /// The similarity whose inverse (B -> A) is given.
   static Pose from_inverse(const Eigen::Matrix4d& inverse);
-  /// A registration of `a` onto a mesh (register_surface).
-  Pose(const TriMesh& a, Registration registration);
+  /// A registration of `a` onto a mesh (register_surface); `threads` build its trees (0: all
+  /// hardware threads).
+  Pose(const TriMesh& a, Registration registration, int threads = 1);
 
   bool registered() const;
   Vec3 forward(const Vec3& x) const;
