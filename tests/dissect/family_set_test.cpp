@@ -82,26 +82,23 @@ INSTANTIATE_TEST_SUITE_P(Families, FamilySet,
                                   std::to_string(std::get<1>(info.param));
                          });
 
-TEST(FamilySetRefinement, AFoldedLeafIsRefinedAndEndsBijective) {
-  // With the old maps (edge seed paths, mean-value weights), seed 1's first four shapes have leaves
-  // that stay folded after the alignment and the repair; refining the region of their folds makes
-  // them bijective. (With the default maps none of the pairs shape 0 + shape 1..4 of seeds 1-6, nor
-  // the families of 8 and 16 of seeds 1-3, needs a refinement any more: the warp's edges are cut
-  // into the patch first, see feature_alignment.cpp.)
+TEST(FamilySetSplit, ASplitWhoseCutsCrossIsTriedAgainAndEveryLeafEndsBijective) {
+  // With the old maps (edge seed paths, mean-value weights), seed 1's first four shapes have a
+  // node whose split's cuts cross where they pass through vertices near them; the split is tried
+  // again with cuts kept on their segments (before, the node's patch was refined and split again).
   const Generated& g = family_of(1);
   qs::dissect::DissectOptions old_maps;
   old_maps.geodesic_seed_curves = false;
   old_maps.intrinsic_cotan = false;
-  old_maps.intrinsic_loops = false;  // the loops that lead to those folds: each shape's own
+  old_maps.intrinsic_loops = false;  // the loops that lead to that node: each shape's own
   const std::vector<qs::dissect::MeshToDissect> set(g.set.begin(), g.set.begin() + 4);
   const qs::dissect::DissectionSet s = qs::dissect::dissect_set(set, old_maps);
-  int refined = 0;
-  for (const auto& n : s.tree)
-    for (int f : n.refined_faces) refined += f;
-  EXPECT_GT(refined, 0) << "the test should exercise local refinement";
+  EXPECT_GT(s.retried_splits, 0) << "the test should exercise a split tried again";
+  for (const auto& d : s.meshes)
+    for (const auto& p : d.chart.patches) EXPECT_NE(p.stop, qs::dissect::StopReason::SplitFailed) << p.name;
   expect_exact_common_structure(s);
-  // The refinement only resamples the surface: every chart vertex lies on its input mesh's
-  // surface, so the total area is unchanged.
+  // The cuts only resample the surface: every chart vertex lies on its input mesh's surface, so
+  // the total area is unchanged.
   for (size_t i = 0; i < set.size(); ++i) {
     double a_in = 0, a_chart = 0;
     for (int f = 0; f < g.set[i].mesh->num_faces(); ++f) a_in += qs::face_area(*g.set[i].mesh, f);

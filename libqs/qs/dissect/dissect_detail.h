@@ -85,6 +85,12 @@ enum Flag : char { kFree = 0, kBoundary = 1, kOnPath = 2, kCorner = 3, kFeature 
 constexpr size_t kParallelFaces = 8000;
 /// Stretch-minimization rounds tried on a leaf left over tau or not bijective.
 constexpr int kRepairRounds = 12;
+// A quinary split's cut passes through a free vertex when it crosses an edge this near it (in edge
+// parameter): no sliver is cut into the surface, and the cut moves off its segment by that little.
+constexpr double kSplitSnap = 0.05;
+// Where such detours make two cuts cross (a patch squeezed in (u, v): its edges long across a cut),
+// the split is tried once more with this snap before it fails.
+constexpr double kSplitRetrySnap = 0.002;
 
 // The per-node result of one mesh: its patch extracted and parameterized (after alignment).
 struct Param {
@@ -145,11 +151,14 @@ class MeshDissector {
   /// p's map stretch-minimized (kRepairRounds, p's weights), kept when it folds less, or, both
   /// bijective, when it is less stretched.
   void spread(Param& p) const;
-  std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w);
+  /// `snap`: a cut's crossing this near a free vertex (in edge parameter) passes through it.
+  std::array<Node, 5> split(const Node& node, const Param& p, const Vec2& peak_uv, double w,
+                            double snap = kSplitSnap);
   /// The same split with its four inner corners given (counter-clockwise from the one of corner
   /// 0): DissectOptions::same_pose places them per mesh. \pre a convex quad whose 8 cuts cross
   /// nowhere (inner_quad_ok).
-  std::array<Node, 5> split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner);
+  std::array<Node, 5> split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner,
+                            double snap = kSplitSnap);
 
   /// Puts a node's faces back after a failed split (in any mesh of the set).
   void restore(const Node& node, size_t first_new_label);
@@ -251,7 +260,7 @@ class MeshDissector {
   std::vector<char> flag_;                     // scratch: Flag of the patch being split
   std::vector<std::array<Vec2, 3>> face_uv_;   // leaves' wedge uv, by global face
   std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
-  double snap_ = 0.05;  // trace: a crossing this near a free vertex (in edge parameter) passes through it
+  double snap_ = kSplitSnap;  // trace: a crossing this near a free vertex (in edge parameter) passes through it
   bool project_ = false;  // trace: ... and that vertex's uv moves onto the segment (cut_segments)
   std::vector<Node> leaves_;
   std::vector<PatchInfo> infos_;

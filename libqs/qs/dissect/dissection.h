@@ -306,6 +306,9 @@ struct DissectionSet {
   /// splits that kept the common (u, v) (no posed quad, or the split failed with it).
   int same_pose_splits = 0;
   int same_pose_common = 0;
+  /// Splits that succeeded only when tried again with cuts that keep to their segments (the first
+  /// try's cuts, passing through vertices near them, crossed: a patch squeezed in (u, v)).
+  int retried_splits = 0;
   int same_pose_loops = 0;  ///< meshes but the first whose seed loop follows the first's by pose
   /// DissectOptions::same_pose_maps: node maps (of meshes but the first, before a split) taken
   /// over from the first mesh's; of those, the ones left folded (no bijective map near the

@@ -126,11 +126,18 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
   return path;
 }
 
-std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const Vec2& peak_uv, double w) {
-  return split(node, p, inner_corners(peak_uv, w));
+std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const Vec2& peak_uv, double w,
+                                         double snap) {
+  return split(node, p, inner_corners(peak_uv, w), snap);
 }
 
-std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner) {
+std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner,
+                                         double snap) {
+  struct Snap {
+    double& value;
+    ~Snap() { value = kSplitSnap; }
+  } restore_snap{snap_};
+  snap_ = snap;
   const Extracted& ex = p.ex;
   const int nv = static_cast<int>(ex.verts.size());
   for (int i = 0; i < nv; ++i) {
@@ -228,7 +235,7 @@ void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<s
   } catch (const SplitFailure& e) {
     failure = e.what();
   }
-  snap_ = 0.05;
+  snap_ = kSplitSnap;
   project_ = false;
   cut_edges_.clear();
   // The same map on the refined patch: new vertices got their uv on the split edges.

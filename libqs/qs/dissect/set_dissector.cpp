@@ -707,11 +707,11 @@ DissectionSet SetDissector::run() {
       }
       Vec2 common_peak = peak;
       double common_w = w;
-      auto split_all = [&](bool use_posed) {
+      auto split_all = [&](bool use_posed, double snap) {
         parallel_for(meshes_.size(), node_faces >= kParallelFaces ? 0 : 1, ctx_, [&](size_t i) {
           try {
-            kids[i] = use_posed ? meshes_[i].split(nodes[i], ps[i], posed[i])
-                                : meshes_[i].split(nodes[i], ps[i], common_peak, common_w);
+            kids[i] = use_posed ? meshes_[i].split(nodes[i], ps[i], posed[i], snap)
+                                : meshes_[i].split(nodes[i], ps[i], common_peak, common_w, snap);
           } catch (const SplitFailure& e) {
             throw SplitFailure(meshes_.size() > 1 ? meshes_[i].name() + ": " + e.what() : std::string(e.what()));
           }
@@ -727,7 +727,7 @@ DissectionSet SetDissector::run() {
         bool done = false;
         if (!posed.empty()) {
           try {
-            split_all(true);
+            split_all(true, kSplitSnap);
             done = true;
             tn.posed = true;
             ++out.same_pose_splits;
@@ -743,7 +743,22 @@ DissectionSet SetDissector::run() {
             std::tie(common_peak, common_w) = choose_split(node, ps, tn, over);
           }
         }
-        if (!done) split_all(false);
+        if (!done) {
+          try {
+            split_all(false, kSplitSnap);
+          } catch (const SplitFailure&) {
+            // Cuts that crossed where they passed through vertices near them: once more, the
+            // node parameterized again as after the posed attempt, with (almost) no such detours.
+            for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
+            tn = TreeNode{};
+            tn.name = node.name;
+            tn.depth = node.depth;
+            ps = evaluate(nodes, tn);
+            std::tie(common_peak, common_w) = choose_split(node, ps, tn, over);
+            split_all(false, kSplitRetrySnap);
+            ++out.retried_splits;
+          }
+        }
       } catch (const SplitFailure& e) {
         for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
         tn = TreeNode{};

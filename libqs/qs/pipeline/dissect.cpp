@@ -325,6 +325,9 @@ DissectResult dissect(const std::vector<Input>& inputs, const DissectConfig& con
                                           : "")
            << "\n";
   }
+  if (sets.retried_splits > 0)
+    text << "splits tried again with cuts kept on their segments (the first cuts crossed): " << sets.retried_splits
+         << "\n";
   if (one_pose && inputs.size() > 1) {
     if (sets.same_pose_fallback.empty())
       text << "same pose: " << sets.same_pose_loops << " of " << inputs.size() - 1 << " seed loops routed by pose, "
