@@ -244,7 +244,9 @@ class MeshDissector {
     std::sort(p.features.begin(), p.features.end());
   }
   int insert_point(int label, const Vec2& q, bool snap);
-  std::vector<int> trace(int label, int a, int b);
+  /// `snap`: a crossing this near a free vertex (in edge parameter) passes through it; `project`:
+  /// and that vertex's uv moves onto the segment.
+  std::vector<int> trace(int label, int a, int b, double snap, bool project);
   void project_onto_segment(int label, int v, const Vec2& q);
 
   const TriMesh& mesh_;  // the input, before any cut
@@ -260,8 +262,6 @@ class MeshDissector {
   std::vector<char> flag_;                     // scratch: Flag of the patch being split
   std::vector<std::array<Vec2, 3>> face_uv_;   // leaves' wedge uv, by global face
   std::unordered_set<std::uint64_t> cut_edges_;  // edges of the cuts of the split under way
-  double snap_ = kSplitSnap;  // trace: a crossing this near a free vertex (in edge parameter) passes through it
-  bool project_ = false;  // trace: ... and that vertex's uv moves onto the segment (cut_segments)
   std::vector<Node> leaves_;
   std::vector<PatchInfo> infos_;
   struct Repair {

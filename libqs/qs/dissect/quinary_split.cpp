@@ -64,8 +64,8 @@ void MeshDissector::project_onto_segment(int label, int v, const Vec2& q) {
 
 // Cuts the straight parameter-domain segment from vertex a to vertex b into the mesh: walks from
 // vertex to vertex, splitting each crossed edge (or passing through a free vertex when the
-// crossing is within 5% of it). Returns the path's vertices, a and b included.
-std::vector<int> MeshDissector::trace(int label, int a, int b) {
+// crossing is within `snap` of it). Returns the path's vertices, a and b included.
+std::vector<int> MeshDissector::trace(int label, int a, int b, double snap, bool project) {
   std::vector<int> path = {a};
   const Vec2 target = uv_of_[b];
   const size_t limit = 4 * patch_faces_[label].size() + 16;
@@ -104,12 +104,12 @@ std::vector<int> MeshDissector::trace(int label, int a, int b) {
       if (!std::isfinite(t)) throw SplitFailure("a cut met a degenerate parameter triangle");
       const double s = cross2(ux - p, e) / cross2(d, e);
       if (s >= 1.0) throw SplitFailure("a cut missed its end vertex");
-      if (t < snap_ && flag_[x] == kFree) {
+      if (t < snap && flag_[x] == kFree) {
         next = x;
-        if (project_) project_onto_segment(label, x, ux + t * e);
-      } else if (t > 1 - snap_ && flag_[y] == kFree) {
+        if (project) project_onto_segment(label, x, ux + t * e);
+      } else if (t > 1 - snap && flag_[y] == kFree) {
         next = y;
-        if (project_) project_onto_segment(label, y, ux + t * e);
+        if (project) project_onto_segment(label, y, ux + t * e);
       } else {
         const int hxy = CutMesh::next(best_h);
         if (!interior_edge(hxy, label)) throw SplitFailure("a cut crossed its patch's boundary");
@@ -133,11 +133,6 @@ std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const
 
 std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const std::array<Vec2, 4>& inner,
                                          double snap) {
-  struct Snap {
-    double& value;
-    ~Snap() { value = kSplitSnap; }
-  } restore_snap{snap_};
-  snap_ = snap;
   const Extracted& ex = p.ex;
   const int nv = static_cast<int>(ex.verts.size());
   for (int i = 0; i < nv; ++i) {
@@ -161,8 +156,8 @@ std::array<Node, 5> MeshDissector::split(const Node& node, const Param& p, const
     for (int j = 0; j < i; ++j)
       if (c[i + 4] == c[j + 4]) throw SplitFailure("two inner corners fell on one vertex");
   std::vector<std::vector<int>> paths;
-  for (int i = 0; i < 4; ++i) paths.push_back(trace(node.label, c[i], c[i + 4]));
-  for (int i = 0; i < 4; ++i) paths.push_back(trace(node.label, c[i + 4], c[(i + 1) % 4 + 4]));
+  for (int i = 0; i < 4; ++i) paths.push_back(trace(node.label, c[i], c[i + 4], snap, false));
+  for (int i = 0; i < 4; ++i) paths.push_back(trace(node.label, c[i + 4], c[(i + 1) % 4 + 4], snap, false));
 
   // Flood the parent's faces into the 5 regions the cuts bound.
   std::vector<char> cut(3 * cm_.num_faces(), 0);
@@ -227,16 +222,12 @@ void MeshDissector::cut_segments(const Node& node, Param& p, const std::vector<s
   // A crossing within 2% of an edge's length of a free vertex passes through it: the segment moves
   // by that little, and no sliver is cut into the surface (a split 1e-6 from a vertex makes 3D
   // slivers that fold later mean-value maps, and midpoint refinement keeps their shape).
-  snap_ = kSegmentSnap;
-  project_ = true;
   std::string failure;
   try {
-    for (const auto& s : global) trace(node.label, s[0], s[1]);
+    for (const auto& s : global) trace(node.label, s[0], s[1], kSegmentSnap, true);
   } catch (const SplitFailure& e) {
     failure = e.what();
   }
-  snap_ = kSplitSnap;
-  project_ = false;
   cut_edges_.clear();
   // The same map on the refined patch: new vertices got their uv on the split edges.
   Param q;

@@ -723,6 +723,15 @@ DissectionSet SetDissector::run() {
             if (meshes_[i].feature_label(k) != meshes_[0].feature_label(k))
               throw SplitFailure("feature '" + feature_names_[k] + "' would land in different children (a folded map)");
       };
+      // After a failed attempt (which cut the meshes: new vertices), the node is put back and
+      // parameterized again.
+      auto start_over = [&]() {
+        for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
+        tn = TreeNode{};
+        tn.name = node.name;
+        tn.depth = node.depth;
+        ps = evaluate(nodes, tn);
+      };
       try {
         bool done = false;
         if (!posed.empty()) {
@@ -732,14 +741,8 @@ DissectionSet SetDissector::run() {
             tn.posed = true;
             ++out.same_pose_splits;
           } catch (const SplitFailure&) {
-            // The attempt cut the meshes (new vertices): the node is parameterized and its split
-            // chosen again before the common split, as after any failed split.
-            for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
+            start_over();
             ++out.same_pose_common;
-            tn = TreeNode{};
-            tn.name = node.name;
-            tn.depth = node.depth;
-            ps = evaluate(nodes, tn);
             std::tie(common_peak, common_w) = choose_split(node, ps, tn, over);
           }
         }
@@ -747,24 +750,16 @@ DissectionSet SetDissector::run() {
           try {
             split_all(false, kSplitSnap);
           } catch (const SplitFailure&) {
-            // Cuts that crossed where they passed through vertices near them: once more, the
-            // node parameterized again as after the posed attempt, with (almost) no such detours.
-            for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
-            tn = TreeNode{};
-            tn.name = node.name;
-            tn.depth = node.depth;
-            ps = evaluate(nodes, tn);
+            // Cuts that crossed where they passed through vertices near them: once more, with
+            // (almost) no such detours.
+            start_over();
             std::tie(common_peak, common_w) = choose_split(node, ps, tn, over);
             split_all(false, kSplitRetrySnap);
             ++out.retried_splits;
           }
         }
       } catch (const SplitFailure& e) {
-        for (size_t i = 0; i < meshes_.size(); ++i) meshes_[i].restore(nodes[i], first_new_label);
-        tn = TreeNode{};
-        tn.name = node.name;
-        tn.depth = node.depth;
-        ps = evaluate(nodes, tn);
+        start_over();
         stop = StopReason::SplitFailed;
         detail = e.what();
       }

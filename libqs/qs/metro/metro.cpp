@@ -251,9 +251,7 @@ struct SurfaceDistance::Impl {
     std::vector<Triangle> in(nf);
     std::vector<Prim> prims(nf);
     const int chunks = count > 1 ? 4 * count : 1;
-    Context threads_only;
-    threads_only.threads = count;
-    parallel_for(chunks, count, threads_only, [&](int k) {
+    parallel_for(chunks, count, Context{}, [&](int k) {
       for (size_t f = nf * static_cast<size_t>(k) / chunks; f < nf * static_cast<size_t>(k + 1) / chunks; ++f)
         prim(mesh, f, in[f], prims[f]);
     });
@@ -321,9 +319,7 @@ struct SurfaceDistance::Impl {
       return;
     }
     std::vector<Node> second;
-    Context two;
-    two.threads = 2;
-    parallel_for(2, 2, two, [&](int c) {
+    parallel_for(2, 2, Context{}, [&](int c) {
       build_node(prims, order, scratch, c ? mid : begin, c ? end : mid, depth + 1, node, c, c ? second : out, fork - 1);
     });
     // The second subtree's node indices follow the first's.
