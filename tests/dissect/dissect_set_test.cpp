@@ -276,6 +276,34 @@ TEST(DissectSet, RerouteForSidesMovesOnePathAroundAVertex) {
   EXPECT_EQ(r.seeds, loop.seeds);
 }
 
+TEST(DissectSet, RerouteForSidesMovesAPathAroundAVertexRightBesideIt) {
+  // A vertex pulled to 2% of an edge from a vertex of the loop: the waypoint across it still has
+  // room (at least two mean edge lengths away).
+  auto a = qs::shapes::ellipsoid(1.2, 1, 0.9, 3);
+  const qs::dissect::SeedLoop loop = qs::dissect::trace_seed_loop(a, equator_seeds(a));
+  const std::vector<int>& path = loop.paths[0];
+  ASSERT_GE(path.size(), 3u);
+  const int x = path[path.size() / 2];
+  std::set<int> on_loop;
+  for (const auto& p : loop.paths) on_loop.insert(p.begin(), p.end());
+  int f = -1;
+  for (const qs::Tri& t : a.faces)
+    for (int k = 0; k < 3 && f < 0; ++k)
+      if (t[k] == x)
+        for (int j = 1; j < 3; ++j)
+          if (!on_loop.count(t[(k + j) % 3])) f = t[(k + j) % 3];
+  ASSERT_GE(f, 0);
+  a.positions[f] = a.positions[x] + 0.02 * (a.positions[f] - a.positions[x]);
+  const int far = vertex_towards(a, {0, 0, 1});
+  const std::vector<int> before = qs::dissect::sides_of_vertices(a, loop, {f, far});
+  const qs::dissect::SeedLoop r =
+      qs::dissect::reroute_for_sides(a, loop, {}, {{f, 1 - before[0]}, {far, before[1]}});
+  const std::vector<int> after = qs::dissect::sides_of_vertices(a, r, {f, far});
+  EXPECT_EQ(after[0], 1 - before[0]);
+  EXPECT_EQ(after[1], before[1]);
+  EXPECT_EQ(r.seeds, loop.seeds);
+}
+
 TEST(DissectSet, SeedsGivenAsSurfacePointsAreExactPatchCorners) {
   const auto a = qs::shapes::ellipsoid(1.2, 1, 0.9, 3);
   const auto b = deform(a);

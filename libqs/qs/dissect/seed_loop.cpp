@@ -125,6 +125,10 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
   if (labels.empty()) throw InvalidInput("seed loop does not cut the mesh into two patches: " + why);
   SeedLoop cur = loop;
   int wrong = count_wrong(mesh, labels, sides);
+  double mean_edge = 0;
+  for (const Tri& t : mesh.faces)
+    for (int k = 0; k < 3; ++k) mean_edge += (mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm();
+  mean_edge /= std::max<size_t>(1, 3 * mesh.faces.size());
   const int nv = mesh.num_vertices();
   for (int round = 0; wrong > 0 && round < 2 * static_cast<int>(sides.size()) + 2; ++round) {
     context.check_cancel();
@@ -145,11 +149,16 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
       int x = old.front();
       for (int v : old)
         if (df[v] < df[x]) x = v;
-      const double r = df[x];
-      if (!(r < kInf) || r <= 0) continue;
+      if (!(df[x] < kInf)) continue;
+      // Waypoints at a few times the vertex's distance from the path, and, when the path passes
+      // through its ring (no room there), at a few times two mean edge lengths.
+      std::vector<double> radii;
+      if (df[x] > 0) radii = {df[x], 1.5 * df[x], 2.5 * df[x]};
+      if (df[x] < 2 * mean_edge)
+        for (double factor : {2.0, 3.0, 5.0}) radii.push_back(factor * mean_edge);
       const std::vector<double> dx = dijkstra.all_distances(x);
-      for (double factor : {1.0, 1.5, 2.5}) {
-        // The waypoint: about factor * r from the feature, as far as possible from x.
+      for (double r : radii) {
+        // The waypoint: about r from the feature, as far as possible from x.
         std::fill(blocked.begin(), blocked.end(), 0);
         for (int s : cur.seeds) blocked[s] = 1;
         for (int v : avoid) blocked[v] = 1;
@@ -159,7 +168,7 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
             for (size_t k = 1; k + 1 < cur.paths[j].size(); ++k) blocked[cur.paths[j][k]] = 1;
         int w = -1;
         for (int v = 0; v < nv; ++v) {
-          if (blocked[v] || !(df[v] >= 0.8 * factor * r && df[v] <= 1.25 * factor * r)) continue;
+          if (blocked[v] || !(df[v] >= 0.8 * r && df[v] <= 1.25 * r)) continue;
           if (w < 0 || dx[v] > dx[w]) w = v;
         }
         if (w < 0) continue;

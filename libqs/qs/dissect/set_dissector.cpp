@@ -213,7 +213,10 @@ std::optional<SeedLoop> SetDissector::pose_loop(size_t i, const SeedLoop& own, c
   try {
     SeedLoop guided =
         trace_guided_loop(mi, own.seeds, moved, kPoseLoopSigma * pose_diagonal_[i], meshes_[i].feature_vertices());
-    if (sides_of_vertices(mi, guided, meshes_[i].feature_vertices()) != want) return std::nullopt;
+    // A feature next to mesh 0's loop can fall on the other side of the guided one (a limb turned
+    // about its axis, which the pose does not see): the nearest path is routed around it.
+    if (sides_of_vertices(mi, guided, meshes_[i].feature_vertices()) != want)
+      guided = meshes_[i].reroute_loop(guided, want, {});
     return guided;
   } catch (const InvalidInput&) {
     return std::nullopt;
