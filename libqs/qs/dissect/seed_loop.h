@@ -48,7 +48,8 @@ struct SideConstraint {
 /// puts some on the other (for example a head between two hands: the shortest hand-to-hand path
 /// may pass in front of the neck on one mesh and behind it on another). One vertex at a time, the
 /// path of the loop nearest it is routed through a waypoint across the vertex (on the far side
-/// of it, at 1, 1.5 or 2.5 times its distance to the path); among the loops that cut the mesh in
+/// of it, at 1, 1.5 or 2.5 times its distance to the path, and at 2, 3 or 5 mean edge lengths when
+/// the path passes within two); among the loops that cut the mesh in
 /// two and leave fewer vertices on the wrong side, the shortest is kept. Every path still avoids
 /// `avoid`. Returns the loop unchanged when all sides already hold.
 /// \throws InvalidInput naming the vertices whose side cannot be met.
