@@ -597,3 +597,41 @@ TEST_F(CorrespondenceTool, AGuidedSeedLoopIsRoutedAroundAFeatureItPassesOnTheWro
   EXPECT_LT(e["mean_percent"].get<double>(), 0.4) << e.dump();
   EXPECT_LT(e["max_percent"].get<double>(), 7.0) << e.dump();
 }
+
+// A body against itself in a stronger pose, re-tessellated, with its seeds and two features (the
+// head top and the left heel): no loop through the second mesh's own seeds puts both features
+// where the first mesh's shortest loop has them, but the pair registers, and the loop routed
+// along the first mesh's does. Such a set is dissected (it used to stop with exit 2, "move the
+// seeds").
+TEST_F(CorrespondenceTool, OwnLoopsThatCannotAgreeDoNotStopASetThatRegisters) {
+  const fs::path src = shared_meshes() / "smpl_woman_14k.obj";
+  if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
+  const std::string landmarks = std::string(QS_SOURCE_DIR) + "/bench/correspondence/smpl.landmarks.json";
+  ASSERT_EQ(run_tool("qs-family", "pose " + src.string() + " --landmarks " + landmarks +
+                                      " --seed 5 --min-angle 60 --max-angle 110 --retessellate --keep-shape -q -o " +
+                                      d() + "/posed.obj")
+                .exit,
+            0);
+  // The seeds and the first two features by name, as a user who picked only those.
+  auto few = [&](const std::string& in, const std::string& out) {
+    const auto j = nlohmann::json::parse(std::ifstream(in));
+    nlohmann::json f;
+    int k = 0;
+    for (const auto& [name, v] : j["features"].items())
+      if (k++ < 2) f[name] = v;
+    std::ofstream(out) << nlohmann::json{{"seeds", j["seeds"]}, {"features", f}}.dump();
+  };
+  few(d() + "/posed.source.landmarks.json", d() + "/a.landmarks.json");
+  few(d() + "/posed_r.landmarks.json", d() + "/b.landmarks.json");
+  const std::string out = d() + "/pair";
+  const RunResult r = run_tool("qs-dissect", src.string() + " " + d() + "/posed_r.obj --landmarks " + d() +
+                                                 "/a.landmarks.json " + d() + "/b.landmarks.json -q -o " + out +
+                                                 " --report " + out + ".txt");
+  ASSERT_EQ(r.exit, 0) << r.out;
+  EXPECT_THAT(read_bytes(out + ".txt"), HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
+  const RunResult m = run_tool("qs-metro", "--correspondence " + out + " --map - " + d() +
+                                               "/posed_r.map.json --samples 20000 --json -o " + out + ".json");
+  ASSERT_EQ(m.exit, 0) << m.out;
+  const auto e = nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  EXPECT_LT(e["mean_percent"].get<double>(), 1.0) << e.dump();
+}

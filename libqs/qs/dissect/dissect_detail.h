@@ -383,6 +383,9 @@ class SetDissector {
   bool one_tessellation_ = false;      // the meshes choosing together share one face list
   std::vector<registration::Pose> pose_;  // same_pose: mesh 0 -> mesh i
   std::vector<double> pose_diagonal_;  // same_pose: each input's bounding-box diagonal
+  // same_pose: why the meshes' own loops could not put every feature on one side (thrown only
+  // when a mesh must keep its own loop, its loop not routed along mesh 0's).
+  std::optional<InvalidInput> own_loops_failure_;
 };
 
 /// same_pose_maps: rounds of the fold repair of transfer_node_map that solve the folded vertices

@@ -305,6 +305,8 @@ void SetDissector::seed_posed(std::vector<SeedLoop>& loops, std::array<std::vect
       auto& best = chosen[task / 2 + 1];
       if (!best || c.distance < best->distance) best = std::move(c);
     }
+  for (size_t i = 1; i < nm; ++i)
+    if (!chosen[i] && own_loops_failure_) throw *own_loops_failure_;
   for (size_t i = 1; i < nm; ++i) {
     out.same_pose_loops += chosen[i].has_value();
     const auto ri = chosen[i] ? meshes_[i].seed(std::move(chosen[i]->loop), std::move(chosen[i]->straightened))
@@ -495,7 +497,10 @@ DissectionSet SetDissector::run() {
                                    "and no loop through its seeds puts it on the same side (" + *bad +
                                    "); move the seeds so that each feature is on the same side of the loop in every mesh");
     }
-    if (first_failure) throw *first_failure;
+    // In one pose the loops follow mesh 0's (seed_posed), each with the features on mesh 0's sides;
+    // the own loops are only the fallback there.
+    if (first_failure && opt_.same_pose) own_loops_failure_ = std::move(first_failure);
+    else if (first_failure) throw *first_failure;
   }
   DissectionSet out;
   if (nm > 1 && !opt_.same_pose && opt_.intrinsic_loops)
