@@ -150,8 +150,8 @@ SeedLoop reroute_for_sides(const TriMesh& mesh, const SeedLoop& loop, const std:
       for (int v : old)
         if (df[v] < df[x]) x = v;
       if (!(df[x] < kInf)) continue;
-      // Waypoints at a few times the vertex's distance from the path, and, when the path passes
-      // through its ring (no room there), at a few times two mean edge lengths.
+      // Waypoints at 1, 1.5 and 2.5 times the vertex's distance from the path, and, when the path
+      // passes within two mean edge lengths (no room there), at 2, 3 and 5 of them.
       std::vector<double> radii;
       if (df[x] > 0) radii = {df[x], 1.5 * df[x], 2.5 * df[x]};
       if (df[x] < 2 * mean_edge)
