@@ -44,6 +44,33 @@ class CorrespondenceTool : public ::testing::Test {
     EXPECT_EQ(run_tool("qs-family", args + " --quiet").exit, 0);
     return src + " " + out + "_r.obj --landmarks " + out + ".landmarks.json " + out + "_r.landmarks.json --quiet";
   }
+  // `src` posed by qs-family pose with `args` (its seed, angles, landmarks) and re-tessellated:
+  // d()/posed.obj, d()/posed_r.obj with their maps and landmark files.
+  void pose_retessellated(const fs::path& src, const std::string& args) const {
+    EXPECT_EQ(run_tool("qs-family", "pose " + src.string() + " " + args + " --retessellate --keep-shape -q -o " +
+                                        d() + "/posed.obj")
+                  .exit,
+              0);
+  }
+  // `src` against d()/posed_r.obj dissected into d()/pair with the landmark files `la` and `lb`
+  // (exit 0 expected): its report.
+  std::string dissect_posed(const fs::path& src, const std::string& la, const std::string& lb) const {
+    const std::string out = d() + "/pair";
+    const RunResult r = run_tool("qs-dissect", src.string() + " " + d() + "/posed_r.obj --landmarks " + la + " " + lb +
+                                                   " -q -o " + out + " --report " + out + ".txt");
+    EXPECT_EQ(r.exit, 0) << r.out;
+    return read_bytes(out + ".txt");
+  }
+  // d()/pair's error against the re-tessellation's exact map (qs-metro, level `level`): the JSON
+  // of the dissection's figures.
+  nlohmann::json posed_error(int level) const {
+    const std::string out = d() + "/pair";
+    const RunResult m = run_tool("qs-metro", "--correspondence " + out + " --map - " + d() +
+                                                 "/posed_r.map.json --samples 20000 --level " + std::to_string(level) +
+                                                 " --json -o " + out + ".json");
+    EXPECT_EQ(m.exit, 0) << m.out;
+    return nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  }
   // camel_self_pair dissected at the defaults into `out` (exit 0 expected): its report.
   std::string dissect_camel(const std::string& out, const std::string& features) const {
     const RunResult r =
@@ -550,23 +577,13 @@ TEST_F(CorrespondenceTool, MalformedMapFilesAreInvalidInput) {
 TEST_F(CorrespondenceTool, ASqueezedSeedPatchIsSplitWhenItsFirstCutsCross) {
   const fs::path src = shared_meshes() / "smpl_man_14k.obj";
   if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
-  const std::string landmarks = std::string(QS_SOURCE_DIR) + "/bench/correspondence/smpl.landmarks.json";
-  ASSERT_EQ(run_tool("qs-family", "pose " + src.string() + " --landmarks " + landmarks +
-                                      " --seed 1 --retessellate --keep-shape -q -o " + d() + "/posed.obj")
-                .exit,
-            0);
-  const std::string out = d() + "/pair";
-  const RunResult r = run_tool("qs-dissect", src.string() + " " + d() + "/posed_r.obj --landmarks " + d() +
-                                                 "/posed.source.landmarks.json " + d() + "/posed_r.landmarks.json -q -o " +
-                                                 out + " --report " + out + ".txt");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  const std::string report = read_bytes(out + ".txt");
+  pose_retessellated(src, "--landmarks " + std::string(QS_SOURCE_DIR) +
+                              "/bench/correspondence/smpl.landmarks.json --seed 1");
+  const std::string report =
+      dissect_posed(src, d() + "/posed.source.landmarks.json", d() + "/posed_r.landmarks.json");
   EXPECT_THAT(report, HasSubstr("splits tried again with cuts kept on their segments"));
   EXPECT_THAT(report, Not(HasSubstr("split_failed")));
-  const RunResult m = run_tool("qs-metro", "--correspondence " + out + " --map - " + d() +
-                                               "/posed_r.map.json --samples 20000 --level 4 --json -o " + out + ".json");
-  ASSERT_EQ(m.exit, 0) << m.out;
-  const auto e = nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  const auto e = posed_error(4);
   EXPECT_LT(e["mean_percent"].get<double>(), 0.5) << e.dump();
   EXPECT_LT(e["max_percent"].get<double>(), 6.0) << e.dump();
 }
@@ -579,21 +596,10 @@ TEST_F(CorrespondenceTool, ASqueezedSeedPatchIsSplitWhenItsFirstCutsCross) {
 TEST_F(CorrespondenceTool, AGuidedSeedLoopIsRoutedAroundAFeatureItPassesOnTheWrongSide) {
   const fs::path src = shared_meshes() / "elephant_12k.obj";
   if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
-  ASSERT_EQ(run_tool("qs-family", "pose " + src.string() +
-                                      " --seed 4 --min-angle 60 --max-angle 110 --retessellate --keep-shape -q -o " +
-                                      d() + "/posed.obj")
-                .exit,
-            0);
-  const std::string out = d() + "/pair";
-  const RunResult r = run_tool("qs-dissect", src.string() + " " + d() + "/posed_r.obj --landmarks " + d() +
-                                                 "/posed.source.landmarks.json " + d() + "/posed_r.landmarks.json -q -o " +
-                                                 out + " --report " + out + ".txt");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(read_bytes(out + ".txt"), HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
-  const RunResult m = run_tool("qs-metro", "--correspondence " + out + " --map - " + d() +
-                                               "/posed_r.map.json --samples 20000 --json -o " + out + ".json");
-  ASSERT_EQ(m.exit, 0) << m.out;
-  const auto e = nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  pose_retessellated(src, "--seed 4 --min-angle 60 --max-angle 110");
+  EXPECT_THAT(dissect_posed(src, d() + "/posed.source.landmarks.json", d() + "/posed_r.landmarks.json"),
+              HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
+  const auto e = posed_error(0);
   EXPECT_LT(e["mean_percent"].get<double>(), 0.4) << e.dump();
   EXPECT_LT(e["max_percent"].get<double>(), 7.0) << e.dump();
 }
@@ -606,12 +612,8 @@ TEST_F(CorrespondenceTool, AGuidedSeedLoopIsRoutedAroundAFeatureItPassesOnTheWro
 TEST_F(CorrespondenceTool, OwnLoopsThatCannotAgreeDoNotStopASetThatRegisters) {
   const fs::path src = shared_meshes() / "smpl_woman_14k.obj";
   if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
-  const std::string landmarks = std::string(QS_SOURCE_DIR) + "/bench/correspondence/smpl.landmarks.json";
-  ASSERT_EQ(run_tool("qs-family", "pose " + src.string() + " --landmarks " + landmarks +
-                                      " --seed 5 --min-angle 60 --max-angle 110 --retessellate --keep-shape -q -o " +
-                                      d() + "/posed.obj")
-                .exit,
-            0);
+  pose_retessellated(src, "--landmarks " + std::string(QS_SOURCE_DIR) +
+                              "/bench/correspondence/smpl.landmarks.json --seed 5 --min-angle 60 --max-angle 110");
   // The seeds and the first two features by name, as a user who picked only those.
   auto few = [&](const std::string& in, const std::string& out) {
     const auto j = nlohmann::json::parse(std::ifstream(in));
@@ -623,15 +625,8 @@ TEST_F(CorrespondenceTool, OwnLoopsThatCannotAgreeDoNotStopASetThatRegisters) {
   };
   few(d() + "/posed.source.landmarks.json", d() + "/a.landmarks.json");
   few(d() + "/posed_r.landmarks.json", d() + "/b.landmarks.json");
-  const std::string out = d() + "/pair";
-  const RunResult r = run_tool("qs-dissect", src.string() + " " + d() + "/posed_r.obj --landmarks " + d() +
-                                                 "/a.landmarks.json " + d() + "/b.landmarks.json -q -o " + out +
-                                                 " --report " + out + ".txt");
-  ASSERT_EQ(r.exit, 0) << r.out;
-  EXPECT_THAT(read_bytes(out + ".txt"), HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
-  const RunResult m = run_tool("qs-metro", "--correspondence " + out + " --map - " + d() +
-                                               "/posed_r.map.json --samples 20000 --json -o " + out + ".json");
-  ASSERT_EQ(m.exit, 0) << m.out;
-  const auto e = nlohmann::json::parse(std::ifstream(out + ".json"))["pairs"][0]["dissection"];
+  EXPECT_THAT(dissect_posed(src, d() + "/a.landmarks.json", d() + "/b.landmarks.json"),
+              HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
+  const auto e = posed_error(0);
   EXPECT_LT(e["mean_percent"].get<double>(), 1.0) << e.dump();
 }
