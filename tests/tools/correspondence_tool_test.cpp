@@ -45,12 +45,11 @@ class CorrespondenceTool : public ::testing::Test {
     return src + " " + out + "_r.obj --landmarks " + out + ".landmarks.json " + out + "_r.landmarks.json --quiet";
   }
   // `src` posed by qs-family pose with `args` (its seed, angles, landmarks) and re-tessellated:
-  // d()/posed.obj, d()/posed_r.obj with their maps and landmark files.
-  void pose_retessellated(const fs::path& src, const std::string& args) const {
-    EXPECT_EQ(run_tool("qs-family", "pose " + src.string() + " " + args + " --retessellate --keep-shape -q -o " +
-                                        d() + "/posed.obj")
-                  .exit,
-              0);
+  // d()/posed.obj, d()/posed_r.obj with their maps and landmark files. False when the tool failed.
+  [[nodiscard]] bool pose_retessellated(const fs::path& src, const std::string& args) const {
+    return run_tool("qs-family", "pose " + src.string() + " " + args + " --retessellate --keep-shape -q -o " + d() +
+                                     "/posed.obj")
+               .exit == 0;
   }
   // `src` against d()/posed_r.obj dissected into d()/pair with the landmark files `la` and `lb`
   // (exit 0 expected): its report.
@@ -577,8 +576,8 @@ TEST_F(CorrespondenceTool, MalformedMapFilesAreInvalidInput) {
 TEST_F(CorrespondenceTool, ASqueezedSeedPatchIsSplitWhenItsFirstCutsCross) {
   const fs::path src = shared_meshes() / "smpl_man_14k.obj";
   if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
-  pose_retessellated(src, "--landmarks " + std::string(QS_SOURCE_DIR) +
-                              "/bench/correspondence/smpl.landmarks.json --seed 1");
+  ASSERT_TRUE(pose_retessellated(
+      src, "--landmarks " + std::string(QS_SOURCE_DIR) + "/bench/correspondence/smpl.landmarks.json --seed 1"));
   const std::string report =
       dissect_posed(src, d() + "/posed.source.landmarks.json", d() + "/posed_r.landmarks.json");
   EXPECT_THAT(report, HasSubstr("splits tried again with cuts kept on their segments"));
@@ -596,7 +595,7 @@ TEST_F(CorrespondenceTool, ASqueezedSeedPatchIsSplitWhenItsFirstCutsCross) {
 TEST_F(CorrespondenceTool, AGuidedSeedLoopIsRoutedAroundAFeatureItPassesOnTheWrongSide) {
   const fs::path src = shared_meshes() / "elephant_12k.obj";
   if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
-  pose_retessellated(src, "--seed 4 --min-angle 60 --max-angle 110");
+  ASSERT_TRUE(pose_retessellated(src, "--seed 4 --min-angle 60 --max-angle 110"));
   EXPECT_THAT(dissect_posed(src, d() + "/posed.source.landmarks.json", d() + "/posed_r.landmarks.json"),
               HasSubstr("same pose: 1 of 1 seed loops routed by pose"));
   const auto e = posed_error(0);
@@ -612,8 +611,9 @@ TEST_F(CorrespondenceTool, AGuidedSeedLoopIsRoutedAroundAFeatureItPassesOnTheWro
 TEST_F(CorrespondenceTool, OwnLoopsThatCannotAgreeDoNotStopASetThatRegisters) {
   const fs::path src = shared_meshes() / "smpl_woman_14k.obj";
   if (!fs::exists(src)) GTEST_SKIP() << "shared meshes not found";
-  pose_retessellated(src, "--landmarks " + std::string(QS_SOURCE_DIR) +
-                              "/bench/correspondence/smpl.landmarks.json --seed 5 --min-angle 60 --max-angle 110");
+  ASSERT_TRUE(pose_retessellated(src, "--landmarks " + std::string(QS_SOURCE_DIR) +
+                                          "/bench/correspondence/smpl.landmarks.json --seed 5 --min-angle 60 "
+                                          "--max-angle 110"));
   // The seeds and the first two features by name, as a user who picked only those.
   auto few = [&](const std::string& in, const std::string& out) {
     const auto j = nlohmann::json::parse(std::ifstream(in));
