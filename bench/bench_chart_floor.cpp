@@ -34,11 +34,6 @@ using qs::landmarks::SurfacePoint;
 
 double side_distance(const Vec2& q) { return std::min({q.x(), 1 - q.x(), q.y(), 1 - q.y()}); }
 
-Vec3 position(const TriMesh& m, const SurfacePoint& p) {
-  const auto& t = m.faces[p.face];
-  return p.bary[0] * m.positions[t[0]] + p.bary[1] * m.positions[t[1]] + p.bary[2] * m.positions[t[2]];
-}
-
 SurfacePoint locate(const TriMesh& m, const qs::metro::SurfaceDistance& tree, const Vec3& x) {
   const int f = tree.closest(x).face;
   const auto& t = m.faces[f];
@@ -98,7 +93,7 @@ int main(int argc, char** argv) {
         if (it == done.end()) {
           const SurfacePoint on_a = truth.map(1, 0, locate(mb, on_b, cb.mesh.positions[v]));
           Vec2 uv;
-          const bool found = uv_on_a(position(ma, on_a), cb.face_patch[f], uv);
+          const bool found = uv_on_a(qs::landmarks::position_of(ma, on_a), cb.face_patch[f], uv);
           it = done.emplace(std::make_pair(v, cb.face_patch[f]), std::make_pair(found, uv)).first;
         }
         if (it->second.first) {
@@ -126,26 +121,30 @@ int main(int argc, char** argv) {
       }
     for (int f = 0; f < ma.num_faces(); ++f)
       for (int j = 0; j < 3; ++j) face_of[ma.faces[f][j]] = f, corner_of[ma.faces[f][j]] = j;
+    // Per vertex of A: its distance from its patch's sides in (u, v) and both charts' errors.
+    std::vector<double> side, e_own, e_floor;
+    for (int v = 0; v < nv; ++v) {
+      if (wedge_face[v] < 0 || face_of[v] < 0) continue;
+      const Vec2 uv = ca.face_uv[wedge_face[v]][wedge_corner[v]];
+      const int patch = ca.face_patch[wedge_face[v]];
+      SurfacePoint at{face_of[v], {0, 0, 0}};
+      at.bary[corner_of[v]] = 1;
+      const Vec3 image = qs::landmarks::position_of(mb, truth.map(0, 1, at));
+      side.push_back(side_distance(uv));
+      e_own.push_back(100 * (own.point(patch, uv) - image).norm() / diagonal);
+      e_floor.push_back(100 * (floor.point(patch, uv) - image).norm() / diagonal);
+    }
     std::printf("A's vertices: count, B's own chart, the exact chart (mean / median / p95 / max, %% of B's "
                 "diagonal)\n");
     for (double margin : {0.0, 0.03, 0.1}) {
-      std::vector<double> e_own, e_floor;
-      for (int v = 0; v < nv; ++v) {
-        if (wedge_face[v] < 0 || face_of[v] < 0) continue;
-        const Vec2 uv = ca.face_uv[wedge_face[v]][wedge_corner[v]];
-        if (side_distance(uv) < margin) continue;
-        const int patch = ca.face_patch[wedge_face[v]];
-        SurfacePoint at{face_of[v], {0, 0, 0}};
-        at.bary[corner_of[v]] = 1;
-        const Vec3 image = position(mb, truth.map(0, 1, at));
-        e_own.push_back(100 * (own.point(patch, uv) - image).norm() / diagonal);
-        e_floor.push_back(100 * (floor.point(patch, uv) - image).norm() / diagonal);
-      }
-      if (e_own.empty()) continue;
-      std::printf("  at least %.2f from a side: %zu, ", margin, e_own.size());
-      print_stats(e_own);
+      std::vector<double> own_band, floor_band;
+      for (size_t k = 0; k < side.size(); ++k)
+        if (side[k] >= margin) own_band.push_back(e_own[k]), floor_band.push_back(e_floor[k]);
+      if (own_band.empty()) continue;
+      std::printf("  at least %.2f from a side: %zu, ", margin, own_band.size());
+      print_stats(own_band);
       std::printf(", ");
-      print_stats(e_floor);
+      print_stats(floor_band);
       std::printf("\n");
     }
   } catch (const std::exception& e) {
