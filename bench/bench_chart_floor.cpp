@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
         auto it = done.find({v, cb.face_patch[f]});
         if (it == done.end()) {
           const SurfacePoint on_a = truth.map(1, 0, locate(mb, on_b, cb.mesh.positions[v]));
-          Vec2 uv;
+          Vec2 uv = Vec2::Zero();
           const bool found = uv_on_a(qs::landmarks::position_of(ma, on_a), cb.face_patch[f], uv);
           it = done.emplace(std::make_pair(v, cb.face_patch[f]), std::make_pair(found, uv)).first;
         }
